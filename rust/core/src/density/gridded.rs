@@ -1,0 +1,360 @@
+//! A density field sampled on a regular 4-D grid (time, geodetic altitude, geodetic
+//! latitude, longitude), holding ln(mean density) and sigma/mean. Any density model,
+//! however slow, is sampled once into this form and then drives the integrator at the
+//! cost of one multilinear interpolation per evaluation.
+//!
+//! Behaviour outside the grid: time, altitude and latitude outside their axis range are
+//! an error ([`CoreError::OutsideField`]) naming the axis, the value and the covered
+//! range; there is no extrapolation and no clamping. Longitude is periodic and always
+//! covered.
+
+use super::Atmosphere;
+use crate::error::{finite, CoreError};
+use crate::frames::{geodetic, EarthRotation};
+use std::f64::consts::TAU;
+
+/// A uniform axis: `len` nodes at `start + i * step`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Axis {
+    pub start: f64,
+    pub step: f64,
+    pub len: usize,
+}
+
+impl Axis {
+    fn checked(name: &str, start: f64, step: f64, len: usize) -> Result<Self, CoreError> {
+        finite(&format!("{name} axis start"), start)?;
+        finite(&format!("{name} axis step"), step)?;
+        if step <= 0.0 {
+            return Err(CoreError::invalid(
+                format!("{name} axis step"),
+                step,
+                "must be > 0",
+            ));
+        }
+        if len < 2 {
+            return Err(CoreError::invalid(
+                format!("{name} axis length"),
+                len as f64,
+                "needs at least 2 nodes",
+            ));
+        }
+        Ok(Self { start, step, len })
+    }
+
+    /// Last node.
+    pub fn end(&self) -> f64 {
+        self.start + self.step * (self.len - 1) as f64
+    }
+
+    /// Cell index and fraction of `x`, or `None` outside [start, end]. A rounding slack
+    /// of 1e-9 cells is accepted at both ends.
+    #[inline(always)]
+    fn locate(&self, x: f64) -> Option<(usize, f64)> {
+        let u = (x - self.start) / self.step;
+        let last = (self.len - 1) as f64;
+        if !(u >= -1e-9 && u <= last + 1e-9) {
+            return None;
+        }
+        let i = (u.floor().max(0.0) as usize).min(self.len - 2);
+        Some((i, (u - i as f64).clamp(0.0, 1.0)))
+    }
+}
+
+/// Density sampled on a (time, altitude, latitude, longitude) grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GriddedField {
+    /// Epoch of the time axis, seconds since J2000 (UT1).
+    epoch: f64,
+    time: Axis,
+    alt: Axis,
+    /// Latitude axis in radians.
+    lat: Axis,
+    /// First longitude node in radians; nodes are `nlon` equal steps around the globe.
+    lon0: f64,
+    nlon: usize,
+    ln_mean: Vec<f64>,
+    rel_sigma: Vec<f64>,
+}
+
+impl GriddedField {
+    /// Builds a field. `epoch` in seconds since J2000; `time` axis in seconds from
+    /// `epoch`; `alt` in metres (geodetic); `lat` in degrees (geodetic); longitude nodes
+    /// at `lon0_deg + k * 360 / nlon` degrees, periodic. `ln_mean` (ln of kg/m^3) and
+    /// `rel_sigma` (sigma/mean, >= 0) are row-major [time][alt][lat][lon].
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        epoch: f64,
+        time: (f64, f64, usize),
+        alt: (f64, f64, usize),
+        lat_deg: (f64, f64, usize),
+        lon0_deg: f64,
+        nlon: usize,
+        ln_mean: Vec<f64>,
+        rel_sigma: Vec<f64>,
+    ) -> Result<Self, CoreError> {
+        finite("field epoch", epoch)?;
+        let time = Axis::checked("time", time.0, time.1, time.2)?;
+        let alt = Axis::checked("altitude", alt.0, alt.1, alt.2)?;
+        let lat = Axis::checked("latitude", lat_deg.0, lat_deg.1, lat_deg.2)?;
+        if lat.start < -90.0 - 1e-9 || lat.end() > 90.0 + 1e-9 {
+            return Err(CoreError::invalid(
+                "latitude axis",
+                lat.end(),
+                format!(
+                    "must lie within [-90, 90] deg, spans {} to {}",
+                    lat.start,
+                    lat.end()
+                ),
+            ));
+        }
+        finite("longitude start", lon0_deg)?;
+        if nlon < 3 {
+            return Err(CoreError::invalid(
+                "longitude axis length",
+                nlon as f64,
+                "needs at least 3 nodes around the globe",
+            ));
+        }
+        let n = time.len * alt.len * lat.len * nlon;
+        for (name, v) in [("ln_mean", &ln_mean), ("rel_sigma", &rel_sigma)] {
+            if v.len() != n {
+                return Err(CoreError::shape(
+                    name,
+                    format!(
+                        "expected {} values ({} x {} x {} x {}), got {}",
+                        n,
+                        time.len,
+                        alt.len,
+                        lat.len,
+                        nlon,
+                        v.len()
+                    ),
+                ));
+            }
+        }
+        if let Some(i) = ln_mean.iter().position(|x| !x.is_finite()) {
+            return Err(CoreError::non_finite(format!("ln_mean[{i}]"), ln_mean[i]));
+        }
+        if let Some(i) = rel_sigma.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(CoreError::invalid(
+                format!("rel_sigma[{i}]"),
+                rel_sigma[i],
+                "must be finite and >= 0",
+            ));
+        }
+        Ok(Self {
+            epoch,
+            time,
+            alt,
+            lat: Axis {
+                start: lat.start.to_radians(),
+                step: lat.step.to_radians(),
+                len: lat.len,
+            },
+            lon0: lon0_deg.to_radians(),
+            nlon,
+            ln_mean,
+            rel_sigma,
+        })
+    }
+
+    /// Time axis (seconds from the field epoch).
+    pub fn time_axis(&self) -> Axis {
+        self.time
+    }
+
+    /// Altitude axis (m).
+    pub fn altitude_axis(&self) -> Axis {
+        self.alt
+    }
+
+    /// Field epoch, seconds since J2000.
+    pub fn epoch(&self) -> f64 {
+        self.epoch
+    }
+
+    /// Mean and sigma at `ut1` seconds since J2000 and geodetic (lat, lon) in rad, alt m.
+    pub fn at_geodetic(
+        &self,
+        ut1: f64,
+        lat: f64,
+        lon: f64,
+        alt: f64,
+    ) -> Result<(f64, f64), CoreError> {
+        let t = ut1 - self.epoch;
+        let outside =
+            |axis: &'static str, value: f64, a: &Axis, scale: f64| CoreError::OutsideField {
+                axis,
+                value: value * scale,
+                min: a.start * scale,
+                max: a.end() * scale,
+                t,
+            };
+        let (it, ft) = self
+            .time
+            .locate(t)
+            .ok_or_else(|| outside("time (s from field start)", t, &self.time, 1.0))?;
+        let (ia, fa) = self
+            .alt
+            .locate(alt)
+            .ok_or_else(|| outside("altitude (m)", alt, &self.alt, 1.0))?;
+        let (il, fl) = self.lat.locate(lat).ok_or_else(|| {
+            outside(
+                "latitude (deg)",
+                lat,
+                &self.lat,
+                180.0 / std::f64::consts::PI,
+            )
+        })?;
+        let step_lon = TAU / self.nlon as f64;
+        let u = ((lon - self.lon0) / step_lon).rem_euclid(self.nlon as f64);
+        let io0 = (u.floor() as usize).min(self.nlon - 1);
+        let fo = u - io0 as f64;
+        let io1 = if io0 + 1 == self.nlon { 0 } else { io0 + 1 };
+
+        let (na, nl, no) = (self.alt.len, self.lat.len, self.nlon);
+        let mut ln_m = 0.0;
+        let mut rs = 0.0;
+        for (dt, wt) in [(0, 1.0 - ft), (1, ft)] {
+            for (da, wa) in [(0, 1.0 - fa), (1, fa)] {
+                for (dl, wl) in [(0, 1.0 - fl), (1, fl)] {
+                    let row = (((it + dt) * na + ia + da) * nl + il + dl) * no;
+                    let w = wt * wa * wl;
+                    let (a, b) = (row + io0, row + io1);
+                    ln_m += w * ((1.0 - fo) * self.ln_mean[a] + fo * self.ln_mean[b]);
+                    rs += w * ((1.0 - fo) * self.rel_sigma[a] + fo * self.rel_sigma[b]);
+                }
+            }
+        }
+        let mean = ln_m.exp();
+        Ok((mean, rs * mean))
+    }
+}
+
+impl Atmosphere for GriddedField {
+    fn mean_sigma(
+        &self,
+        ut1: f64,
+        r: [f64; 3],
+        rot: &EarthRotation,
+    ) -> Result<(f64, f64), CoreError> {
+        let g = geodetic(rot.to_fixed(r));
+        self.at_geodetic(ut1, g.lat, g.lon, g.alt)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field whose ln(mean) and rel_sigma are affine in every axis, so multilinear
+    /// interpolation must reproduce them exactly.
+    fn affine_field() -> GriddedField {
+        let (nt, na, nl, no) = (3, 4, 5, 8);
+        let mut ln_mean = Vec::new();
+        let mut rel = Vec::new();
+        for it in 0..nt {
+            for ia in 0..na {
+                for il in 0..nl {
+                    for io in 0..no {
+                        let t = it as f64 * 600.0;
+                        let h = 300e3 + ia as f64 * 50e3;
+                        let lat = -60.0 + il as f64 * 30.0;
+                        ln_mean.push(-20.0 - h / 60e3 + 1e-4 * t + 0.01 * lat + 0.001 * io as f64);
+                        rel.push(0.1 + 1e-6 * t + 1e-7 * h);
+                    }
+                }
+            }
+        }
+        GriddedField::new(
+            100.0,
+            (0.0, 600.0, nt),
+            (300e3, 50e3, na),
+            (-60.0, 30.0, nl),
+            0.0,
+            no,
+            ln_mean,
+            rel,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn interpolation_is_exact_for_affine_data() {
+        let f = affine_field();
+        let (t, h, lat) = (777.0, 412.5e3, 17.25f64);
+        let lon = (45.0f64 * 2.5).to_radians(); // between nodes 2 and 3 (45 deg spacing)
+        let (m, s) = f.at_geodetic(100.0 + t, lat.to_radians(), lon, h).unwrap();
+        let expect = -20.0 - h / 60e3 + 1e-4 * t + 0.01 * lat + 0.001 * 2.5;
+        assert!((m.ln() - expect).abs() < 1e-12, "{} vs {}", m.ln(), expect);
+        let rel = 0.1 + 1e-6 * t + 1e-7 * h;
+        assert!((s / m - rel).abs() < 1e-12);
+    }
+
+    #[test]
+    fn longitude_is_periodic() {
+        let f = affine_field();
+        let at = |lon_deg: f64| {
+            f.at_geodetic(400.0, 0.1, lon_deg.to_radians(), 350e3)
+                .unwrap()
+                .0
+        };
+        // Between the last node (315 deg) and the first (0 deg = 360 deg): linear between
+        // the values at io = 7 and io = 0.
+        let a = at(315.0).ln();
+        let b = at(0.0).ln();
+        assert!(((at(337.5).ln()) - 0.5 * (a + b)).abs() < 1e-12);
+        assert!((at(-22.5) - at(337.5)).abs() < 1e-25);
+        assert!((at(720.0 + 10.0) - at(10.0)).abs() < 1e-25);
+    }
+
+    #[test]
+    fn outside_the_grid_is_an_error_naming_the_axis() {
+        let f = affine_field();
+        let e = f.at_geodetic(100.0 + 1300.0, 0.0, 0.0, 350e3).unwrap_err();
+        assert!(e.to_string().contains("time"), "{e}");
+        let e = f.at_geodetic(100.0, 0.0, 0.0, 460e3).unwrap_err();
+        assert!(e.to_string().contains("altitude (m) = 460000"), "{e}");
+        let e = f
+            .at_geodetic(100.0, 70f64.to_radians(), 0.0, 350e3)
+            .unwrap_err();
+        assert!(e.to_string().contains("latitude (deg)"), "{e}");
+        // Exactly on the upper corners is inside.
+        assert!(f
+            .at_geodetic(100.0 + 1200.0, 60f64.to_radians(), 0.0, 450e3)
+            .is_ok());
+    }
+
+    #[test]
+    fn rejects_bad_construction() {
+        let ok = |v: Vec<f64>| {
+            GriddedField::new(
+                0.0,
+                (0.0, 1.0, 2),
+                (0.0, 1.0, 2),
+                (-1.0, 1.0, 2),
+                0.0,
+                3,
+                v.clone(),
+                vec![0.1; 24],
+            )
+        };
+        assert!(ok(vec![0.0; 24]).is_ok());
+        assert!(ok(vec![0.0; 23]).is_err());
+        let mut nan = vec![0.0; 24];
+        nan[5] = f64::NAN;
+        assert!(ok(nan).unwrap_err().to_string().contains("ln_mean[5]"));
+        assert!(GriddedField::new(
+            0.0,
+            (0.0, 1.0, 2),
+            (0.0, 1.0, 2),
+            (80.0, 20.0, 2),
+            0.0,
+            3,
+            vec![0.0; 24],
+            vec![0.1; 24]
+        )
+        .is_err());
+    }
+}

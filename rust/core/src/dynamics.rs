@@ -1,0 +1,229 @@
+//! Equations of motion: two-body + J2 + drag with a co-rotating atmosphere, evaluated for
+//! a batch of `W` members at once, held structure-of-arrays (`state[component][lane]`).
+//! One trajectory is a batch of one. This is the one RHS that every integrator, member and
+//! sigma point uses.
+
+use crate::constants::{J2, MU, OMEGA_EARTH, R_EARTH};
+use crate::density::Atmosphere;
+use crate::error::CoreError;
+use crate::frames::EarthRotation;
+use crate::time::gmst;
+
+/// Batch state: `[x, y, z, vx, vy, vz][lane]`, m and m/s, inertial.
+pub type State<const W: usize> = [[f64; W]; 6];
+
+/// Right-hand side of a batch ODE.
+pub trait BatchRhs<const W: usize> {
+    /// Writes dy/dt at `t` (seconds from the epoch) into `dy`.
+    fn eval(&mut self, t: f64, y: &State<W>, dy: &mut State<W>) -> Result<(), CoreError>;
+}
+
+/// How the normalised offset kappa perturbs the density (DESIGN.md section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Perturbation {
+    /// rho = mean + kappa * sigma, clipped at 0 (the paper's form); clips are counted.
+    Additive,
+    /// rho = mean * exp(kappa s - s^2 / 2), s^2 = ln(1 + (sigma/mean)^2): same mean and
+    /// variance, never negative.
+    Lognormal,
+}
+
+/// Two-body + J2 + drag for a batch of members sharing one epoch and atmosphere.
+pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
+    atmosphere: &'a A,
+    /// Epoch of t = 0, seconds since J2000 (UT1).
+    epoch: f64,
+    /// Drag parameter Cd * A / m per lane, m^2/kg (0 switches drag off in that lane).
+    pub drag: [f64; W],
+    /// Normalised density offset per lane (0 = mean density).
+    pub kappa: [f64; W],
+    pub perturbation: Perturbation,
+    /// Number of density evaluations clipped at zero, per lane.
+    pub clipped: [u64; W],
+    /// Number of batch RHS evaluations.
+    pub evaluations: u64,
+}
+
+impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
+    /// Dynamics at the mean density (kappa = 0) with the given drag parameters.
+    pub fn new(atmosphere: &'a A, epoch: f64, drag: [f64; W]) -> Self {
+        Self {
+            atmosphere,
+            epoch,
+            drag,
+            kappa: [0.0; W],
+            perturbation: Perturbation::Additive,
+            clipped: [0; W],
+            evaluations: 0,
+        }
+    }
+
+    /// Epoch of t = 0, seconds since J2000.
+    pub fn epoch(&self) -> f64 {
+        self.epoch
+    }
+}
+
+impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> {
+    #[inline]
+    fn eval(&mut self, t: f64, y: &State<W>, dy: &mut State<W>) -> Result<(), CoreError> {
+        self.evaluations += 1;
+        let ut1 = self.epoch + t;
+        // One Earth-rotation angle per stage, shared by all lanes.
+        let rot = EarthRotation::new(gmst(ut1));
+        let kj2 = -1.5 * J2 * MU * R_EARTH * R_EARTH;
+        for l in 0..W {
+            let (x, yy, z) = (y[0][l], y[1][l], y[2][l]);
+            let r2 = x * x + yy * yy + z * z;
+            let r = r2.sqrt();
+            let inv_r2 = 1.0 / r2;
+            let inv_r3 = inv_r2 / r;
+            let zz = 5.0 * z * z * inv_r2;
+            let j2f = kj2 * inv_r3 * inv_r2;
+            dy[0][l] = y[3][l];
+            dy[1][l] = y[4][l];
+            dy[2][l] = y[5][l];
+            dy[3][l] = -MU * x * inv_r3 + j2f * x * (1.0 - zz);
+            dy[4][l] = -MU * yy * inv_r3 + j2f * yy * (1.0 - zz);
+            dy[5][l] = -MU * z * inv_r3 + j2f * z * (3.0 - zz);
+        }
+        for l in 0..W {
+            if self.drag[l] == 0.0 {
+                continue;
+            }
+            let r = [y[0][l], y[1][l], y[2][l]];
+            let (mean, sigma) = self.atmosphere.mean_sigma(ut1, r, &rot)?;
+            let k = self.kappa[l];
+            let rho = match self.perturbation {
+                Perturbation::Additive => {
+                    let rho = mean + k * sigma;
+                    if rho < 0.0 {
+                        self.clipped[l] += 1;
+                        0.0
+                    } else {
+                        rho
+                    }
+                }
+                Perturbation::Lognormal => {
+                    if sigma == 0.0 {
+                        mean
+                    } else {
+                        let rel = sigma / mean;
+                        let s2 = (rel * rel).ln_1p();
+                        mean * (k * s2.sqrt() - 0.5 * s2).exp()
+                    }
+                }
+            };
+            // v_rel = v - omega x r with omega = (0, 0, OMEGA_EARTH).
+            let vr = [
+                y[3][l] + OMEGA_EARTH * r[1],
+                y[4][l] - OMEGA_EARTH * r[0],
+                y[5][l],
+            ];
+            let vn = (vr[0] * vr[0] + vr[1] * vr[1] + vr[2] * vr[2]).sqrt();
+            let f = -0.5 * rho * self.drag[l] * vn;
+            dy[3][l] += f * vr[0];
+            dy[4][l] += f * vr[1];
+            dy[5][l] += f * vr[2];
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::density::Exponential;
+
+    fn one(state: [f64; 6]) -> State<1> {
+        state.map(|c| [c])
+    }
+
+    #[test]
+    fn two_body_and_j2_match_the_potential_gradient() {
+        // Without drag the acceleration is the gradient of
+        // U = mu/r - mu J2 Re^2 (3 z^2 / r^2 - 1) / (2 r^3); check by central differences.
+        let atm = Exponential::new(1e-12, 400e3, 60e3, 0.0).unwrap();
+        let mut dynm = Dynamics::new(&atm, 0.0, [0.0]);
+        let p = [3782900.7, -5441600.6, -1420075.1];
+        let mut dy = [[0.0]; 6];
+        dynm.eval(0.0, &one([p[0], p[1], p[2], 1.0, 2.0, 3.0]), &mut dy)
+            .unwrap();
+        let u = |q: [f64; 3]| {
+            let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+            MU / r
+                - MU * J2 * R_EARTH * R_EARTH * (3.0 * q[2] * q[2] / (r * r) - 1.0)
+                    / (2.0 * r * r * r)
+        };
+        for i in 0..3 {
+            let h = 1.0;
+            let mut qp = p;
+            let mut qm = p;
+            qp[i] += h;
+            qm[i] -= h;
+            let grad = (u(qp) - u(qm)) / (2.0 * h);
+            assert!(
+                (dy[3 + i][0] - grad).abs() < 1e-9 * grad.abs().max(1.0),
+                "axis {i}"
+            );
+        }
+        assert_eq!(dy[0][0], 1.0);
+    }
+
+    #[test]
+    fn drag_opposes_relative_velocity_with_the_right_magnitude() {
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        let r = R_EARTH + 400e3;
+        let state = [r, 0.0, 0.0, 0.0, 7700.0, 0.0];
+        let mut with = Dynamics::new(&atm, 0.0, [3.0912 * 0.0015]);
+        let mut without = Dynamics::new(&atm, 0.0, [0.0]);
+        let (mut a, mut b) = ([[0.0]; 6], [[0.0]; 6]);
+        with.eval(0.0, &one(state), &mut a).unwrap();
+        without.eval(0.0, &one(state), &mut b).unwrap();
+        let vrel = 7700.0 - OMEGA_EARTH * r;
+        let expect = -0.5 * 3.725e-12 * 3.0912 * 0.0015 * vrel * vrel;
+        assert!((a[4][0] - b[4][0] - expect).abs() < 1e-12 * expect.abs());
+        assert_eq!(a[3][0], b[3][0]);
+
+        // kappa = -10 with 20 % sigma makes the additive density negative: clipped to 0.
+        with.kappa = [-10.0];
+        with.eval(0.0, &one(state), &mut a).unwrap();
+        assert_eq!(a[4][0], b[4][0]);
+        assert_eq!(with.clipped, [1]);
+        // Lognormal keeps it positive: mean * exp(-10 s - s^2/2).
+        with.perturbation = Perturbation::Lognormal;
+        with.eval(0.0, &one(state), &mut a).unwrap();
+        let s2 = (1.0f64 + 0.04).ln();
+        let rho = 3.725e-12 * (-10.0 * s2.sqrt() - 0.5 * s2).exp();
+        let expect = -0.5 * rho * 3.0912 * 0.0015 * vrel * vrel;
+        assert!((a[4][0] - b[4][0] - expect).abs() < 1e-10 * expect.abs());
+    }
+
+    #[test]
+    fn lanes_are_independent() {
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        let s0 = [
+            3782900.7032,
+            -5441600.6779,
+            -1420075.1327,
+            -606.66,
+            1539.2559,
+            -7488.3946,
+        ];
+        let s1 = [7.0e6, 1.0e5, 2.0e5, 10.0, 7500.0, 100.0];
+        let mut batch = Dynamics::new(&atm, 5e8, [0.004, 0.01]);
+        batch.kappa = [0.5, -1.0];
+        let y: State<2> = std::array::from_fn(|c| [s0[c], s1[c]]);
+        let mut dy = [[0.0; 2]; 6];
+        batch.eval(30.0, &y, &mut dy).unwrap();
+        for (lane, (s, d, k)) in [(s0, 0.004, 0.5), (s1, 0.01, -1.0)].into_iter().enumerate() {
+            let mut single = Dynamics::new(&atm, 5e8, [d]);
+            single.kappa = [k];
+            let mut d1 = [[0.0]; 6];
+            single.eval(30.0, &one(s), &mut d1).unwrap();
+            for c in 0..6 {
+                assert_eq!(d1[c][0], dy[c][lane]);
+            }
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! Density sources as frozen Python classes wrapping the core types.
+
+use crate::arrays::{row3, rows, vector};
+use crate::errors::to_py;
+use numpy::ndarray::Array1;
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray4};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use rhoprop_core::density::{Atmosphere, Exponential, GriddedField};
+use rhoprop_core::frames::EarthRotation;
+use rhoprop_core::time::gmst;
+use std::sync::Arc;
+
+/// (mean, sigma) arrays, kg/m^3.
+type MeanSigma<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
+/// Exponential atmosphere rho0 * exp(-(h - h0)/H), h = |r| - Re (spherical altitude).
+#[pyclass(frozen, name = "ExponentialAtmosphere", module = "rhoprop._core")]
+pub struct PyExponential(pub Exponential);
+
+#[pymethods]
+impl PyExponential {
+    #[new]
+    #[pyo3(signature = (rho0, h0, scale_height, rel_sigma = 0.0))]
+    fn new(rho0: f64, h0: f64, scale_height: f64, rel_sigma: f64) -> PyResult<Self> {
+        Exponential::new(rho0, h0, scale_height, rel_sigma)
+            .map(Self)
+            .map_err(to_py)
+    }
+
+    /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s
+    /// since J2000.
+    fn mean_sigma<'py>(
+        &self,
+        py: Python<'py>,
+        ut1: PyReadonlyArray1<'py, f64>,
+        positions: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<MeanSigma<'py>> {
+        mean_sigma_at(py, &self.0, ut1, positions)
+    }
+}
+
+/// Density sampled on a (time, altitude, latitude, longitude) grid of ln(mean) and
+/// sigma/mean, interpolated multilinearly; periodic in longitude; an error outside.
+#[pyclass(frozen, name = "GriddedAtmosphere", module = "rhoprop._core")]
+pub struct PyGridded(pub Arc<GriddedField>);
+
+#[pymethods]
+impl PyGridded {
+    #[new]
+    #[pyo3(signature = (epoch, time, altitude, latitude, lon0, ln_mean, rel_sigma))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        epoch: f64,
+        time: (f64, f64, usize),
+        altitude: (f64, f64, usize),
+        latitude: (f64, f64, usize),
+        lon0: f64,
+        ln_mean: PyReadonlyArray4<'_, f64>,
+        rel_sigma: PyReadonlyArray4<'_, f64>,
+    ) -> PyResult<Self> {
+        let a = ln_mean.as_array();
+        let b = rel_sigma.as_array();
+        if a.shape() != b.shape() {
+            return Err(PyValueError::new_err(format!(
+                "ln_mean {:?} and rel_sigma {:?} must have the same shape",
+                a.shape(),
+                b.shape()
+            )));
+        }
+        let expect = [time.2, altitude.2, latitude.2];
+        if a.shape()[..3] != expect {
+            return Err(PyValueError::new_err(format!(
+                "ln_mean has shape {:?}, expected ({}, {}, {}, nlon) from the axes",
+                a.shape(),
+                expect[0],
+                expect[1],
+                expect[2]
+            )));
+        }
+        let nlon = a.shape()[3];
+        // Iterating the views yields logical row-major order whatever the strides.
+        let ln_mean: Vec<f64> = a.iter().copied().collect();
+        let rel_sigma: Vec<f64> = b.iter().copied().collect();
+        GriddedField::new(
+            epoch, time, altitude, latitude, lon0, nlon, ln_mean, rel_sigma,
+        )
+        .map(|f| Self(Arc::new(f)))
+        .map_err(to_py)
+    }
+
+    /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s
+    /// since J2000.
+    fn mean_sigma<'py>(
+        &self,
+        py: Python<'py>,
+        ut1: PyReadonlyArray1<'py, f64>,
+        positions: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<MeanSigma<'py>> {
+        mean_sigma_at(py, self.0.as_ref(), ut1, positions)
+    }
+}
+
+fn mean_sigma_at<'py, A: Atmosphere + ?Sized>(
+    py: Python<'py>,
+    atmosphere: &A,
+    ut1: PyReadonlyArray1<'py, f64>,
+    positions: PyReadonlyArray2<'py, f64>,
+) -> PyResult<MeanSigma<'py>> {
+    let t = vector("ut1", &ut1)?;
+    let p = rows("positions", &positions, 3)?;
+    if t.len() != p.nrows() {
+        return Err(PyValueError::new_err(format!(
+            "ut1 has {} times but positions has {} rows",
+            t.len(),
+            p.nrows()
+        )));
+    }
+    let mut mean = Array1::zeros(t.len());
+    let mut sigma = Array1::zeros(t.len());
+    for i in 0..t.len() {
+        let rot = EarthRotation::new(gmst(t[i]));
+        let (m, s) = atmosphere
+            .mean_sigma(t[i], row3(&p, i), &rot)
+            .map_err(to_py)?;
+        mean[i] = m;
+        sigma[i] = s;
+    }
+    Ok((mean.into_pyarray(py), sigma.into_pyarray(py)))
+}
+
+/// A density source extracted from any of the Python atmosphere classes.
+pub enum AtmosphereRef {
+    Exponential(Exponential),
+    Gridded(Arc<GriddedField>),
+}
+
+impl AtmosphereRef {
+    /// Extracts the core atmosphere from a Python object.
+    pub fn extract(obj: &Bound<'_, PyAny>) -> PyResult<Self> {
+        if let Ok(e) = obj.cast::<PyExponential>() {
+            return Ok(Self::Exponential(e.get().0));
+        }
+        if let Ok(g) = obj.cast::<PyGridded>() {
+            return Ok(Self::Gridded(g.get().0.clone()));
+        }
+        Err(PyTypeError::new_err(format!(
+            "atmosphere must be an ExponentialAtmosphere or GriddedAtmosphere, got {}",
+            obj.get_type().name()?
+        )))
+    }
+}

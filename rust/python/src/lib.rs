@@ -1,0 +1,39 @@
+//! rhoprop._core: the thin pyo3 binding of rhoprop-core. It converts arrays and errors,
+//! releases the GIL around core calls and does nothing else; the documented Python API
+//! lives in the `rhoprop` package.
+
+mod arrays;
+mod density;
+mod detach;
+mod errors;
+mod frames;
+mod propagation;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("RhopropError", py.get_type::<errors::RhopropError>())?;
+    m.add(
+        "DensityFieldError",
+        py.get_type::<errors::DensityFieldError>(),
+    )?;
+    m.add(
+        "IntegrationError",
+        py.get_type::<errors::IntegrationError>(),
+    )?;
+    m.add_class::<density::PyExponential>()?;
+    m.add_class::<density::PyGridded>()?;
+    m.add_function(wrap_pyfunction!(propagation::propagate, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::gmst, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::inertial_to_fixed, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::geodetic_to_fixed, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::rtn_basis, m)?)?;
+    m.add(
+        "DEFAULT_FLOOR_ALTITUDE",
+        rhoprop_core::propagate::DEFAULT_FLOOR_ALTITUDE,
+    )?;
+    Ok(())
+}
