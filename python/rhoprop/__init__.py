@@ -1,0 +1,25 @@
+"""rhoprop: orbit uncertainty of low-Earth-orbit objects caused by uncertainty in
+thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3)."""
+
+from . import density, frames, scenarios
+from ._core import DensityFieldError, IntegrationError, RhopropError
+from .epochs import seconds_since_j2000, to_datetime64
+from .orbit import OrbitState, Spacecraft, Trajectory, propagate
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "DensityFieldError",
+    "IntegrationError",
+    "OrbitState",
+    "RhopropError",
+    "Spacecraft",
+    "Trajectory",
+    "__version__",
+    "density",
+    "frames",
+    "propagate",
+    "scenarios",
+    "seconds_since_j2000",
+    "to_datetime64",
+]

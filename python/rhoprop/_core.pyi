@@ -1,0 +1,92 @@
+"""Type stubs of the compiled extension ``rhoprop._core`` (the thin binding of the Rust
+core). Users call the documented ``rhoprop`` API instead; array arguments are float64."""
+
+from typing import final
+
+import numpy as np
+import numpy.typing as npt
+from typing_extensions import Self
+
+_F64 = npt.NDArray[np.float64]
+
+__all__ = [
+    "DEFAULT_FLOOR_ALTITUDE",
+    "DensityFieldError",
+    "ExponentialAtmosphere",
+    "GriddedAtmosphere",
+    "IntegrationError",
+    "RhopropError",
+    "geodetic",
+    "geodetic_to_fixed",
+    "gmst",
+    "inertial_to_fixed",
+    "propagate",
+    "rtn_basis",
+]
+
+DEFAULT_FLOOR_ALTITUDE: float
+
+class RhopropError(ValueError):
+    """Base of all rhoprop errors (a ValueError)."""
+
+class DensityFieldError(RhopropError):
+    """A density lookup fell outside the sampled field."""
+
+class IntegrationError(RhopropError):
+    """The integrator could not complete (step underflow, too many steps)."""
+
+@final
+class ExponentialAtmosphere:
+    """Exponential atmosphere rho0 * exp(-(h - h0)/H), h = |r| - Re."""
+
+    def __new__(
+        cls, rho0: float, h0: float, scale_height: float, rel_sigma: float = 0.0
+    ) -> Self: ...
+    def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
+        """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
+
+@final
+class GriddedAtmosphere:
+    """Density sampled on a (time, altitude, latitude, longitude) grid of ln(mean) and
+    sigma/mean; multilinear, periodic in longitude, an error outside the grid."""
+
+    def __new__(
+        cls,
+        epoch: float,
+        time: tuple[float, float, int],
+        altitude: tuple[float, float, int],
+        latitude: tuple[float, float, int],
+        lon0: float,
+        ln_mean: _F64,
+        rel_sigma: _F64,
+    ) -> Self: ...
+    def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
+        """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
+
+def propagate(
+    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    epoch: float,
+    state: _F64,
+    drag: float,
+    output_times: _F64,
+    method: str,
+    step: float | None,
+    rtol: float | None,
+    floor_altitude: float,
+) -> tuple[_F64, _F64, float | None, int, int]:
+    """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
+
+def gmst(ut1: _F64) -> _F64:
+    """GMST (IAU-82), rad, for UT1 seconds since J2000."""
+
+def inertial_to_fixed(ut1: _F64, positions: _F64) -> _F64:
+    """Inertial (n, 3) -> Earth-fixed (n, 3), m."""
+
+def geodetic(positions: _F64) -> _F64:
+    """Earth-fixed (n, 3) m -> (n, 3) [lat deg, lon deg, alt m] on WGS-84."""
+
+def geodetic_to_fixed(lla: _F64) -> _F64:
+    """(n, 3) [lat deg, lon deg, alt m] -> Earth-fixed (n, 3) m."""
+
+def rtn_basis(positions: _F64, velocities: _F64) -> _F64:
+    """RTN bases (n, 3, 3), rows R, T, N."""

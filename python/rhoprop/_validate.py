@@ -1,0 +1,51 @@
+"""Input checks shared by the public API: clear ValueError/TypeError naming the argument."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from numbers import Real
+
+import numpy as np
+
+
+def real(name: str, value: object) -> float:
+    """``value`` as a finite float, else TypeError/ValueError naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__}")
+    out = float(value)  # type: ignore[arg-type]
+    if not math.isfinite(out):
+        raise ValueError(f"{name} must be finite, got {out}")
+    return out
+
+
+def positive(name: str, value: object) -> float:
+    """``value`` as a finite float > 0."""
+    out = real(name, value)
+    if out <= 0.0:
+        raise ValueError(f"{name} must be > 0, got {out}")
+    return out
+
+
+def seconds(name: str, value: object) -> float:
+    """A duration in seconds from a number, ``datetime.timedelta`` or ``timedelta64``."""
+    if isinstance(value, _dt.timedelta):
+        return value.total_seconds()
+    if isinstance(value, np.timedelta64):
+        return float(value / np.timedelta64(1, "ns")) * 1e-9
+    return real(name, value)
+
+
+def vector3(name: str, value: object) -> np.ndarray:
+    """A finite float64 array of shape (3,)."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f"{name} must be 3 numbers, got {value!r}") from err
+    if arr.shape != (3,):
+        raise ValueError(f"{name} must have shape (3,), got {arr.shape}")
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        raise ValueError(f"{name}[{bad[0]}] must be finite, got {arr[bad[0]]}")
+    arr.flags.writeable = False
+    return arr

@@ -1,0 +1,84 @@
+"""Frames and time: GMST (IAU-82), inertial <-> Earth-fixed, geodetic WGS-84 and the RTN
+frame of a reference orbit. Inputs may be one vector (3,) or many (n, 3)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from .epochs import J2000, EpochLike, seconds_since_j2000
+
+
+def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
+    a = np.asarray(value, dtype=float)
+    single = a.ndim == 1
+    a2 = np.atleast_2d(a)
+    if a2.ndim != 2 or a2.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (3,) or (n, 3), got {a.shape}")
+    if not np.isfinite(a2).all():
+        raise ValueError(f"{name} must be finite")
+    return np.ascontiguousarray(a2), single
+
+
+def _ut1(epochs: Any, n: int) -> np.ndarray:
+    """UT1 seconds since J2000 of one epoch (repeated n times) or of n epochs."""
+    if np.ndim(epochs) == 0:
+        return np.full(n, seconds_since_j2000(epochs))
+    arr = np.asarray(epochs).astype("datetime64[ns]")
+    if len(arr) != n:
+        raise ValueError(f"got {len(arr)} epochs for {n} positions")
+    return (arr - J2000).astype(np.int64) * 1e-9
+
+
+def gmst(epochs: EpochLike | Any) -> np.ndarray | float:
+    """Greenwich mean sidereal time (IAU-82), rad in [0, 2 pi), at UTC epochs (UT1 = UTC)."""
+    if np.ndim(epochs) == 0:
+        return float(_core.gmst(_ut1(epochs, 1))[0])
+    return _core.gmst(_ut1(epochs, len(epochs)))
+
+
+def inertial_to_fixed(epochs: Any, positions: Any) -> np.ndarray:
+    """Inertial positions (3,) or (n, 3), m -> Earth-fixed, rotated about z by GMST at
+    ``epochs`` (one epoch or n)."""
+    p, single = _rows("positions", positions)
+    out = _core.inertial_to_fixed(_ut1(epochs, len(p)), p)
+    return out[0] if single else out
+
+
+def geodetic(positions_fixed: Any) -> np.ndarray:
+    """Earth-fixed positions (3,) or (n, 3), m -> geodetic WGS-84 [lat deg, lon deg,
+    alt m], closed form (Heikkinen), sub-millimetre."""
+    p, single = _rows("positions_fixed", positions_fixed)
+    out = _core.geodetic(p)
+    return out[0] if single else out
+
+
+def geodetic_to_fixed(lat: Any, lon: Any, alt: Any) -> np.ndarray:
+    """Geodetic WGS-84 latitude, longitude (deg) and altitude (m) -> Earth-fixed (…, 3), m."""
+    la, lo, al = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (lat, lon, alt)))
+    lla = np.stack([la.ravel(), lo.ravel(), al.ravel()], axis=1)
+    if not np.isfinite(lla).all():
+        raise ValueError("lat, lon and alt must be finite")
+    return _core.geodetic_to_fixed(lla).reshape((*la.shape, 3))
+
+
+def rtn_basis(position: Any, velocity: Any) -> np.ndarray:
+    """RTN basis (3, 3) or (n, 3, 3) of the orbit through ``position`` (m) and
+    ``velocity`` (m/s): rows R = r/|r|, T = N x R, N = (r x v)/|r x v|."""
+    p, single = _rows("position", position)
+    v, _ = _rows("velocity", velocity)
+    if len(p) != len(v):
+        raise ValueError(f"position has {len(p)} rows but velocity has {len(v)}")
+    out = _core.rtn_basis(p, v)
+    return out[0] if single else out
+
+
+def to_rtn(positions: Any, ref_positions: Any, ref_velocities: Any) -> np.ndarray:
+    """Position differences ``positions - ref_positions`` (…, 3), m, expressed in the RTN
+    frame of the reference orbit (radial, along-track, cross-track). ``positions`` may
+    carry leading member axes: shape (..., n, 3) against references (n, 3)."""
+    basis = rtn_basis(ref_positions, ref_velocities)
+    delta = np.asarray(positions, dtype=float) - np.asarray(ref_positions, dtype=float)
+    return np.einsum("...ij,...j->...i", basis, delta)

@@ -1,0 +1,38 @@
+"""The paper's study as data (Paul, Licata & Mehta; DESIGN.md section 7)."""
+
+from __future__ import annotations
+
+from .density.exponential import Exponential
+from .epochs import EpochLike
+from .orbit import OrbitState, Spacecraft
+
+#: Initial inertial position, m, and velocity, m/s.
+PAPER_POSITION = (3782900.7032, -5441600.6779, -1420075.1327)
+PAPER_VELOCITY = (-606.6600, 1539.2559, -7488.3946)
+#: Reference drag coefficient and area-to-mass ratio (m^2/kg) of the paper's sphere.
+PAPER_CD = 3.0912
+PAPER_AREA_TO_MASS = 0.0015
+#: Propagation span: 3 days, s.
+PAPER_DURATION = 259200.0
+#: Epochs of the four cases (III/IV share I/II's with mean geomagnetic drivers).
+CASE_EPOCHS = {
+    "solar-max-storm": "2002-09-07T01:00:00",
+    "solar-min": "2009-12-02T00:00:00",
+    "solar-max-simulated": "2002-09-07T01:00:00",
+    "solar-min-simulated": "2009-12-02T00:00:00",
+}
+
+
+def paper_state(epoch: EpochLike = CASE_EPOCHS["solar-max-storm"]) -> OrbitState:
+    """The paper's initial state at ``epoch`` (Case I by default)."""
+    return OrbitState(epoch, PAPER_POSITION, PAPER_VELOCITY)
+
+
+def paper_spacecraft(cd: float = PAPER_CD) -> Spacecraft:
+    """The paper's sphere: Cd (default 3.0912) and A/m = 0.0015 m^2/kg."""
+    return Spacecraft(cd, PAPER_AREA_TO_MASS)
+
+
+def benchmark_exponential(rel_sigma: float = 0.0) -> Exponential:
+    """The analytic benchmark atmosphere: rho = 3.725e-12 kg/m^3 at 400 km, H = 58.515 km."""
+    return Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=rel_sigma)

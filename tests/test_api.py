@@ -1,0 +1,138 @@
+"""The Python API: types, shapes, epochs, and clear errors on bad input."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+
+
+def test_trajectory_shapes_and_epochs(paper_state, paper_craft, benchmark_atmosphere):
+    tr = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 7000.0, output_step=3000.0)
+    np.testing.assert_array_equal(tr.times, [0.0, 3000.0, 6000.0, 7000.0])
+    assert tr.positions.shape == (4, 3) and tr.velocities.shape == (4, 3)
+    assert tr.states.shape == (4, 6)
+    assert tr.epochs[-1] == np.datetime64("2002-09-07T02:56:40", "ns")
+    np.testing.assert_array_equal(tr.positions[0], paper_state.position)
+    assert tr.decayed_at is None and tr.clipped == 0 and tr.evaluations > 0
+    end = tr.state_at(-1)
+    assert isinstance(end, rp.OrbitState) and end.epoch == tr.epochs[-1]
+    # Start and end only by default.
+    assert rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 60.0).times.tolist() == [
+        0.0,
+        60.0,
+    ]
+
+
+@pytest.mark.parametrize(
+    "epoch",
+    [
+        "2002-09-07T01:00:00Z",
+        "2002-09-07T01:00:00",
+        dt.datetime(2002, 9, 7, 1),
+        dt.datetime(2002, 9, 7, 3, tzinfo=dt.timezone(dt.timedelta(hours=2))),
+        np.datetime64("2002-09-07T01:00"),
+    ],
+)
+def test_epoch_forms(epoch):
+    s = rp.OrbitState(epoch, [7e6, 0, 0], [0, 7.5e3, 0])
+    assert s.epoch == np.datetime64("2002-09-07T01:00:00", "ns")
+
+
+def test_seconds_since_j2000():
+    assert rp.seconds_since_j2000("2000-01-01T12:00:00") == 0.0
+    assert rp.seconds_since_j2000("2000-01-02T12:00:00.5") == 86400.5
+
+
+def test_timedelta_duration(paper_state, paper_craft, benchmark_atmosphere):
+    a = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, dt.timedelta(hours=1))
+    b = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 3600.0)
+    np.testing.assert_array_equal(a.positions, b.positions)
+
+
+def test_exponential_mean_std():
+    model = rp.density.Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=0.2)
+    # At the equator geodetic and spherical altitude coincide.
+    mean, std = model.mean_std(np.datetime64("2002-09-07"), 0.0, [0.0, 90.0], 400e3)
+    np.testing.assert_allclose(mean, 3.725e-12, rtol=1e-12)
+    np.testing.assert_allclose(std, 0.2 * 3.725e-12, rtol=1e-12)
+    # At the pole a geodetic altitude of 400 km is 21.4 km lower in spherical altitude.
+    pole, _ = model.mean_std(np.datetime64("2002-09-07"), 90.0, 0.0, 400e3)
+    spherical = 6356752.314245 + 400e3 - 6378137.0
+    assert pole == pytest.approx(3.725e-12 * np.exp(-(spherical - 400e3) / 58.515e3), rel=1e-9)
+
+
+def test_decay_is_reported_not_raised(paper_state, paper_craft):
+    dense = rp.density.Exponential(1e-9, 400e3, 58.515e3)
+    tr = rp.propagate(paper_state, paper_craft, dense, 259200.0, output_step=3600.0)
+    assert tr.decayed_at is not None and tr.decayed_at < 259200.0
+    assert len(tr.times) < 73 and np.isfinite(tr.positions).all()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"position": [np.nan, 0, 0]}, ValueError, r"position\[0\] must be finite"),
+        ({"velocity": [0, np.inf, 0]}, ValueError, r"velocity\[1\] must be finite"),
+        ({"position": [1e6, 0, 0]}, ValueError, "below the Earth's surface"),
+        ({"position": [6.45e6, 0, 0]}, ValueError, "below the decay floor"),
+        ({"position": [1, 2]}, ValueError, r"shape \(3,\)"),
+        ({"cd": 0.0}, ValueError, "cd must be > 0"),
+        ({"cd": -3.0}, ValueError, "cd must be > 0"),
+        ({"area_to_mass": 0.0}, ValueError, "area_to_mass must be > 0"),
+        ({"area_to_mass": "big"}, TypeError, "area_to_mass must be a real number"),
+        ({"duration": 0.0}, ValueError, "duration must be > 0"),
+        ({"duration": -5.0}, ValueError, "duration must be > 0"),
+        ({"duration": np.nan}, ValueError, "duration must be finite"),
+        ({"method": "euler"}, ValueError, "unknown method 'euler'"),
+        ({"method": "rk8", "step": -1.0}, ValueError, "step must be > 0"),
+        ({"method": "rk8", "rtol": 1e-9}, ValueError, "rtol applies to method 'dop853'"),
+        ({"rtol": 0.0}, ValueError, "rtol must be > 0"),
+        ({"rtol": 5.0}, ValueError, "rtol = 5 is invalid"),
+        ({"output_step": 0.0}, ValueError, "output_step must be > 0"),
+        ({"epoch": "yesterday"}, ValueError, "not an ISO-8601 UTC time"),
+        ({"epoch": 12.0}, TypeError, "epoch must be an ISO string"),
+        ({"density": "msis"}, TypeError, "density must be a rhoprop density model"),
+    ],
+)
+def test_bad_input_raises_clearly(kwargs, error, message):
+    state = dict(
+        epoch="2002-09-07T01:00:00",
+        position=rp.scenarios.PAPER_POSITION,
+        velocity=rp.scenarios.PAPER_VELOCITY,
+    )
+    craft = dict(cd=3.0912, area_to_mass=0.0015)
+    call = dict(density=rp.scenarios.benchmark_exponential(), duration=3600.0)
+    options = {}
+    for key, value in kwargs.items():
+        for target in (state, craft, call):
+            if key in target:
+                target[key] = value
+                break
+        else:
+            options[key] = value
+    with pytest.raises(error, match=message):
+        rp.propagate(
+            rp.OrbitState(**state),
+            rp.Spacecraft(**craft),
+            call["density"],
+            call["duration"],
+            **options,
+        )
+
+
+def test_core_errors_are_value_errors():
+    assert issubclass(rp.RhopropError, ValueError)
+    assert issubclass(rp.DensityFieldError, rp.RhopropError)
+    with pytest.raises(rp.RhopropError, match="scale_height = -1 is invalid"):
+        rp._core.ExponentialAtmosphere(1e-12, 400e3, -1.0)
+
+
+def test_bad_exponential_parameters():
+    with pytest.raises(ValueError, match="rel_sigma must be >= 0"):
+        rp.density.Exponential(1e-12, 400e3, 58e3, rel_sigma=-0.1)
+    with pytest.raises(ValueError, match="rho0 must be > 0"):
+        rp.density.Exponential(0.0, 400e3, 58e3)
