@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from reference import reference_orbit
 
 import rhoprop as rp
+from reference import reference_orbit
 
 DURATION = 259200.0
 TIMES = np.arange(0.0, DURATION + 1, 21600.0)

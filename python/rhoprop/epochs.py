@@ -5,11 +5,10 @@ contract allows; leap seconds are not modelled (numpy's datetime64 has none)."""
 from __future__ import annotations
 
 import datetime as _dt
-from typing import Union
 
 import numpy as np
 
-EpochLike = Union[str, _dt.datetime, _dt.date, np.datetime64]
+EpochLike = str | _dt.datetime | _dt.date | np.datetime64
 
 #: The J2000 epoch, 2000-01-01T12:00:00 (UTC, taken as UT1).
 J2000 = np.datetime64("2000-01-01T12:00:00", "ns")
