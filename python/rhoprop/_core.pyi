@@ -53,7 +53,7 @@ class GriddedAtmosphere:
     def __new__(
         cls,
         epoch: float,
-        time: tuple[float, float, int],
+        time: _F64,
         altitude: tuple[float, float, int],
         latitude: tuple[float, float, int],
         lon0: float,

@@ -187,7 +187,7 @@ def propagate(
     floor = _validate.real("floor_altitude", floor_altitude)
     times = output_grid(span, output_step)
     epoch = seconds_since_j2000(state.epoch)
-    atmosphere = as_atmosphere(density, state.epoch, span)
+    atmosphere = as_atmosphere(density, state, span)
     t, states, decayed_at, evaluations, clipped = _core.propagate(
         atmosphere,
         epoch,

@@ -3,16 +3,23 @@
 A stochastic density model answers ``mean_std(times, lat, lon, alt)`` (UTC datetime64,
 geodetic WGS-84 degrees and metres) with mean and standard deviation in kg/m^3, and gives
 the core an atmosphere it can evaluate without calling back into Python through
-``atmosphere(epoch, duration)``: an analytic core atmosphere or a sampled density field.
+``atmosphere(state, duration)``: an analytic core atmosphere or a sampled density field.
 """
 
 from __future__ import annotations
 
+import abc
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from .. import _core
+from ..epochs import EpochLike
+from .field import DensityField, FieldResolution, sample_field
+
+MU = 3.986004418e14
+R_EQUATOR = 6378137.0
+R_POLE = 6356752.314245
 
 #: Core atmosphere objects the propagator evaluates directly.
 CoreAtmosphere = (_core.ExponentialAtmosphere, _core.GriddedAtmosphere)
@@ -26,18 +33,18 @@ class DensityModel(Protocol):
         """Mean and standard deviation of density, kg/m^3, broadcast over the inputs."""
         ...
 
-    def atmosphere(self, epoch: np.datetime64, duration: float) -> Any:
-        """The core atmosphere covering ``duration`` s from ``epoch``."""
+    def atmosphere(self, state: Any, duration: float) -> Any:
+        """The core atmosphere covering ``duration`` s of the orbit from ``state``."""
         ...
 
 
-def as_atmosphere(model: Any, epoch: np.datetime64, duration: float) -> Any:
-    """The core atmosphere of ``model`` for ``duration`` s from ``epoch``."""
+def as_atmosphere(model: Any, state: Any, duration: float) -> Any:
+    """The core atmosphere of ``model`` for ``duration`` s of the orbit from ``state``."""
     if isinstance(model, CoreAtmosphere):
         return model
     make = getattr(model, "atmosphere", None)
     if callable(make):
-        return make(epoch, duration)
+        return make(state, duration)
     raise TypeError(
         "density must be a rhoprop density model (e.g. rhoprop.density.Exponential), "
         f"got {type(model).__name__}"
@@ -70,3 +77,97 @@ def broadcast_inputs(
         raise ValueError("times contain NaT")
     t, la, lo, al = np.broadcast_arrays(t, la, lo, al)
     return t, la, lo, al
+
+
+def altitude_band(
+    position: Any, velocity: Any, below: float = 50e3, above: float = 25e3
+) -> tuple[float, float]:
+    """Geodetic altitude range (m) an orbit can reach: perigee radius minus the equatorial
+    radius, apogee radius minus the polar radius, widened by ``below``/``above`` m for
+    decay and margin."""
+    r = np.asarray(position, dtype=float)
+    v = np.asarray(velocity, dtype=float)
+    rn = np.linalg.norm(r)
+    a = 1.0 / (2.0 / rn - v @ v / MU)
+    e_vec = np.cross(v, np.cross(r, v)) / MU - r / rn
+    e = float(np.linalg.norm(e_vec))
+    if not (a > 0 and e < 1):
+        raise ValueError("the orbit is not elliptic: a sampled density field needs a bounded orbit")
+    low = a * (1 - e) - R_EQUATOR - below
+    high = a * (1 + e) - R_POLE + above
+    return max(low, 0.0), high
+
+
+class SampledModel(abc.ABC):
+    """Base of density models that the core evaluates through a sampled field.
+
+    Subclasses implement :meth:`mean_std`; they may override ``_grid_values`` (faster
+    grid sampling), ``_breaks`` (epochs where drivers jump) and ``cache_key`` (enables the
+    on-disk field cache).
+    """
+
+    #: Grid resolution used by :meth:`atmosphere` (None: the default resolution).
+    resolution: FieldResolution | None = None
+
+    @abc.abstractmethod
+    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and standard deviation of density, kg/m^3, at UTC ``times``, geodetic
+        ``lat``/``lon`` (deg) and ``alt`` (m), broadcast together."""
+
+    def field(
+        self,
+        start: EpochLike,
+        end: EpochLike,
+        *,
+        altitude_range: tuple[float, float],
+        resolution: FieldResolution | None = None,
+        cache: bool = True,
+    ) -> DensityField:
+        """Samples the model over [start, end] (UTC) and ``altitude_range`` (geodetic, m)
+        on a (time, altitude, latitude, longitude) grid for the core (see
+        :class:`~rhoprop.density.field.FieldResolution` for the defaults)."""
+        return sample_field(
+            self,
+            start,
+            end,
+            altitude_range=altitude_range,
+            resolution=resolution or self.resolution,
+            cache=cache,
+        )
+
+    def atmosphere(self, state: Any, duration: float) -> Any:
+        """The sampled field covering ``duration`` s of the orbit from ``state``."""
+        end = state.epoch + np.timedelta64(int(np.ceil(duration * 1e9)), "ns")
+        band = altitude_band(state.position, state.velocity)
+        return self.field(state.epoch, end, altitude_range=band).core
+
+    def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
+        """A JSON-able description identifying the sampled values, or None (no caching)."""
+        return None
+
+    def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
+        """Epochs in (start, end) where the model's drivers change in a step."""
+        return np.array([], dtype="datetime64[ns]")
+
+    def _grid_values(
+        self,
+        epochs: np.ndarray,
+        left: np.ndarray,
+        alt: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """ln(mean) and sigma/mean on the grid (nt, nalt, nlat, nlon) from ``mean_std``."""
+        mean, std = self.mean_std(
+            epochs[:, None, None, None],
+            lat[None, None, :, None],
+            lon[None, None, None, :],
+            alt[None, :, None, None],
+        )
+        mean = np.broadcast_to(mean, (len(epochs), len(alt), len(lat), len(lon)))
+        std = np.broadcast_to(std, mean.shape)
+        if not (np.isfinite(mean).all() and (mean > 0).all()):
+            raise ValueError(f"{type(self).__name__}.mean_std gave a non-positive or NaN mean")
+        if not (np.isfinite(std).all() and (std >= 0).all()):
+            raise ValueError(f"{type(self).__name__}.mean_std gave a negative or NaN std")
+        return np.log(mean), std / mean

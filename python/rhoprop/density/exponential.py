@@ -53,6 +53,6 @@ class Exponential:
         mean = self.rho0 * np.exp(-(r - R_EARTH - self.h0) / self.scale_height)
         return mean, self.rel_sigma * mean
 
-    def atmosphere(self, epoch: np.datetime64, duration: float) -> Any:
+    def atmosphere(self, state: Any, duration: float) -> Any:
         """The analytic core atmosphere (valid at every time and place)."""
         return self._core

@@ -52,7 +52,7 @@ impl PyGridded {
     #[allow(clippy::too_many_arguments)]
     fn new(
         epoch: f64,
-        time: (f64, f64, usize),
+        time: PyReadonlyArray1<'_, f64>,
         altitude: (f64, f64, usize),
         latitude: (f64, f64, usize),
         lon0: f64,
@@ -68,7 +68,8 @@ impl PyGridded {
                 b.shape()
             )));
         }
-        let expect = [time.2, altitude.2, latitude.2];
+        let time: Vec<f64> = time.as_array().to_vec();
+        let expect = [time.len(), altitude.2, latitude.2];
         if a.shape()[..3] != expect {
             return Err(PyValueError::new_err(format!(
                 "ln_mean has shape {:?}, expected ({}, {}, {}, nlon) from the axes",

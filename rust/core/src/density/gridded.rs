@@ -3,6 +3,11 @@
 //! however slow, is sampled once into this form and then drives the integrator at the
 //! cost of one multilinear interpolation per evaluation.
 //!
+//! The time axis is a list of nodes; a node given twice marks a discontinuity (the first
+//! copy holds the value just before, the second the value from then on), so that density
+//! models whose drivers change in steps (3-hourly ap, daily F10.7) are represented exactly
+//! instead of being smeared across a cell.
+//!
 //! Behaviour outside the grid: time, altitude and latitude outside their axis range are
 //! an error ([`CoreError::OutsideField`]) naming the axis, the value and the covered
 //! range; there is no extrapolation and no clamping. Longitude is periodic and always
@@ -61,12 +66,86 @@ impl Axis {
     }
 }
 
+/// A non-decreasing time axis whose repeated nodes mark discontinuities.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeNodes {
+    nodes: Vec<f64>,
+}
+
+impl TimeNodes {
+    fn checked(nodes: Vec<f64>) -> Result<Self, CoreError> {
+        let n = nodes.len();
+        if n < 2 {
+            return Err(CoreError::invalid(
+                "time axis length",
+                n as f64,
+                "needs at least 2 nodes",
+            ));
+        }
+        for (i, &t) in nodes.iter().enumerate() {
+            finite(&format!("time node {i}"), t)?;
+            if i > 0 && t < nodes[i - 1] {
+                return Err(CoreError::invalid(
+                    format!("time node {i}"),
+                    t,
+                    format!("time nodes must not decrease (previous {})", nodes[i - 1]),
+                ));
+            }
+            if i > 1 && t == nodes[i - 2] {
+                return Err(CoreError::invalid(
+                    format!("time node {i}"),
+                    t,
+                    "a node may appear at most twice",
+                ));
+            }
+        }
+        if nodes[1] == nodes[0] || nodes[n - 1] == nodes[n - 2] {
+            return Err(CoreError::invalid(
+                "time axis",
+                nodes[0],
+                "the first and last cells must not be empty",
+            ));
+        }
+        Ok(Self { nodes })
+    }
+
+    /// First node.
+    pub fn start(&self) -> f64 {
+        self.nodes[0]
+    }
+
+    /// Last node.
+    pub fn end(&self) -> f64 {
+        self.nodes[self.nodes.len() - 1]
+    }
+
+    /// The nodes.
+    pub fn nodes(&self) -> &[f64] {
+        &self.nodes
+    }
+
+    /// Cell and fraction of `t`; at a repeated node the later cell (value after the jump).
+    #[inline(always)]
+    fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        let n = self.nodes.len();
+        let slack = 1e-9 * (self.end() - self.start());
+        if !(t >= self.start() - slack && t <= self.end() + slack) {
+            return None;
+        }
+        // First node strictly after t; the cell starts one before it.
+        let j = self.nodes.partition_point(|&x| x <= t).clamp(1, n - 1);
+        let i = j - 1;
+        let width = self.nodes[j] - self.nodes[i];
+        Some((i, ((t - self.nodes[i]) / width).clamp(0.0, 1.0)))
+    }
+}
+
 /// Density sampled on a (time, altitude, latitude, longitude) grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GriddedField {
     /// Epoch of the time axis, seconds since J2000 (UT1).
     epoch: f64,
-    time: Axis,
+    time: TimeNodes,
     alt: Axis,
     /// Latitude axis in radians.
     lat: Axis,
@@ -78,14 +157,14 @@ pub struct GriddedField {
 }
 
 impl GriddedField {
-    /// Builds a field. `epoch` in seconds since J2000; `time` axis in seconds from
-    /// `epoch`; `alt` in metres (geodetic); `lat` in degrees (geodetic); longitude nodes
+    /// Builds a field. `epoch` in seconds since J2000; `time` nodes in seconds from
+    /// `epoch` (non-decreasing, a repeated node marks a discontinuity); `alt` in metres (geodetic); `lat` in degrees (geodetic); longitude nodes
     /// at `lon0_deg + k * 360 / nlon` degrees, periodic. `ln_mean` (ln of kg/m^3) and
     /// `rel_sigma` (sigma/mean, >= 0) are row-major [time][alt][lat][lon].
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         epoch: f64,
-        time: (f64, f64, usize),
+        time: Vec<f64>,
         alt: (f64, f64, usize),
         lat_deg: (f64, f64, usize),
         lon0_deg: f64,
@@ -94,7 +173,7 @@ impl GriddedField {
         rel_sigma: Vec<f64>,
     ) -> Result<Self, CoreError> {
         finite("field epoch", epoch)?;
-        let time = Axis::checked("time", time.0, time.1, time.2)?;
+        let time = TimeNodes::checked(time)?;
         let alt = Axis::checked("altitude", alt.0, alt.1, alt.2)?;
         let lat = Axis::checked("latitude", lat_deg.0, lat_deg.1, lat_deg.2)?;
         if lat.start < -90.0 - 1e-9 || lat.end() > 90.0 + 1e-9 {
@@ -116,7 +195,7 @@ impl GriddedField {
                 "needs at least 3 nodes around the globe",
             ));
         }
-        let n = time.len * alt.len * lat.len * nlon;
+        let n = time.nodes.len() * alt.len * lat.len * nlon;
         for (name, v) in [("ln_mean", &ln_mean), ("rel_sigma", &rel_sigma)] {
             if v.len() != n {
                 return Err(CoreError::shape(
@@ -124,7 +203,7 @@ impl GriddedField {
                     format!(
                         "expected {} values ({} x {} x {} x {}), got {}",
                         n,
-                        time.len,
+                        time.nodes.len(),
                         alt.len,
                         lat.len,
                         nlon,
@@ -159,9 +238,9 @@ impl GriddedField {
         })
     }
 
-    /// Time axis (seconds from the field epoch).
-    pub fn time_axis(&self) -> Axis {
-        self.time
+    /// Time nodes (seconds from the field epoch).
+    pub fn time_nodes(&self) -> &TimeNodes {
+        &self.time
     }
 
     /// Altitude axis (m).
@@ -191,10 +270,13 @@ impl GriddedField {
                 max: a.end() * scale,
                 t,
             };
-        let (it, ft) = self
-            .time
-            .locate(t)
-            .ok_or_else(|| outside("time (s from field start)", t, &self.time, 1.0))?;
+        let (it, ft) = self.time.locate(t).ok_or(CoreError::OutsideField {
+            axis: "time (s from field epoch)",
+            value: t,
+            min: self.time.start(),
+            max: self.time.end(),
+            t,
+        })?;
         let (ia, fa) = self
             .alt
             .locate(alt)
@@ -269,7 +351,7 @@ mod tests {
         }
         GriddedField::new(
             100.0,
-            (0.0, 600.0, nt),
+            vec![0.0, 600.0, 1200.0],
             (300e3, 50e3, na),
             (-60.0, 30.0, nl),
             0.0,
@@ -290,6 +372,37 @@ mod tests {
         assert!((m.ln() - expect).abs() < 1e-12, "{} vs {}", m.ln(), expect);
         let rel = 0.1 + 1e-6 * t + 1e-7 * h;
         assert!((s / m - rel).abs() < 1e-12);
+    }
+
+    #[test]
+    fn repeated_time_node_is_an_exact_step() {
+        // ln(mean) = -20 before t = 10 s and -19 from then on, with a linear ramp of
+        // 0.01 per second on each side.
+        let nodes = vec![0.0, 10.0, 10.0, 20.0];
+        let ln_at = [-20.0, -19.9, -19.0, -18.9];
+        let mut ln_mean = Vec::new();
+        for v in ln_at {
+            ln_mean.extend(std::iter::repeat_n(v, 2 * 2 * 3));
+        }
+        let n = ln_mean.len();
+        let f = GriddedField::new(
+            0.0,
+            nodes,
+            (0.0, 1.0, 2),
+            (-1.0, 1.0, 2),
+            0.0,
+            3,
+            ln_mean,
+            vec![0.1; n],
+        )
+        .unwrap();
+        let ln = |t: f64| f.at_geodetic(t, 0.0, 0.0, 0.5).unwrap().0.ln();
+        assert!((ln(5.0) - -19.95).abs() < 1e-12);
+        assert!((ln(9.999999) - -19.9).abs() < 1e-6);
+        assert!((ln(10.0) - -19.0).abs() < 1e-12);
+        assert!((ln(15.0) - -18.95).abs() < 1e-12);
+        assert!((ln(20.0) - -18.9).abs() < 1e-12);
+        assert!(f.at_geodetic(20.1, 0.0, 0.0, 0.5).is_err());
     }
 
     #[test]
@@ -331,7 +444,7 @@ mod tests {
         let ok = |v: Vec<f64>| {
             GriddedField::new(
                 0.0,
-                (0.0, 1.0, 2),
+                vec![0.0, 1.0],
                 (0.0, 1.0, 2),
                 (-1.0, 1.0, 2),
                 0.0,
@@ -347,7 +460,7 @@ mod tests {
         assert!(ok(nan).unwrap_err().to_string().contains("ln_mean[5]"));
         assert!(GriddedField::new(
             0.0,
-            (0.0, 1.0, 2),
+            vec![0.0, 1.0],
             (0.0, 1.0, 2),
             (80.0, 20.0, 2),
             0.0,
@@ -356,5 +469,25 @@ mod tests {
             vec![0.1; 24]
         )
         .is_err());
+        let time = |nodes: Vec<f64>| {
+            let n = nodes.len();
+            GriddedField::new(
+                0.0,
+                nodes,
+                (0.0, 1.0, 2),
+                (-1.0, 1.0, 2),
+                0.0,
+                3,
+                vec![0.0; 12 * n],
+                vec![0.1; 12 * n],
+            )
+        };
+        assert!(time(vec![0.0, 1.0, 1.0, 2.0]).is_ok());
+        assert!(time(vec![0.0, 1.0, 0.5])
+            .unwrap_err()
+            .to_string()
+            .contains("must not decrease"));
+        assert!(time(vec![0.0, 1.0, 1.0, 1.0, 2.0]).is_err());
+        assert!(time(vec![0.0, 0.0, 2.0]).is_err());
     }
 }

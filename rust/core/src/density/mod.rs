@@ -6,7 +6,7 @@ mod exponential;
 mod gridded;
 
 pub use exponential::Exponential;
-pub use gridded::{Axis, GriddedField};
+pub use gridded::{Axis, GriddedField, TimeNodes};
 
 use crate::error::CoreError;
 use crate::frames::EarthRotation;
