@@ -5,6 +5,7 @@ from . import density, frames, scenarios
 from ._core import DensityFieldError, IntegrationError, RhopropError
 from .epochs import seconds_since_j2000, to_datetime64
 from .orbit import OrbitState, Spacecraft, Trajectory, propagate
+from .spaceweather import SpaceWeather
 
 __version__ = "0.1.0"
 
@@ -13,6 +14,7 @@ __all__ = [
     "IntegrationError",
     "OrbitState",
     "RhopropError",
+    "SpaceWeather",
     "Spacecraft",
     "Trajectory",
     "__version__",

@@ -1,15 +1,34 @@
 """Density models with uncertainty: each gives the mean and standard deviation of
-thermospheric density (kg/m^3) and an atmosphere the Rust core evaluates."""
+thermospheric density (kg/m^3) and an atmosphere the Rust core evaluates.
+
+- :class:`Msis`: NRLMSIS 2.1 / 2.0 / NRLMSISE-00 through pymsis, with
+  :class:`DriverUncertainty` (default) or :class:`RelativeSigma`.
+- :class:`Exponential`: the analytic benchmark atmosphere.
+- :class:`Gridded`: a user grid (arrays or an xarray Dataset).
+- :class:`PcaRom`: a PCA reduced-order model as HASDM-ML outputs it.
+- :class:`FromFunction`: any callable (times, lat, lon, alt) -> (mean, std).
+- :class:`DensityField`: a sampled field (what :meth:`SampledModel.field` returns).
+"""
 
 from .base import DensityModel, SampledModel, altitude_band, as_atmosphere
 from .exponential import Exponential
 from .field import DensityField, FieldResolution
+from .function import FromFunction
+from .gridded import Gridded
+from .msis import DriverUncertainty, Msis, RelativeSigma
+from .pcarom import PcaRom
 
 __all__ = [
     "DensityField",
     "DensityModel",
+    "DriverUncertainty",
     "Exponential",
     "FieldResolution",
+    "FromFunction",
+    "Gridded",
+    "Msis",
+    "PcaRom",
+    "RelativeSigma",
     "SampledModel",
     "altitude_band",
     "as_atmosphere",
