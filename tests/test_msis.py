@@ -138,3 +138,23 @@ def test_bad_construction(sw):
         Msis("2.1", space_weather=sw, uncertainty=0.1)
     with pytest.raises(ValueError, match="model_floor must be >= 0"):
         DriverUncertainty(model_floor=-0.1)
+
+
+def test_propagate_through_msis_samples_a_cached_field(sw):
+    state = rp.scenarios.paper_state()
+    craft = rp.scenarios.paper_spacecraft()
+    model = Msis("00", space_weather=sw)
+    a = rp.propagate(state, craft, model, 6 * 3600.0, method="rk8")
+    b = rp.propagate(state, craft, model, 6 * 3600.0, method="rk8")  # from the disk cache
+    np.testing.assert_array_equal(a.positions, b.positions)
+    # Drag lowers the orbit and so speeds it up: against a drag-free orbit the member is
+    # ahead (positive along-track), by an amount of the same order as with the benchmark
+    # exponential atmosphere, whose density at 400 km is close to NRLMSIS's here.
+    free = rp.propagate(state, craft, rp.density.Exponential(1e-300, 400e3, 58.515e3), 6 * 3600.0)
+    expo = rp.propagate(state, craft, rp.scenarios.benchmark_exponential(), 6 * 3600.0)
+
+    def ahead(traj):
+        return rp.frames.to_rtn(traj.positions[-1], free.positions[-1], free.velocities[-1])[1]
+
+    ratio = ahead(a) / ahead(expo)
+    assert ahead(a) > 0 and 0.33 < ratio < 3, (ahead(a), ahead(expo))

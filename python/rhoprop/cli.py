@@ -9,8 +9,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from . import __version__, frames, scenarios
+from . import __version__, density, frames, scenarios
 from .orbit import propagate
+from .spaceweather import SpaceWeather
 
 
 def _paper(args: argparse.Namespace) -> int:
@@ -40,8 +41,26 @@ def _paper(args: argparse.Namespace) -> int:
     assert reference is not None
     print()
     print(f"  final position [m]: {np.array2string(reference, precision=3)}")
+    _paper_models(state, craft, duration)
     print("The Monte Carlo, CCSP and ensemble stages of the study are not built yet.")
     return 0
+
+
+def _paper_models(state, craft, duration: float) -> None:
+    """Mean orbits of Case I through the three NRLMSIS stand-ins, along-track vs 2.1."""
+    sw = SpaceWeather()
+    print()
+    print("Mean orbits through NRLMSIS (Case I: 2002-09-07 storm; fields cached on disk)")
+    print(f"  {'model':<12} {'field+run [s]':>13}  {'along-track vs 2.1 [m]':>23}")
+    ref = None
+    for version in ("2.1", "2.0", "00"):
+        t0 = time.perf_counter()
+        tr = propagate(state, craft, density.Msis(version, space_weather=sw), duration)
+        wall = time.perf_counter() - t0
+        if ref is None:
+            ref = tr
+        along = frames.to_rtn(tr.positions[-1], ref.positions[-1], ref.velocities[-1])[1]
+        print(f"  {'NRLMSIS ' + version:<12} {wall:>13.2f}  {along:>23.1f}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -54,9 +73,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     paper = sub.add_parser(
         "paper",
-        help="run the paper study (for now: the deterministic 3-day propagation)",
+        help="run the paper study (for now: the deterministic 3-day propagations)",
         description="Run the paper study. For now this propagates the paper's orbit for 3 "
-        "days with each integrator and prints the result.",
+        "days with each integrator (benchmark atmosphere) and through NRLMSIS 2.1, 2.0 and "
+        "NRLMSISE-00 for Case I, and prints the results.",
     )
     paper.add_argument("--quick", action="store_true", help="propagate 6 hours instead of 3 days")
     paper.set_defaults(run=_paper)
