@@ -7,6 +7,7 @@ use crate::constants::{J2, MU, OMEGA_EARTH, R_EARTH};
 use crate::density::Atmosphere;
 use crate::error::CoreError;
 use crate::frames::EarthRotation;
+use crate::kappa::KappaLanes;
 use crate::time::gmst;
 
 /// Batch state: `[x, y, z, vx, vy, vz][lane]`, m and m/s, inertial.
@@ -35,8 +36,8 @@ pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     epoch: f64,
     /// Drag parameter Cd * A / m per lane, m^2/kg (0 switches drag off in that lane).
     pub drag: [f64; W],
-    /// Normalised density offset per lane (0 = mean density).
-    pub kappa: [f64; W],
+    /// Normalised density offset per lane on the current node segment (0 = mean density).
+    pub kappa: KappaLanes<W>,
     pub perturbation: Perturbation,
     /// Number of density evaluations clipped at zero, per lane.
     pub clipped: [u64; W],
@@ -51,7 +52,7 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             atmosphere,
             epoch,
             drag,
-            kappa: [0.0; W],
+            kappa: KappaLanes::zero(),
             perturbation: Perturbation::Additive,
             clipped: [0; W],
             evaluations: 0,
@@ -61,6 +62,42 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
     /// Epoch of t = 0, seconds since J2000.
     pub fn epoch(&self) -> f64 {
         self.epoch
+    }
+}
+
+impl<A: Atmosphere + ?Sized, const W: usize> Dynamics<'_, A, W> {
+    /// Density (kg/m^3) that lane `l` sees at `t` s from the epoch in state `y`.
+    pub fn density(&self, t: f64, y: &State<W>, l: usize) -> Result<f64, CoreError> {
+        let ut1 = self.epoch + t;
+        let rot = EarthRotation::new(gmst(ut1));
+        let (mean, sigma) = self
+            .atmosphere
+            .mean_sigma(ut1, [y[0][l], y[1][l], y[2][l]], &rot)?;
+        Ok(perturb(mean, sigma, self.kappa.at(l, t), self.perturbation).0)
+    }
+}
+
+/// Density from mean, sigma and kappa; the flag tells whether it was clipped at zero.
+#[inline(always)]
+pub fn perturb(mean: f64, sigma: f64, kappa: f64, perturbation: Perturbation) -> (f64, bool) {
+    match perturbation {
+        Perturbation::Additive => {
+            let rho = mean + kappa * sigma;
+            if rho < 0.0 {
+                (0.0, true)
+            } else {
+                (rho, false)
+            }
+        }
+        Perturbation::Lognormal => {
+            if sigma == 0.0 {
+                (mean, false)
+            } else {
+                let rel = sigma / mean;
+                let s2 = (rel * rel).ln_1p();
+                (mean * (kappa * s2.sqrt() - 0.5 * s2).exp(), false)
+            }
+        }
     }
 }
 
@@ -93,27 +130,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             }
             let r = [y[0][l], y[1][l], y[2][l]];
             let (mean, sigma) = self.atmosphere.mean_sigma(ut1, r, &rot)?;
-            let k = self.kappa[l];
-            let rho = match self.perturbation {
-                Perturbation::Additive => {
-                    let rho = mean + k * sigma;
-                    if rho < 0.0 {
-                        self.clipped[l] += 1;
-                        0.0
-                    } else {
-                        rho
-                    }
-                }
-                Perturbation::Lognormal => {
-                    if sigma == 0.0 {
-                        mean
-                    } else {
-                        let rel = sigma / mean;
-                        let s2 = (rel * rel).ln_1p();
-                        mean * (k * s2.sqrt() - 0.5 * s2).exp()
-                    }
-                }
-            };
+            let (rho, clipped) = perturb(mean, sigma, self.kappa.at(l, t), self.perturbation);
+            self.clipped[l] += u64::from(clipped);
             // v_rel = v - omega x r with omega = (0, 0, OMEGA_EARTH).
             let vr = [
                 y[3][l] + OMEGA_EARTH * r[1],
@@ -186,7 +204,7 @@ mod tests {
         assert_eq!(a[3][0], b[3][0]);
 
         // kappa = -10 with 20 % sigma makes the additive density negative: clipped to 0.
-        with.kappa = [-10.0];
+        with.kappa.k0 = [-10.0];
         with.eval(0.0, &one(state), &mut a).unwrap();
         assert_eq!(a[4][0], b[4][0]);
         assert_eq!(with.clipped, [1]);
@@ -212,13 +230,13 @@ mod tests {
         ];
         let s1 = [7.0e6, 1.0e5, 2.0e5, 10.0, 7500.0, 100.0];
         let mut batch = Dynamics::new(&atm, 5e8, [0.004, 0.01]);
-        batch.kappa = [0.5, -1.0];
+        batch.kappa.k0 = [0.5, -1.0];
         let y: State<2> = std::array::from_fn(|c| [s0[c], s1[c]]);
         let mut dy = [[0.0; 2]; 6];
         batch.eval(30.0, &y, &mut dy).unwrap();
         for (lane, (s, d, k)) in [(s0, 0.004, 0.5), (s1, 0.01, -1.0)].into_iter().enumerate() {
             let mut single = Dynamics::new(&atm, 5e8, [d]);
-            single.kappa = [k];
+            single.kappa.k0 = [k];
             let mut d1 = [[0.0]; 6];
             single.eval(30.0, &one(s), &mut d1).unwrap();
             for c in 0..6 {

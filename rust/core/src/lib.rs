@@ -13,10 +13,13 @@
 pub mod constants;
 pub mod density;
 pub mod dynamics;
+pub mod ensemble;
 pub mod error;
 pub mod frames;
 pub mod integrators;
+pub mod kappa;
 pub mod propagate;
+pub mod rng;
 pub mod time;
 
 pub use error::CoreError;
