@@ -1,9 +1,10 @@
 """rhoprop: orbit uncertainty of low-Earth-orbit objects caused by uncertainty in
 thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3)."""
 
-from . import density, frames, scenarios
+from . import density, frames, kappa, scenarios
 from ._core import DensityFieldError, IntegrationError, RhopropError
 from .epochs import seconds_since_j2000, to_datetime64
+from .montecarlo import MonteCarloResult, monte_carlo
 from .orbit import OrbitState, Spacecraft, Trajectory, propagate
 from .spaceweather import SpaceWeather
 
@@ -12,6 +13,7 @@ __version__ = "0.1.0"
 __all__ = [
     "DensityFieldError",
     "IntegrationError",
+    "MonteCarloResult",
     "OrbitState",
     "RhopropError",
     "SpaceWeather",
@@ -20,6 +22,8 @@ __all__ = [
     "__version__",
     "density",
     "frames",
+    "kappa",
+    "monte_carlo",
     "propagate",
     "scenarios",
     "seconds_since_j2000",

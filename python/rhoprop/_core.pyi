@@ -1,7 +1,8 @@
 """Type stubs of the compiled extension ``rhoprop._core`` (the thin binding of the Rust
 core). Users call the documented ``rhoprop`` API instead; array arguments are float64."""
 
-from typing import final
+from collections.abc import Callable
+from typing import Any, final
 
 import numpy as np
 import numpy.typing as npt
@@ -20,6 +21,7 @@ __all__ = [
     "geodetic_to_fixed",
     "gmst",
     "inertial_to_fixed",
+    "monte_carlo",
     "propagate",
     "rtn_basis",
 ]
@@ -75,6 +77,27 @@ def propagate(
     floor_altitude: float,
 ) -> tuple[_F64, _F64, float | None, int, int]:
     """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
+
+def monte_carlo(
+    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    epoch: float,
+    state: _F64,
+    drag: float,
+    output_times: _F64,
+    kappa: tuple[str, float, float],
+    perturbation: str,
+    method: str,
+    step: float,
+    members: int,
+    seed: int,
+    initial_covariance: _F64 | None,
+    floor_altitude: float,
+    record_density: bool,
+    threads: int | None,
+    progress: Callable[[int], object] | None,
+) -> dict[str, Any]:
+    """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
+    (n,), decay_times (n,), step (s)."""
 
 def gmst(ut1: _F64) -> _F64:
     """GMST (IAU-82), rad, for UT1 seconds since J2000."""

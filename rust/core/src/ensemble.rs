@@ -228,11 +228,11 @@ fn run_batch<A: Atmosphere + ?Sized>(
     };
     let mut frozen: [Option<[f64; 6]>; LANES] = [None; LANES];
     let record = |k: usize,
-                      t: f64,
-                      y: &State<LANES>,
-                      dynamics: &Dynamics<A, LANES>,
-                      frozen: &[Option<[f64; 6]>; LANES],
-                      out: &mut BatchOut|
+                  t: f64,
+                  y: &State<LANES>,
+                  dynamics: &Dynamics<A, LANES>,
+                  frozen: &[Option<[f64; 6]>; LANES],
+                  out: &mut BatchOut|
      -> Result<(), CoreError> {
         for (i, _) in out_steps.iter().enumerate().filter(|(_, &s)| s == k) {
             for l in 0..LANES {
@@ -425,7 +425,10 @@ mod tests {
             &few.densities.as_ref().unwrap()[..]
         );
         // Member 2 and member 3 at the last output differ.
-        assert_ne!(all.positions[(2 * 3 + 2) * 3], all.positions[(3 * 3 + 2) * 3]);
+        assert_ne!(
+            all.positions[(2 * 3 + 2) * 3],
+            all.positions[(3 * 3 + 2) * 3]
+        );
     }
 
     #[test]

@@ -7,6 +7,7 @@ mod density;
 mod detach;
 mod errors;
 mod frames;
+mod montecarlo;
 mod propagation;
 
 use pyo3::prelude::*;
@@ -26,6 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<density::PyExponential>()?;
     m.add_class::<density::PyGridded>()?;
     m.add_function(wrap_pyfunction!(propagation::propagate, m)?)?;
+    m.add_function(wrap_pyfunction!(montecarlo::monte_carlo, m)?)?;
     m.add_function(wrap_pyfunction!(frames::gmst, m)?)?;
     m.add_function(wrap_pyfunction!(frames::inertial_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;

@@ -1,0 +1,154 @@
+//! `monte_carlo`: the ensemble run.
+
+use crate::arrays::{fixed, vector};
+use crate::density::AtmosphereRef;
+use crate::detach::detached_with_progress;
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rhoprop_core::density::GriddedField;
+use rhoprop_core::dynamics::Perturbation;
+use rhoprop_core::ensemble::{covariance_factor, monte_carlo as core_mc, MonteCarloConfig};
+use rhoprop_core::integrators::FixedMethod;
+use rhoprop_core::kappa::KappaProcess;
+
+/// Kappa process from its Python spec (kind, a, b).
+pub fn kappa_from_spec(kind: &str, a: f64, b: f64) -> PyResult<KappaProcess> {
+    Ok(match kind {
+        "white" => KappaProcess::White { step: a },
+        "interpolated" => KappaProcess::Interpolated { interval: a },
+        "gauss_markov" => KappaProcess::GaussMarkov { half_life: a },
+        "constant" => KappaProcess::Constant,
+        "piecewise_constant" => KappaProcess::PiecewiseConstant {
+            interval: a,
+            correlation: b,
+        },
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown kappa process {other:?}"
+            )))
+        }
+    })
+}
+
+/// Runs a Monte Carlo ensemble; see `rhoprop.monte_carlo` for the documented API.
+/// Returns a dict of arrays: positions/velocities (n, nt, 3), densities (n, nt) or None,
+/// clipped (n,), decay_times (n,), step.
+#[pyfunction]
+#[pyo3(signature = (atmosphere, epoch, state, drag, output_times, kappa, perturbation, method,
+    step, members, seed, initial_covariance, floor_altitude, record_density, threads, progress))]
+#[allow(clippy::too_many_arguments)]
+pub fn monte_carlo<'py>(
+    py: Python<'py>,
+    atmosphere: &Bound<'py, PyAny>,
+    epoch: f64,
+    state: PyReadonlyArray1<'py, f64>,
+    drag: f64,
+    output_times: PyReadonlyArray1<'py, f64>,
+    kappa: (String, f64, f64),
+    perturbation: &str,
+    method: &str,
+    step: f64,
+    members: usize,
+    seed: u64,
+    initial_covariance: Option<PyReadonlyArray2<'py, f64>>,
+    floor_altitude: f64,
+    record_density: bool,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let atm = AtmosphereRef::extract(atmosphere)?;
+    let perturbation = match perturbation {
+        "additive" => Perturbation::Additive,
+        "lognormal" => Perturbation::Lognormal,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown perturbation {other:?}; expected 'additive' or 'lognormal'"
+            )))
+        }
+    };
+    let method = match method {
+        "rk8" => FixedMethod::Rk8,
+        "rk4" => FixedMethod::Rk4,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown method {other:?}; a Monte Carlo uses 'rk8' or 'rk4'"
+            )))
+        }
+    };
+    let initial_factor = match initial_covariance {
+        None => None,
+        Some(c) => {
+            let v = c.as_array();
+            if v.shape() != [6, 6] {
+                return Err(PyValueError::new_err(format!(
+                    "initial_covariance must have shape (6, 6), got {:?}",
+                    v.shape()
+                )));
+            }
+            let m: [[f64; 6]; 6] = std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]]));
+            Some(covariance_factor(&m).map_err(crate::errors::to_py)?)
+        }
+    };
+    let cfg = MonteCarloConfig {
+        epoch,
+        y0: fixed::<6>("state", &state)?,
+        drag,
+        initial_factor,
+        kappa: kappa_from_spec(&kappa.0, kappa.1, kappa.2)?,
+        perturbation,
+        method,
+        max_step: step,
+        output_times: vector("output_times", &output_times)?.to_vec(),
+        members,
+        seed,
+        floor_altitude,
+        record_density,
+    };
+    let pool = match threads {
+        Some(0) => return Err(PyValueError::new_err("threads must be >= 1")),
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| PyValueError::new_err(format!("cannot start {n} threads: {e}")))?,
+        ),
+        None => None,
+    };
+    let out = detached_with_progress(py, progress, |p| {
+        let run = || match &atm {
+            AtmosphereRef::Exponential(e) => core_mc(e, &cfg, p),
+            AtmosphereRef::Gridded(g) => core_mc::<GriddedField>(g, &cfg, p),
+        };
+        match &pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        }
+    })?;
+    let nt = cfg.output_times.len();
+    let n = cfg.members;
+    let shape3 = |v: Vec<f64>| {
+        Array3::from_shape_vec((n, nt, 3), v).expect("core returns members x times x 3")
+    };
+    let dict = PyDict::new(py);
+    let positions: Bound<'py, PyArray3<f64>> = shape3(out.positions).into_pyarray(py);
+    let velocities: Bound<'py, PyArray3<f64>> = shape3(out.velocities).into_pyarray(py);
+    dict.set_item("positions", positions)?;
+    dict.set_item("velocities", velocities)?;
+    let densities: Option<Bound<'py, PyArray2<f64>>> = out.densities.map(|d| {
+        Array2::from_shape_vec((n, nt), d)
+            .expect("core returns members x times")
+            .into_pyarray(py)
+    });
+    dict.set_item("densities", densities)?;
+    let clipped: Bound<'py, PyArray1<u64>> = Array1::from_vec(out.clipped).into_pyarray(py);
+    dict.set_item("clipped", clipped)?;
+    dict.set_item(
+        "decay_times",
+        Array1::from_vec(out.decay_times).into_pyarray(py),
+    )?;
+    dict.set_item("step", out.step)?;
+    Ok(dict)
+}

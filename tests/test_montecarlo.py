@@ -1,0 +1,247 @@
+"""Monte Carlo with correlated density: kappa statistics, determinism, exact mean orbit,
+long-time theory (DESIGN.md section 4), initial-covariance propagation vs a linearised
+state-transition matrix, and errors. Tolerances follow from the sample sizes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+
+DAY3 = 259200.0
+
+
+@pytest.fixture(scope="module")
+def setup():
+    return rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+
+
+def kappa_of(result, model):
+    """kappa each member saw at the output times, from rho = mean (1 + eps kappa)."""
+    lla = rp.frames.geodetic(
+        rp.frames.inertial_to_fixed(
+            np.broadcast_to(result.epochs, result.positions.shape[:2]).ravel(),
+            result.positions.reshape(-1, 3),
+        )
+    )
+    mean, _ = model.mean_std(result.epoch, lla[:, 0], lla[:, 1], lla[:, 2])
+    return (result.densities / mean.reshape(result.densities.shape) - 1) / model.rel_sigma
+
+
+@pytest.mark.parametrize(
+    ("process", "lag_corr"),
+    [
+        (rp.kappa.GaussMarkov(1080.0), 0.5),  # lag = one half-life
+        (rp.kappa.Interpolated(1080.0), 0.0),  # outputs on the nodes: i.i.d.
+        (rp.kappa.White(60.0), 0.0),
+    ],
+)
+def test_kappa_statistics(setup, process, lag_corr):
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.1)
+    n = 2000
+    r = rp.monte_carlo(
+        state,
+        craft,
+        model,
+        6 * 3600.0,
+        n=n,
+        kappa=process,
+        output_step=1080.0,
+        record_density=True,
+        progress=False,
+        seed=3,
+    )
+    k = kappa_of(r, model)
+    # Per epoch: mean ~ 0 (stderr 1/sqrt(n) = 0.022), variance ~ 1 (stderr sqrt(2/n) = 0.032).
+    assert np.abs(k.mean(axis=0)).max() < 4.5 / np.sqrt(n)
+    assert np.abs(k.var(axis=0) - 1).max() < 4.5 * np.sqrt(2 / n)
+    # Lag-1080 s correlation across members (stderr (1 - rho^2)/sqrt(n) <= 0.022).
+    corr = np.mean(k[:, 1:-1] * k[:, 2:], axis=0)
+    assert np.abs(corr - lag_corr).max() < 4.5 / np.sqrt(n), corr
+    assert r.clipped.sum() == 0
+
+
+def test_same_seed_same_numbers_whatever_the_threads(setup):
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    runs = [
+        rp.monte_carlo(state, craft, model, 7200.0, n=37, seed=9, threads=t, progress=False)
+        for t in (1, 2)
+    ]
+    np.testing.assert_array_equal(runs[0].positions, runs[1].positions)
+    np.testing.assert_array_equal(runs[0].velocities, runs[1].velocities)
+    other = rp.monte_carlo(state, craft, model, 7200.0, n=37, seed=10, progress=False)
+    assert not np.array_equal(other.positions, runs[0].positions)
+
+
+def test_zero_sigma_reproduces_the_mean_orbit_exactly(setup):
+    state, craft = setup
+    r = rp.monte_carlo(
+        state, craft, rp.scenarios.benchmark_exponential(0.0), 86400.0, n=5, progress=False
+    )
+    for member in r.positions:
+        np.testing.assert_array_equal(member, r.mean_orbit.positions)
+    assert np.all(r.along_track == 0)
+
+
+@pytest.fixture(scope="module")
+def long_runs(setup):
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    processes = {
+        "gm18": rp.kappa.GaussMarkov(1080.0),
+        "gm180": rp.kappa.GaussMarkov(10800.0),
+        "in18": rp.kappa.Interpolated(1080.0),
+        "in180": rp.kappa.Interpolated(10800.0),
+    }
+    stds = {
+        name: rp.monte_carlo(
+            state, craft, model, DAY3, n=1000, kappa=p, output_step=None, progress=False
+        )
+        .along_track[:, -1]
+        .std(ddof=1)
+        for name, p in processes.items()
+    }
+    # Mean drag acceleration along the mean orbit, for the long-time theory.
+    tr = rp.propagate(state, craft, model, DAY3, output_step=30.0)
+    r = np.linalg.norm(tr.positions, axis=1)
+    rho = model.rho0 * np.exp(-(r - 6378137.0 - model.h0) / model.scale_height)
+    vrel = tr.velocities - np.cross([0.0, 0.0, 7.292115e-5], tr.positions)
+    a_drag = np.mean(0.5 * rho * craft.drag_parameter * np.linalg.norm(vrel, axis=1) ** 2)
+    return stds, processes, a_drag
+
+
+def test_long_time_theory_gauss_markov(long_runs):
+    # sigma_AT^2 = 3 D T^3 (eps a_D)^2 with D = 2 half_life / ln 2; 20 % tolerance (the
+    # theory is asymptotic; the sampling error of a std from 1000 members is 2.2 %).
+    stds, processes, a_drag = long_runs
+    theory = np.sqrt(3 * processes["gm18"].correlation_time() * DAY3**3) * 0.2 * a_drag
+    assert stds["gm18"] == pytest.approx(theory, rel=0.2)
+
+
+def test_long_time_ratios(long_runs):
+    stds, _, _ = long_runs
+    # 180 min / 18 min ~ sqrt(10) for both methods, within 10 % (1000 members each).
+    assert stds["gm180"] / stds["gm18"] == pytest.approx(np.sqrt(10), rel=0.1)
+    assert stds["in180"] / stds["in18"] == pytest.approx(np.sqrt(10), rel=0.1)
+    # GaussMarkov / Interpolated at the same time constant ~ sqrt(2 / ln 2) = 1.70.
+    assert stds["gm18"] / stds["in18"] == pytest.approx(np.sqrt(2 / np.log(2)), rel=0.1)
+
+
+def test_initial_covariance_matches_linearised_propagation(setup):
+    # No density noise; P(1 h) = Phi P0 Phi^T with Phi from central differences of the
+    # deterministic propagation. Std per axis from 4000 members: stderr 1.1 %; allow 5 %.
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.0)
+    p0 = np.diag([100.0, 100.0, 100.0, 1e-2, 1e-2, 1e-2])
+    r = rp.monte_carlo(
+        state,
+        craft,
+        model,
+        3600.0,
+        n=4000,
+        initial_covariance=p0,
+        output_step=None,
+        progress=False,
+        seed=1,
+    )
+
+    def end(y):
+        s = rp.OrbitState(state.epoch, y[:3], y[3:])
+        tr = rp.propagate(s, craft, model, 3600.0, method="rk8")
+        return tr.states[-1]
+
+    y0 = state.state
+    delta = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3, 1e-3])
+    phi = np.column_stack(
+        [
+            (end(y0 + delta[j] * e) - end(y0 - delta[j] * e)) / (2 * delta[j])
+            for j, e in enumerate(np.eye(6))
+        ]
+    )
+    p1 = phi @ p0 @ phi.T
+    predicted = np.sqrt(np.diag(p1)[:3])
+    sampled = r.positions[:, -1].std(axis=0, ddof=1)
+    np.testing.assert_allclose(sampled, predicted, rtol=0.05)
+
+
+def test_clipping_and_lognormal(setup):
+    state, craft = setup
+    wild = rp.scenarios.benchmark_exponential(1.5)
+    add = rp.monte_carlo(
+        state, craft, wild, 3600.0, n=8, kappa=rp.kappa.White(60.0), progress=False
+    )
+    assert add.clipped.sum() > 0
+    logn = rp.monte_carlo(
+        state,
+        craft,
+        wild,
+        3600.0,
+        n=8,
+        kappa=rp.kappa.White(60.0),
+        perturbation="lognormal",
+        progress=False,
+    )
+    assert logn.clipped.sum() == 0
+
+
+def test_decayed_members_are_reported(setup):
+    # At 1e-9 kg/m^3 the mean orbit decays after 2.64 days; with a 50 % density bias the
+    # denser members decay within 2.5 days and are reported, the others are not.
+    state, craft = setup
+    dense = rp.density.Exponential(1e-9, 400e3, 58.515e3, rel_sigma=0.5)
+    with pytest.raises(ValueError, match="mean orbit decays"):
+        rp.monte_carlo(state, craft, dense, DAY3, n=8, progress=False)
+    r = rp.monte_carlo(
+        state,
+        craft,
+        dense,
+        2.5 * 86400.0,
+        n=64,
+        kappa=rp.kappa.Constant(),
+        progress=False,
+        output_step=1800.0,
+    )
+    assert np.isfinite(r.positions).all()
+    assert 0 < r.decayed.sum() < 64
+    assert np.all(r.decay_times[r.decayed] < 2.5 * 86400.0)
+    # A decayed member's outputs stay at its decay state.
+    m = np.flatnonzero(r.decayed)[0]
+    np.testing.assert_array_equal(r.positions[m, -1], r.positions[m, -2])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"n": 1}, "n must be an integer >= 2"),
+        ({"initial_covariance": np.eye(5)}, r"shape \(6, 6\)"),
+        ({"initial_covariance": np.diag([1.0, 1, 1, 1, 1, -1])}, "semi-definite"),
+        ({"initial_covariance": np.eye(6) + np.triu(np.ones((6, 6)), 1)}, "symmetric"),
+        ({"perturbation": "multiplicative"}, "unknown perturbation"),
+        ({"output_step": 1000.0}, "multiple of the integration step"),
+        ({"seed": -1}, "seed must be a non-negative integer"),
+        ({"method": "dop853"}, "a Monte Carlo uses 'rk8' or 'rk4'"),
+    ],
+)
+def test_bad_input(setup, kwargs, match):
+    state, craft = setup
+    with pytest.raises(ValueError, match=match):
+        rp.monte_carlo(
+            state, craft, rp.scenarios.benchmark_exponential(0.2), 7200.0, progress=False, **kwargs
+        )
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: rp.kappa.White(0.0),
+        lambda: rp.kappa.Interpolated(-5.0),
+        lambda: rp.kappa.GaussMarkov(0.0),
+        lambda: rp.kappa.PiecewiseConstant(3600.0, 1.0),
+    ],
+)
+def test_bad_kappa(make):
+    with pytest.raises(ValueError):
+        make()
