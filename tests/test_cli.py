@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -14,13 +15,23 @@ def test_help_lists_commands(capsys):
     assert "paper" in out and "usage: rhoprop" in out
 
 
-def test_paper_quick_prints_methods_that_agree(capsys):
-    assert main(["paper", "--quick"]) == 0
+def test_paper_quick_prints_methods_that_agree(capsys, tmp_path):
+    assert main(["paper", "--quick", "--members", "8", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     rows = [line.split() for line in out.splitlines() if line.strip().startswith(("rk8", "rk4"))]
     assert len(rows) == 2
     # Last column: distance to the adaptive solution after 6 h, m.
     assert all(float(r[-1]) < 0.1 for r in rows), rows
+    # The method comparison wrote its figure and a summary of the fixed shape.
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert set(summary["method_comparison"]) == {
+        "white_10s",
+        "interpolated_18min",
+        "interpolated_180min",
+        "gauss_markov_18min",
+        "gauss_markov_180min",
+    }
+    assert (tmp_path / "method_comparison.png").stat().st_size > 10_000
 
 
 def test_console_script_module_entry():

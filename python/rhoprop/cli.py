@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
-from . import __version__, density, frames, scenarios
+from . import __version__, density, frames, scenarios, studies
 from .orbit import propagate
 from .spaceweather import SpaceWeather
 
@@ -42,8 +44,36 @@ def _paper(args: argparse.Namespace) -> int:
     print()
     print(f"  final position [m]: {np.array2string(reference, precision=3)}")
     _paper_models(state, craft, duration)
-    print("The Monte Carlo, CCSP and ensemble stages of the study are not built yet.")
+    _paper_methods(args, state, craft, duration)
+    print("The CCSP and multi-model ensemble stages of the study are not built yet.")
     return 0
+
+
+def _paper_methods(args: argparse.Namespace, state, craft, duration: float) -> None:
+    """The paper's method comparison (Fig. 4 analogue) into --out."""
+    members = args.members or (100 if args.quick else 1000)
+    out = Path(args.out)
+    print()
+    print(f"Method comparison (paper Fig. 4): {members} members per method, NRLMSIS 2.1, Case I")
+    comparison = studies.method_comparison(state, craft, None, duration, n=members, progress=True)
+    figure = comparison.figure(out / "method_comparison.png")
+    table = comparison.table()
+    print(table)
+    summary = {
+        "members": members,
+        "duration_s": duration,
+        "method_comparison": comparison.along_track_std,
+        "method_ratios": [
+            {"a": a, "b": b, "measured": m, "long_time_theory": t}
+            for a, b, m, t in comparison.ratios()
+        ],
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out / "summary.md").write_text(
+        f"# rhoprop paper study\n\n## Method comparison ({members} members, "
+        f"{duration / 86400:g} days)\n\n{table}\n"
+    )
+    print(f"wrote {figure}, {out / 'summary.json'}, {out / 'summary.md'}")
 
 
 def _paper_models(state, craft, duration: float) -> None:
@@ -73,12 +103,28 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     paper = sub.add_parser(
         "paper",
-        help="run the paper study (for now: the deterministic 3-day propagations)",
-        description="Run the paper study. For now this propagates the paper's orbit for 3 "
-        "days with each integrator (benchmark atmosphere) and through NRLMSIS 2.1, 2.0 and "
-        "NRLMSISE-00 for Case I, and prints the results.",
+        help="run the paper study (deterministic orbits and the method comparison so far)",
+        description="Run the paper study: the paper's orbit for 3 days with each "
+        "integrator and through NRLMSIS 2.1, 2.0 and NRLMSISE-00 (Case I), then the "
+        "Monte Carlo method comparison (paper Fig. 4): figure, summary.json and summary.md "
+        "in --out. The CCSP and ensemble stages are not built yet.",
     )
-    paper.add_argument("--quick", action="store_true", help="propagate 6 hours instead of 3 days")
+    paper.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smoke run: 6 hours and 100 members instead of 3 days and 1000",
+    )
+    paper.add_argument(
+        "--members",
+        type=int,
+        default=None,
+        help="Monte Carlo members per case (default 1000, 100 with --quick)",
+    )
+    paper.add_argument(
+        "--out",
+        default="rhoprop-paper",
+        help="directory for figures and summaries (default ./rhoprop-paper)",
+    )
     paper.set_defaults(run=_paper)
     return parser
 

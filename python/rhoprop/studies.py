@@ -1,0 +1,191 @@
+"""The paper's studies as functions. ``method_comparison`` is the paper's section 3 /
+Fig. 4: the same orbit with five kappa processes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import frames, kappa, scenarios
+from .montecarlo import MonteCarloResult, monte_carlo
+from .orbit import OrbitState, Spacecraft
+
+#: The five processes of the paper's comparison, keyed as in ``summary.json``.
+METHODS: dict[str, kappa.KappaProcess] = {
+    "white_10s": kappa.White(10.0),
+    "interpolated_18min": kappa.Interpolated(1080.0),
+    "interpolated_180min": kappa.Interpolated(10800.0),
+    "gauss_markov_18min": kappa.GaussMarkov(1080.0),
+    "gauss_markov_180min": kappa.GaussMarkov(10800.0),
+}
+LABELS = {
+    "white_10s": "White 10 s",
+    "interpolated_18min": "Interpolated 18 min",
+    "interpolated_180min": "Interpolated 180 min",
+    "gauss_markov_18min": "Gauss-Markov 18 min",
+    "gauss_markov_180min": "Gauss-Markov 180 min",
+}
+#: Ratios of 3-day along-track std and their long-time values, sqrt(D1 / D2).
+RATIOS = [
+    ("gauss_markov_180min", "gauss_markov_18min"),
+    ("interpolated_180min", "interpolated_18min"),
+    ("gauss_markov_18min", "interpolated_18min"),
+    ("gauss_markov_180min", "interpolated_180min"),
+    ("gauss_markov_18min", "white_10s"),
+]
+
+
+@dataclass(frozen=True)
+class MethodComparison:
+    """Results of :func:`method_comparison`.
+
+    Attributes:
+        results: the Monte Carlo result per method key.
+        traces: per method, (times s, densities (5, nt) kg/m^3) of the first five members
+            over the first 3 h; ``mean_trace`` the mean density along the mean orbit.
+        along_track_std: 3-day along-track standard deviation per method, m.
+    """
+
+    results: dict[str, MonteCarloResult]
+    traces: dict[str, tuple[np.ndarray, np.ndarray]]
+    mean_trace: dict[str, np.ndarray]
+    along_track_std: dict[str, float]
+
+    def ratios(self) -> list[tuple[str, str, float, float]]:
+        """(method a, method b, measured std_a / std_b, long-time theory sqrt(D_a / D_b))."""
+        out = []
+        for a, b in RATIOS:
+            if a not in self.results or b not in self.results:
+                continue
+            da, db = (self.results[k].kappa.correlation_time() for k in (a, b))
+            theory = np.sqrt(da / db)
+            out.append((a, b, self.along_track_std[a] / self.along_track_std[b], theory))
+        return out
+
+    def table(self) -> str:
+        """Markdown table of the stds and the ratios next to the long-time theory."""
+        days = next(iter(self.results.values())).times[-1] / 86400.0
+        lines = [f"| method | {days:g}-day along-track std [m] |", "| --- | --- |"]
+        lines += [f"| {LABELS[k]} | {v:.1f} |" for k, v in self.along_track_std.items()]
+        lines += ["", "| ratio | measured | long-time theory |", "| --- | --- | --- |"]
+        lines += [
+            f"| {LABELS[a]} / {LABELS[b]} | {m:.3f} | {t:.3f} |" for a, b, m, t in self.ratios()
+        ]
+        return "\n".join(lines)
+
+    def figure(self, path: str | Path) -> Path:
+        """Density traces of the first five members (mean in bold) per method, and the
+        along-track normal PDFs at the end; saved as PNG."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        keys = list(self.results)
+        fig = plt.figure(figsize=(16, 8.5), layout="constrained")
+        grid = fig.add_gridspec(2, len(keys), height_ratios=[1, 1.2])
+        for i, k in enumerate(keys):
+            ax = fig.add_subplot(grid[0, i])
+            t, rho = self.traces[k]
+            for member in rho:
+                ax.plot(t / 3600.0, member * 1e12, lw=0.8)
+            ax.plot(t / 3600.0, self.mean_trace[k] * 1e12, "k", lw=2.2, label="mean")
+            ax.set_title(LABELS[k], fontsize=10)
+            ax.set_xlabel("time [h]")
+            if i == 0:
+                ax.set_ylabel("density [1e-12 kg/m^3]")
+                ax.legend(fontsize=8)
+        ax = fig.add_subplot(grid[1, :])
+        stds = sorted(self.along_track_std.values())
+        x = np.linspace(-4 * stds[-1], 4 * stds[-1], 4001)
+        for k in keys:
+            at = self.results[k].along_track[:, -1]
+            mu, sd = at.mean(), self.along_track_std[k]
+            pdf = np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
+            note = " (peak off scale)" if len(stds) > 1 and sd < stds[1] / 2 else ""
+            ax.plot(x / 1e3, pdf * 1e3, lw=2, label=f"{LABELS[k]} (std {sd:,.0f} m){note}")
+        if len(stds) > 1:
+            # Scale to the second narrowest PDF: a very narrow one would flatten the rest.
+            ax.set_ylim(0, 1.25e3 / (stds[1] * np.sqrt(2 * np.pi)))
+        days = self.results[keys[0]].times[-1] / 86400.0
+        ax.set_xlabel(f"along-track error at {days:g} days [km]")
+        ax.set_ylabel("normal PDF [1/km]")
+        ax.legend()
+        ax.grid(alpha=0.3)
+        fig.suptitle("Density perturbation methods: member densities (top) and along-track PDFs")
+        out = Path(path)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=110)
+        plt.close(fig)
+        return out
+
+
+def method_comparison(
+    state: OrbitState | None = None,
+    spacecraft: Spacecraft | None = None,
+    model: Any = None,
+    duration: float = scenarios.PAPER_DURATION,
+    *,
+    n: int = 1000,
+    seed: int = 0,
+    methods: dict[str, kappa.KappaProcess] | None = None,
+    progress: bool = True,
+) -> MethodComparison:
+    """Runs the same orbit with each kappa process (default: the paper's five).
+
+    Args:
+        state, spacecraft: default the paper's (Case I epoch).
+        model: density model with uncertainty (default NRLMSIS 2.1 with the bundled space
+            weather).
+        duration: span, s (default 3 days).
+        n: members per method; seed: the seed (the traces are the first five members).
+        methods: {key: process} (default :data:`METHODS`).
+        progress: show progress bars.
+    """
+    from .density import Msis
+
+    state = state or scenarios.paper_state()
+    spacecraft = spacecraft or scenarios.paper_spacecraft()
+    model = model if model is not None else Msis("2.1")
+    methods = methods or METHODS
+    results, traces, mean_trace, stds = {}, {}, {}, {}
+    for key, process in methods.items():
+        results[key] = monte_carlo(
+            state,
+            spacecraft,
+            model,
+            duration,
+            n=n,
+            kappa=process,
+            seed=seed,
+            output_step=None,
+            progress=progress,
+        )
+        stds[key] = float(results[key].along_track[:, -1].std(ddof=1))
+        h = results[key].step
+        trace = monte_carlo(
+            state,
+            spacecraft,
+            model,
+            min(3 * 3600.0, duration),
+            n=5,
+            kappa=process,
+            seed=seed,
+            output_step=h,
+            record_density=True,
+            progress=False,
+        )
+        traces[key] = (trace.times, trace.densities)
+        mean_trace[key] = _mean_density(model, trace)
+    return MethodComparison(results, traces, mean_trace, stds)
+
+
+def _mean_density(model: Any, result: MonteCarloResult) -> np.ndarray:
+    """Mean density along the mean orbit at the output times, kg/m^3."""
+    orbit = result.mean_orbit
+    lla = frames.geodetic(frames.inertial_to_fixed(orbit.epochs, orbit.positions))
+    mean, _ = model.mean_std(orbit.epochs, lla[:, 0], lla[:, 1], lla[:, 2])
+    return np.asarray(mean)
