@@ -3,6 +3,8 @@ thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3)
 
 from . import density, frames, kappa, scenarios
 from ._core import DensityFieldError, IntegrationError, RhopropError
+from .ccsp import CcspResult, ccsp
+from .debias import debias_drag_coefficient
 from .epochs import seconds_since_j2000, to_datetime64
 from .montecarlo import MonteCarloResult, monte_carlo
 from .orbit import OrbitState, Spacecraft, Trajectory, propagate
@@ -11,6 +13,7 @@ from .spaceweather import SpaceWeather
 __version__ = "0.1.0"
 
 __all__ = [
+    "CcspResult",
     "DensityFieldError",
     "IntegrationError",
     "MonteCarloResult",
@@ -20,6 +23,8 @@ __all__ = [
     "Spacecraft",
     "Trajectory",
     "__version__",
+    "ccsp",
+    "debias_drag_coefficient",
     "density",
     "frames",
     "kappa",

@@ -17,6 +17,7 @@ __all__ = [
     "GriddedAtmosphere",
     "IntegrationError",
     "RhopropError",
+    "ccsp",
     "geodetic",
     "geodetic_to_fixed",
     "gmst",
@@ -77,6 +78,21 @@ def propagate(
     floor_altitude: float,
 ) -> tuple[_F64, _F64, float | None, int, int]:
     """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
+
+def ccsp(
+    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    epoch: float,
+    state: _F64,
+    drag: float,
+    initial_covariance: _F64,
+    update_interval: float,
+    duration: float,
+    scaling: tuple[float, float],
+    perturbation: str,
+    step: float,
+    floor_altitude: float,
+) -> dict[str, _F64]:
+    """CCSP filter: times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6)."""
 
 def monte_carlo(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,

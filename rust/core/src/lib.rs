@@ -10,6 +10,7 @@
 // them read worse and vectorise no better.
 #![allow(clippy::needless_range_loop)]
 
+pub mod ccsp;
 pub mod constants;
 pub mod density;
 pub mod dynamics;

@@ -3,6 +3,7 @@
 //! lives in the `rhoprop` package.
 
 mod arrays;
+mod ccsp;
 mod density;
 mod detach;
 mod errors;
@@ -28,6 +29,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<density::PyGridded>()?;
     m.add_function(wrap_pyfunction!(propagation::propagate, m)?)?;
     m.add_function(wrap_pyfunction!(montecarlo::monte_carlo, m)?)?;
+    m.add_function(wrap_pyfunction!(ccsp::ccsp, m)?)?;
     m.add_function(wrap_pyfunction!(frames::gmst, m)?)?;
     m.add_function(wrap_pyfunction!(frames::inertial_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;

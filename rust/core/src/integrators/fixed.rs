@@ -99,14 +99,22 @@ pub fn integrate_fixed<const W: usize, R: BatchRhs<W>>(
     mut after_step: impl FnMut(f64, &State<W>) -> Control,
 ) -> Result<Outcome, CoreError> {
     positive("step", max_step)?;
-    check_times("stop times", t0, stops)?;
+    // Backward integration when the stops run backwards from t0 (e.g. drag-coefficient
+    // debiasing over a window before the epoch).
+    let backward = stops.last().is_some_and(|&s| s < t0);
+    if backward {
+        let mirrored: Vec<f64> = stops.iter().map(|s| -s).collect();
+        check_times("stop times (backward)", -t0, &mirrored)?;
+    } else {
+        check_times("stop times", t0, stops)?;
+    }
     let mut stepper = FixedStepper::<W>::default();
     let mut t = t0;
     for (i, &t1) in stops.iter().enumerate() {
         let span = t1 - t;
-        if span > 0.0 {
+        if span != 0.0 {
             // Relative slack so that a span of exactly k steps is not cut into k + 1.
-            let n = ((span / max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+            let n = ((span.abs() / max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
             let h = span / n as f64;
             for j in 0..n {
                 let ts = t + j as f64 * h;
@@ -197,6 +205,25 @@ mod tests {
     }
 
     #[test]
+    fn backward_integration_retraces_the_solution() {
+        let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
+        let mut seen = Vec::new();
+        integrate_fixed(
+            FixedMethod::Rk8,
+            &mut Oscillator,
+            0.0,
+            &mut y,
+            0.1,
+            &[-1.0, -3.0],
+            |_, y| seen.push(y[0][0]),
+            |_, _| Control::Continue,
+        )
+        .unwrap();
+        assert!((seen[0] - 1f64.cos()).abs() < 1e-12 && (seen[1] - 3f64.cos()).abs() < 1e-12);
+        assert!((y[3][0] - 3f64.sin()).abs() < 1e-12); // v(-3) = -sin(-3)
+    }
+
+    #[test]
     fn stops_are_step_boundaries() {
         let mut seen = Vec::new();
         let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
@@ -241,6 +268,7 @@ mod tests {
         };
         assert!(run(&mut y, 0.0, &[1.0]).is_err());
         assert!(run(&mut y, 0.1, &[1.0, 0.5]).is_err());
+        assert!(run(&mut y, 0.1, &[-1.0, -0.5]).is_err());
         assert!(run(&mut y, 0.1, &[f64::NAN]).is_err());
         assert!(run(&mut y, 0.1, &[]).is_err());
     }

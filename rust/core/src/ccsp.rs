@@ -1,0 +1,269 @@
+//! The consider-covariance sigma-point (CCSP) filter of the paper (section 4), in the
+//! form of DESIGN.md section 6: the augmented state is [r, v, kappa] with kappa the
+//! normalised density offset (unit variance), which makes the units of the printed
+//! block-Cholesky factor consistent (the paper's B has units of state in the density row;
+//! we use the transposed off-diagonal block).
+//!
+//! Each sigma point carries its own kappa, held over an update interval, while the mean
+//! and sigma of density follow its position and time. Because the cross-covariance enters
+//! the factor unscaled while the state block is scaled by lambda1 + n, the carried
+//! cross-covariance shrinks by 1 / (lambda2 + p) per update: the filter is the linearised
+//! covariance of a kappa piecewise constant over each interval with correlation
+//! 1 / (lambda2 + p) between consecutive intervals.
+
+use crate::density::Atmosphere;
+use crate::dynamics::{Dynamics, Perturbation, State};
+use crate::ensemble::LANES;
+use crate::error::{finite, positive, CoreError};
+use crate::integrators::{integrate_fixed, Control, FixedMethod};
+use crate::kappa::KappaLanes;
+use crate::propagate::check_state;
+use nalgebra::{Cholesky, Matrix6, SMatrix, Vector6};
+use rayon::prelude::*;
+
+/// Settings of a CCSP run.
+#[derive(Debug, Clone)]
+pub struct CcspConfig {
+    /// Epoch, seconds since J2000.
+    pub epoch: f64,
+    /// Initial mean state (m, m/s).
+    pub y0: [f64; 6],
+    /// Drag parameter Cd*A/m, m^2/kg.
+    pub drag: f64,
+    /// Initial 6x6 state covariance (row-major), positive definite.
+    pub p0: [[f64; 6]; 6],
+    /// Update interval, s.
+    pub update_interval: f64,
+    /// Span, s (the last interval may be shorter).
+    pub duration: f64,
+    /// (lambda1 + n, lambda2 + p), both > 0; the paper uses (3, 3).
+    pub scaling: (f64, f64),
+    pub perturbation: Perturbation,
+    pub method: FixedMethod,
+    /// Largest integration step, s.
+    pub max_step: f64,
+    pub floor_altitude: f64,
+}
+
+/// Mean, covariance and state-kappa cross-covariance at every update time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CcspOutput {
+    pub times: Vec<f64>,
+    pub means: Vec<[f64; 6]>,
+    pub covariances: Vec<[[f64; 6]; 6]>,
+    pub cross: Vec<[f64; 6]>,
+}
+
+const N: usize = 6;
+/// Sigma points: 2n + 1 state points, then 2p + 1 consider points (p = 1).
+const POINTS: usize = 2 * N + 1 + 3;
+
+type Matrix7 = SMatrix<f64, 7, 7>;
+
+/// The scaled block factor S = [[Chol(A), B^T], [0, sqrt(l2)]] of DESIGN.md section 6, with
+/// B = C^T / sqrt(l2) and A = l1 P - B^T B, for state covariance `p` (already including
+/// C C^T) and cross-covariance `c` (kappa has unit variance). `t` names the epoch in errors.
+pub fn factor(
+    p: &Matrix6<f64>,
+    c: &Vector6<f64>,
+    l1: f64,
+    l2: f64,
+    t: f64,
+) -> Result<Matrix7, CoreError> {
+    let bt = c / l2.sqrt();
+    let a = p * l1 - bt * bt.transpose();
+    let a = (a + a.transpose()) * 0.5;
+    let chol = Cholesky::new(a).ok_or_else(|| {
+        CoreError::invalid(
+            format!("CCSP covariance at t = {t} s"),
+            a.symmetric_eigenvalues().min(),
+            "is not positive definite (value: smallest eigenvalue of (lambda1+n) P - B^T B)",
+        )
+    })?;
+    let mut s = Matrix7::zeros();
+    s.fixed_view_mut::<6, 6>(0, 0).copy_from(&chol.l());
+    s.fixed_view_mut::<6, 1>(0, 6).copy_from(&bt);
+    s[(6, 6)] = l2.sqrt();
+    Ok(s)
+}
+
+/// Runs the filter.
+pub fn ccsp<A: Atmosphere + ?Sized>(
+    atmosphere: &A,
+    cfg: &CcspConfig,
+) -> Result<CcspOutput, CoreError> {
+    finite("epoch", cfg.epoch)?;
+    positive("drag parameter Cd*A/m", cfg.drag)?;
+    positive("update_interval", cfg.update_interval)?;
+    positive("duration", cfg.duration)?;
+    positive("step", cfg.max_step)?;
+    positive("scaling[0] (lambda1 + n)", cfg.scaling.0)?;
+    positive("scaling[1] (lambda2 + p)", cfg.scaling.1)?;
+    check_state(cfg.epoch, &cfg.y0, cfg.floor_altitude)?;
+    let (l1, l2) = cfg.scaling;
+    // UKF weights: w0 = lambda / (n + lambda), wi = 1 / (2 (n + lambda)).
+    let (w0, wi) = ((l1 - N as f64) / l1, 0.5 / l1);
+    let (v0, vi) = ((l2 - 1.0) / l2, 0.5 / l2);
+
+    let p0 = Matrix6::from_fn(|i, j| cfg.p0[i][j]);
+    for i in 0..N {
+        for j in 0..N {
+            finite(&format!("initial covariance[{i}][{j}]"), p0[(i, j)])?;
+        }
+    }
+    if (p0 - p0.transpose()).abs().max() > 1e-12 * p0.abs().max() {
+        return Err(CoreError::invalid(
+            "initial covariance",
+            0.0,
+            "must be symmetric",
+        ));
+    }
+    let mut mean = Vector6::from_column_slice(&cfg.y0);
+    let mut p = p0;
+    let mut c = Vector6::zeros();
+    let mut out = CcspOutput {
+        times: vec![0.0],
+        means: vec![cfg.y0],
+        covariances: vec![cfg.p0],
+        cross: vec![[0.0; 6]],
+    };
+    let mut t = 0.0;
+    while t < cfg.duration * (1.0 - 1e-12) {
+        let t1 = (t + cfg.update_interval).min(cfg.duration);
+        let s = factor(&p, &c, l1, l2, t)?;
+        // Sigma points [state; kappa] around the mean (kappa mean 0).
+        let mut points = [[0.0f64; 7]; POINTS];
+        for (k, pt) in points.iter_mut().enumerate() {
+            let (col, sign) = match k {
+                0 | 13 => (None, 0.0),
+                1..=6 => (Some(k - 1), 1.0),
+                7..=12 => (Some(k - 7), -1.0),
+                14 => (Some(6), 1.0),
+                _ => (Some(6), -1.0),
+            };
+            for i in 0..7 {
+                let base = if i < N { mean[i] } else { 0.0 };
+                pt[i] = base + col.map_or(0.0, |j| sign * s[(i, j)]);
+            }
+        }
+        let ends = propagate_points(atmosphere, cfg, &points, t, t1)?;
+        // Set 1 (state points): mean and covariance.
+        let m1: Vector6<f64> = (0..13).map(|k| weight(k, w0, wi) * ends[k]).sum();
+        let mut p1 = Matrix6::zeros();
+        for (k, e) in ends.iter().enumerate().take(13) {
+            let d = e - m1;
+            p1 += weight(k, w0, wi) * d * d.transpose();
+        }
+        // Set 2 (consider points): cross-covariance between state and kappa.
+        let m2: Vector6<f64> = (0..3).map(|k| weight(k, v0, vi) * ends[13 + k]).sum();
+        let mut cross = Vector6::zeros();
+        for k in 0..3 {
+            let kappa = points[13 + k][6];
+            cross += weight(k, v0, vi) * (ends[13 + k] - m2) * kappa;
+        }
+        mean = m1;
+        c = cross;
+        p = p1 + c * c.transpose();
+        p = (p + p.transpose()) * 0.5;
+        if Cholesky::new(p).is_none() {
+            return Err(CoreError::invalid(
+                format!("CCSP covariance at t = {t1} s"),
+                p.symmetric_eigenvalues().min(),
+                "is not positive definite (value: smallest eigenvalue); try a larger initial \
+                 covariance or scaling",
+            ));
+        }
+        t = t1;
+        out.times.push(t);
+        out.means.push(std::array::from_fn(|i| mean[i]));
+        out.covariances
+            .push(std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])));
+        out.cross.push(std::array::from_fn(|i| c[i]));
+    }
+    Ok(out)
+}
+
+fn weight(k: usize, w0: f64, wi: f64) -> f64 {
+    if k == 0 {
+        w0
+    } else {
+        wi
+    }
+}
+
+/// Propagates the sigma points from t0 to t1, each with its kappa held, in parallel
+/// batches of `LANES`.
+fn propagate_points<A: Atmosphere + ?Sized>(
+    atmosphere: &A,
+    cfg: &CcspConfig,
+    points: &[[f64; 7]; POINTS],
+    t0: f64,
+    t1: f64,
+) -> Result<Vec<Vector6<f64>>, CoreError> {
+    let batches: Vec<Vec<Vector6<f64>>> = points
+        .par_chunks(LANES)
+        .map(|chunk| {
+            let lanes = chunk.len();
+            let mut y: State<LANES> = [[0.0; LANES]; 6];
+            let mut kappa = KappaLanes::<LANES>::zero();
+            for l in 0..LANES {
+                let pt = chunk[l.min(lanes - 1)];
+                for c in 0..6 {
+                    y[c][l] = pt[c];
+                }
+                kappa.k0[l] = pt[6];
+            }
+            let mut dynamics = Dynamics::<A, LANES>::new(atmosphere, cfg.epoch, [cfg.drag; LANES]);
+            dynamics.perturbation = cfg.perturbation;
+            dynamics.kappa = kappa;
+            integrate_fixed(
+                cfg.method,
+                &mut dynamics,
+                t0,
+                &mut y,
+                cfg.max_step,
+                &[t1],
+                |_, _| {},
+                |_, _| Control::Continue,
+            )?;
+            Ok((0..lanes)
+                .map(|l| Vector6::from_fn(|c, _| y[c][l]))
+                .collect())
+        })
+        .collect::<Result<_, CoreError>>()?;
+    Ok(batches.into_iter().flatten().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn factor_reproduces_the_documented_product(
+            diag in proptest::collection::vec(1.0f64..100.0, 6),
+            c in proptest::collection::vec(-1.0f64..1.0, 6),
+        ) {
+            // S S^T = [[l1 P, C], [C^T, l2]] (DESIGN.md section 6: the cross block unscaled).
+            let mut p = Matrix6::from_diagonal(&Vector6::from_column_slice(&diag));
+            let c = Vector6::from_column_slice(&c);
+            p += c * c.transpose();
+            let s = factor(&p, &c, 3.0, 3.0, 0.0).unwrap();
+            let sst = s * s.transpose();
+            let tl = sst.fixed_view::<6, 6>(0, 0) - p * 3.0;
+            prop_assert!(tl.abs().max() < 1e-9 * p.abs().max());
+            prop_assert!((sst.fixed_view::<6, 1>(0, 6) - c).abs().max() < 1e-12);
+            prop_assert!((sst[(6, 6)] - 3.0).abs() < 1e-12);
+            // Lower block-triangular: zeros below the state block.
+            prop_assert!(s.fixed_view::<1, 6>(6, 0).abs().max() == 0.0);
+        }
+    }
+
+    #[test]
+    fn non_positive_definite_is_an_error_naming_the_epoch() {
+        let p = Matrix6::from_diagonal(&Vector6::new(1.0, 1.0, 1.0, 1.0, 1.0, -1.0));
+        let e = factor(&p, &Vector6::zeros(), 3.0, 3.0, 7200.0).unwrap_err();
+        assert!(e.to_string().contains("t = 7200 s"), "{e}");
+    }
+}

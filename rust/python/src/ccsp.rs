@@ -1,0 +1,86 @@
+//! `ccsp`: the consider-covariance sigma-point filter.
+
+use crate::arrays::fixed;
+use crate::density::AtmosphereRef;
+use crate::detach::detached_with_progress;
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rhoprop_core::ccsp::{ccsp as core_ccsp, CcspConfig};
+use rhoprop_core::density::GriddedField;
+use rhoprop_core::dynamics::Perturbation;
+use rhoprop_core::integrators::FixedMethod;
+
+/// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
+/// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6).
+#[pyfunction]
+#[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_interval,
+    duration, scaling, perturbation, step, floor_altitude))]
+#[allow(clippy::too_many_arguments)]
+pub fn ccsp<'py>(
+    py: Python<'py>,
+    atmosphere: &Bound<'py, PyAny>,
+    epoch: f64,
+    state: PyReadonlyArray1<'py, f64>,
+    drag: f64,
+    initial_covariance: PyReadonlyArray2<'py, f64>,
+    update_interval: f64,
+    duration: f64,
+    scaling: (f64, f64),
+    perturbation: &str,
+    step: f64,
+    floor_altitude: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let atm = AtmosphereRef::extract(atmosphere)?;
+    let perturbation = match perturbation {
+        "additive" => Perturbation::Additive,
+        "lognormal" => Perturbation::Lognormal,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown perturbation {other:?}; expected 'additive' or 'lognormal'"
+            )))
+        }
+    };
+    let v = initial_covariance.as_array();
+    if v.shape() != [6, 6] {
+        return Err(PyValueError::new_err(format!(
+            "initial_covariance must have shape (6, 6), got {:?}",
+            v.shape()
+        )));
+    }
+    let cfg = CcspConfig {
+        epoch,
+        y0: fixed::<6>("state", &state)?,
+        drag,
+        p0: std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]])),
+        update_interval,
+        duration,
+        scaling,
+        perturbation,
+        method: FixedMethod::Rk8,
+        max_step: step,
+        floor_altitude,
+    };
+    let out = detached_with_progress(py, None, |_| match &atm {
+        AtmosphereRef::Exponential(e) => core_ccsp(e, &cfg),
+        AtmosphereRef::Gridded(g) => core_ccsp::<GriddedField>(g, &cfg),
+    })?;
+    let nt = out.times.len();
+    let dict = PyDict::new(py);
+    dict.set_item("times", Array1::from_vec(out.times).into_pyarray(py))?;
+    dict.set_item(
+        "means",
+        Array2::from_shape_fn((nt, 6), |(i, j)| out.means[i][j]).into_pyarray(py),
+    )?;
+    dict.set_item(
+        "covariances",
+        Array3::from_shape_fn((nt, 6, 6), |(i, j, k)| out.covariances[i][j][k]).into_pyarray(py),
+    )?;
+    dict.set_item(
+        "cross",
+        Array2::from_shape_fn((nt, 6), |(i, j)| out.cross[i][j]).into_pyarray(py),
+    )?;
+    Ok(dict)
+}
