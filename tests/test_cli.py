@@ -32,6 +32,8 @@ def test_paper_quick_prints_methods_that_agree(capsys, tmp_path):
         "gauss_markov_180min",
     }
     assert (tmp_path / "method_comparison.png").stat().st_size > 10_000
+    assert (tmp_path / "ccsp_vs_monte_carlo.png").stat().st_size > 10_000
+    assert len(summary["ccsp_vs_monte_carlo"]) == 3
 
 
 def test_console_script_module_entry():

@@ -24,3 +24,22 @@ def test_method_comparison_ratios_and_figure(tmp_path):
     assert "| Gauss-Markov 18 min / Interpolated 18 min |" in mc.table()
     path = mc.figure(tmp_path / "fig.png")
     assert path.stat().st_size > 10_000
+
+
+def test_ccsp_vs_monte_carlo_on_analytic_models(tmp_path):
+    ref = rp.scenarios.benchmark_exponential(0.2)
+    second = rp.density.Exponential(1.2 * 3.725e-12, 400e3, 58.515e3, rel_sigma=0.2)
+    c = studies.ccsp_vs_monte_carlo(
+        reference=ref, second=second, duration=86400.0, n=200, progress=False
+    )
+    keys = list(c.mc_along)
+    # Debiasing recovers Cd_ref / 1.2 exactly for a constant density ratio.
+    assert c.cd[keys[2]] == pytest.approx(3.0912 / 1.2, rel=1e-12)
+    # Debiased, the second model's orbit stays with the reference; with Cd_ref it runs ahead.
+    assert abs(c.ccsp_mean[keys[2]]) < 0.1 * abs(c.ccsp_mean[keys[1]])
+    assert c.ccsp_mean[keys[1]] > 0
+    # The CCSP spread is ~1.5x the Gauss-Markov 18 min Monte Carlo (DESIGN.md section 6).
+    ratio = c.ccsp_std[keys[0]] / c.mc_along[keys[0]].std(ddof=1)
+    assert 1.2 < ratio < 1.9, ratio
+    assert "| CCSP/MC std |" in c.table()
+    assert c.figure(tmp_path / "fig6.png").stat().st_size > 10_000

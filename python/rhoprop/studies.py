@@ -189,3 +189,140 @@ def _mean_density(model: Any, result: MonteCarloResult) -> np.ndarray:
     lla = frames.geodetic(frames.inertial_to_fixed(orbit.epochs, orbit.positions))
     mean, _ = model.mean_std(orbit.epochs, lla[:, 0], lla[:, 1], lla[:, 2])
     return np.asarray(mean)
+
+
+def model_label(model: Any) -> str:
+    """A short human label for a density model."""
+    version = getattr(model, "version", None)
+    if version is not None:
+        return "NRLMSISE-00" if version == "0" else f"NRLMSIS {version}"
+    return getattr(model, "name", None) or type(model).__name__
+
+
+@dataclass(frozen=True)
+class CcspComparison:
+    """Results of :func:`ccsp_vs_monte_carlo`: per configuration (label), the Monte Carlo
+    along-track errors at the end and the CCSP along-track mean and std, all relative to
+    the reference mean orbit (reference model, Cd_ref), m; the Cd used; run times, s."""
+
+    mc_along: dict[str, np.ndarray]
+    ccsp_mean: dict[str, float]
+    ccsp_std: dict[str, float]
+    cd: dict[str, float]
+    seconds: dict[str, tuple[float, float]]
+    duration: float
+
+    def table(self) -> str:
+        """Markdown table: Cd, MC and CCSP along-track mean/std, their ratio, timings."""
+        lines = [
+            "| configuration | Cd | MC mean [m] | MC std [m] | CCSP mean [m] | CCSP std [m] "
+            "| CCSP/MC std | MC [s] | CCSP [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        ]
+        for k, at in self.mc_along.items():
+            sd = at.std(ddof=1)
+            mc_s, cc_s = self.seconds[k]
+            cm, cs = self.ccsp_mean[k], self.ccsp_std[k]
+            lines.append(
+                f"| {k} | {self.cd[k]:.4f} | {at.mean():.1f} | {sd:.1f} | {cm:.1f} | {cs:.1f} "
+                f"| {cs / sd:.3f} | {mc_s:.2f} | {cc_s:.2f} |"
+            )
+        return "\n".join(lines)
+
+    def figure(self, path: str | Path) -> Path:
+        """Along-track PDFs per configuration: MC histogram, MC normal fit (dashed) and the
+        CCSP normal (solid); saved as PNG."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        keys = list(self.mc_along)
+        fig, axes = plt.subplots(
+            1, len(keys), figsize=(5.2 * len(keys), 4.4), layout="constrained", squeeze=False
+        )
+        for ax, k in zip(axes[0], keys, strict=True):
+            at = self.mc_along[k] / 1e3
+            mu, sd = at.mean(), at.std(ddof=1)
+            cm, cs = self.ccsp_mean[k] / 1e3, self.ccsp_std[k] / 1e3
+            lo, hi = min(mu - 4 * sd, cm - 4 * cs), max(mu + 4 * sd, cm + 4 * cs)
+            x = np.linspace(lo, hi, 600)
+            ax.hist(at, bins=40, density=True, alpha=0.3, color="C0", label="Monte Carlo")
+            ax.plot(x, _normal(x, mu, sd), "--", color="C0", lw=2, label=f"MC normal ({sd:.2f} km)")
+            ax.plot(x, _normal(x, cm, cs), color="C3", lw=2, label=f"CCSP ({cs:.2f} km)")
+            ax.set_title(f"{k}\nCd = {self.cd[k]:.4f}", fontsize=10)
+            ax.set_xlabel(f"along-track at {self.duration / 86400:g} days vs reference [km]")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8)
+        axes[0][0].set_ylabel("PDF [1/km]")
+        fig.suptitle("CCSP vs Monte Carlo (Gauss-Markov 18 min)")
+        out = Path(path)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=110)
+        plt.close(fig)
+        return out
+
+
+def _normal(x: np.ndarray, mu: float, sd: float) -> np.ndarray:
+    return np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
+
+
+def ccsp_vs_monte_carlo(
+    state: OrbitState | None = None,
+    spacecraft: Spacecraft | None = None,
+    reference: Any = None,
+    second: Any = None,
+    duration: float = scenarios.PAPER_DURATION,
+    *,
+    second_cd: float | None = None,
+    n: int = 1000,
+    update_interval: float = 3600.0,
+    seed: int = 0,
+    progress: bool = True,
+) -> CcspComparison:
+    """The paper's Fig. 6: CCSP vs Monte Carlo GaussMarkov(18 min) for the reference
+    model, and for a second model with Cd_ref and with a debiased Cd (``second_cd``, or
+    :func:`~rhoprop.debias_drag_coefficient` over 8 h when None). Defaults: the paper's
+    state and sphere, NRLMSIS 2.1 as reference and NRLMSISE-00 as second model."""
+    import time
+
+    from .ccsp import ccsp
+    from .debias import debias_drag_coefficient
+    from .density import Msis
+    from .spaceweather import SpaceWeather
+
+    state = state or scenarios.paper_state()
+    spacecraft = spacecraft or scenarios.paper_spacecraft()
+    if reference is None or second is None:
+        sw = SpaceWeather()
+        reference = reference if reference is not None else Msis("2.1", space_weather=sw)
+        second = second if second is not None else Msis("00", space_weather=sw)
+    if second_cd is None:
+        second_cd = debias_drag_coefficient(state, spacecraft, reference, second)
+    first_name, second_name = model_label(reference), model_label(second)
+    if second_name == first_name:
+        second_name += " (second)"
+    configs = [
+        (f"{first_name}, Cd_ref", reference, spacecraft.cd),
+        (f"{second_name}, Cd_ref", second, spacecraft.cd),
+        (f"{second_name}, debiased Cd", second, float(second_cd)),
+    ]
+    along, cmean, cstd, cds, seconds = {}, {}, {}, {}, {}
+    ref_orbit = None
+    for label, model, cd in configs:
+        craft = Spacecraft(cd, spacecraft.area_to_mass)
+        t0 = time.perf_counter()
+        mc = monte_carlo(
+            state, craft, model, duration, n=n, seed=seed, output_step=None, progress=progress
+        )
+        t1 = time.perf_counter()
+        cc = ccsp(state, craft, model, duration, update_interval=update_interval)
+        t2 = time.perf_counter()
+        if ref_orbit is None:
+            ref_orbit = (mc.mean_orbit.positions[-1], mc.mean_orbit.velocities[-1])
+        along[label] = frames.to_rtn(mc.positions[:, -1], *ref_orbit)[:, 1]
+        cmean[label] = float(frames.to_rtn(cc.mean[-1, :3], *ref_orbit)[1])
+        cstd[label] = float(cc.along_track_std[-1])
+        cds[label] = cd
+        seconds[label] = (t1 - t0, t2 - t1)
+    return CcspComparison(along, cmean, cstd, cds, seconds, float(duration))
