@@ -5,7 +5,9 @@ from . import density, frames, kappa, scenarios
 from ._core import DensityFieldError, IntegrationError, RhopropError
 from .ccsp import CcspResult, ccsp
 from .debias import debias_drag_coefficient
+from .ensemble import EnsembleResult, ensemble
 from .epochs import seconds_since_j2000, to_datetime64
+from .mixture import GaussianMixture
 from .montecarlo import MonteCarloResult, monte_carlo
 from .orbit import OrbitState, Spacecraft, Trajectory, propagate
 from .spaceweather import SpaceWeather
@@ -15,6 +17,8 @@ __version__ = "0.1.0"
 __all__ = [
     "CcspResult",
     "DensityFieldError",
+    "EnsembleResult",
+    "GaussianMixture",
     "IntegrationError",
     "MonteCarloResult",
     "OrbitState",
@@ -26,6 +30,7 @@ __all__ = [
     "ccsp",
     "debias_drag_coefficient",
     "density",
+    "ensemble",
     "frames",
     "kappa",
     "monte_carlo",

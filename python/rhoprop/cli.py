@@ -1,4 +1,5 @@
-"""The ``rhoprop`` command line."""
+"""The ``rhoprop`` command line: ``rhoprop paper`` (the paper's study) and ``rhoprop run
+SCENARIO.toml`` (a user's own ensemble study). Exit codes: 0 ok, 1 failure, 2 usage."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -16,49 +18,50 @@ from .orbit import propagate
 from .spaceweather import SpaceWeather
 
 
+def _stage(title: str, start: float) -> None:
+    print(f"\n== {title}  (t = {time.perf_counter() - start:.0f} s)", flush=True)
+
+
 def _paper(args: argparse.Namespace) -> int:
-    """The paper's orbit, propagated deterministically (the stochastic study builds on it)."""
-    state = scenarios.paper_state()
-    craft = scenarios.paper_spacecraft()
-    model = scenarios.benchmark_exponential()
-    duration = 3600.0 * 6 if args.quick else scenarios.PAPER_DURATION
-    print("rhoprop paper: the paper's initial state and sphere (Cd 3.0912, A/m 0.0015 m^2/kg)")
-    print(f"  epoch {state.epoch}, {duration / 86400:.2f} days, exponential benchmark atmosphere")
-    print("  (rho = 3.725e-12 kg/m^3 at 400 km, H = 58.515 km); two-body + J2 + drag")
-    print()
-    print(
-        f"  {'method':<8} {'RHS evals':>10} {'wall [s]':>9}  {'final altitude [km]':>20}"
-        f"  {'vs dop853 [m]':>13}"
-    )
-    reference = None
-    for method in ("dop853", "rk8", "rk4"):
-        t0 = time.perf_counter()
-        tr = propagate(state, craft, model, duration, method=method)
-        wall = time.perf_counter() - t0
-        alt = frames.geodetic(frames.inertial_to_fixed(tr.epochs[-1], tr.positions[-1]))[2]
-        if reference is None:
-            reference = tr.positions[-1]
-        diff = float(np.linalg.norm(tr.positions[-1] - reference))
-        print(f"  {method:<8} {tr.evaluations:>10} {wall:>9.3f}  {alt / 1e3:>20.3f}  {diff:>13.3f}")
-    assert reference is not None
-    print()
-    print(f"  final position [m]: {np.array2string(reference, precision=3)}")
-    _paper_models(state, craft, duration)
-    _paper_methods(args, state, craft, duration)
-    print("The multi-model ensemble stage of the study is not built yet.")
-    return 0
-
-
-def _paper_methods(args: argparse.Namespace, state, craft, duration: float) -> None:
-    """The paper's method comparison (Fig. 4 analogue) into --out."""
+    """The paper's study: deterministic orbits, Fig. 4, Fig. 5 (four cases), Fig. 6."""
+    start = time.perf_counter()
     members = args.members or (100 if args.quick else 1000)
+    duration = 86400.0 if args.quick else scenarios.PAPER_DURATION
     out = Path(args.out)
-    print()
-    print(f"Method comparison (paper Fig. 4): {members} members per method, NRLMSIS 2.1, Case I")
-    comparison = studies.method_comparison(state, craft, None, duration, n=members, progress=True)
-    figure = comparison.figure(out / "method_comparison.png")
-    table = comparison.table()
-    print(table)
+    out.mkdir(parents=True, exist_ok=True)
+    record = SpaceWeather()
+    state, craft = scenarios.paper_state(), scenarios.paper_spacecraft()
+    print(f"rhoprop paper: {members} members per run, {duration / 86400:g} days, output in {out}")
+
+    _stage("Mean orbits, Case I (2002-09-07 storm)", start)
+    _paper_orbits(state, craft, duration, record)
+
+    _stage("Method comparison (paper Fig. 4), NRLMSIS 2.1, Case I", start)
+    comparison = studies.method_comparison(
+        state, craft, density.Msis("2.1", space_weather=record), duration, n=members
+    )
+    figures = [comparison.figure(out / "method_comparison.png")]
+    print(comparison.table())
+
+    _stage("Ensembles for the four space-weather cases (paper Fig. 5)", start)
+    ensembles = studies.case_ensembles(n=members, duration=duration, record=record)
+    figures.append(studies.ensemble_figure(ensembles, out / "ensembles.png"))
+    case_table = _case_table(ensembles)
+    print(case_table)
+
+    _stage("CCSP vs Monte Carlo (paper Fig. 6)", start)
+    sw = record
+    versus = studies.ccsp_vs_monte_carlo(
+        state,
+        craft,
+        density.Msis("2.1", space_weather=sw),
+        density.Msis("00", space_weather=sw),
+        duration,
+        n=members,
+    )
+    figures.append(versus.figure(out / "ccsp_vs_monte_carlo.png"))
+    print(versus.table())
+
     summary = {
         "members": members,
         "duration_s": duration,
@@ -67,77 +70,120 @@ def _paper_methods(args: argparse.Namespace, state, craft, duration: float) -> N
             {"a": a, "b": b, "measured": m, "long_time_theory": t}
             for a, b, m, t in comparison.ratios()
         ],
-    }
-    print()
-    print(f"CCSP vs Monte Carlo (paper Fig. 6): {members} members, NRLMSIS 2.1 and NRLMSISE-00")
-    versus = studies.ccsp_vs_monte_carlo(state, craft, None, None, duration, n=members)
-    figure2 = versus.figure(out / "ccsp_vs_monte_carlo.png")
-    table2 = versus.table()
-    print(table2)
-    summary["ccsp_vs_monte_carlo"] = {
-        k: {
-            "cd": versus.cd[k],
-            "mc_along_track_mean_m": float(versus.mc_along[k].mean()),
-            "mc_along_track_std_m": float(versus.mc_along[k].std(ddof=1)),
-            "ccsp_along_track_mean_m": versus.ccsp_mean[k],
-            "ccsp_along_track_std_m": versus.ccsp_std[k],
-            "mc_seconds": versus.seconds[k][0],
-            "ccsp_seconds": versus.seconds[k][1],
-        }
-        for k in versus.mc_along
+        "cases": {
+            case: {"epoch": str(scenarios.CASE_EPOCHS[case]) + "Z", **ens.summary()}
+            for case, ens in ensembles.items()
+        },
+        "ccsp_vs_monte_carlo": {
+            k: {
+                "cd": versus.cd[k],
+                "mc_along_track_mean_m": float(versus.mc_along[k].mean()),
+                "mc_along_track_std_m": float(versus.mc_along[k].std(ddof=1)),
+                "ccsp_along_track_mean_m": versus.ccsp_mean[k],
+                "ccsp_along_track_std_m": versus.ccsp_std[k],
+                "mc_seconds": versus.seconds[k][0],
+                "ccsp_seconds": versus.seconds[k][1],
+            }
+            for k in versus.mc_along
+        },
+        "wall_seconds": time.perf_counter() - start,
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    days = f"{duration / 86400:g}"
     (out / "summary.md").write_text(
-        f"# rhoprop paper study\n\n## Method comparison ({members} members, "
-        f"{duration / 86400:g} days)\n\n{table}\n\n## CCSP vs Monte Carlo\n\n{table2}\n"
+        f"# rhoprop paper study\n\n{members} members per Monte Carlo run, {days} days.\n\n"
+        f"## Method comparison (Fig. 4)\n\n{comparison.table()}\n\n"
+        f"## Ensembles (Fig. 5): along-track at {days} days\n\n{case_table}\n\n"
+        f"## CCSP vs Monte Carlo (Fig. 6)\n\n{versus.table()}\n"
     )
-    print(f"wrote {figure}, {figure2}, {out / 'summary.json'}, {out / 'summary.md'}")
+    _stage("Done", start)
+    for path in [*figures, out / "summary.json", out / "summary.md"]:
+        print(f"  wrote {path}")
+    return 0
 
 
-def _paper_models(state, craft, duration: float) -> None:
-    """Mean orbits of Case I through the three NRLMSIS stand-ins, along-track vs 2.1."""
-    sw = SpaceWeather()
-    print()
-    print("Mean orbits through NRLMSIS (Case I: 2002-09-07 storm; fields cached on disk)")
+def _case_table(ensembles: dict[str, Any]) -> str:
+    """Markdown table of the ensembles: per case and model Cd, along-track mean and std;
+    mixture mean, std, 95 % interval and number of modes."""
+    lines = [
+        "| case | model | Cd | along-track mean [m] | along-track std [m] |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for case, ens in ensembles.items():
+        s = ens.summary()
+        for name, m in s["models"].items():
+            lines.append(
+                f"| {case} | {name} | {m['cd']:.4f} | {m['along_track_mean_m']:.1f} "
+                f"| {m['along_track_std_m']:.1f} |"
+            )
+        x = s["mixture"]
+        lines.append(
+            f"| {case} | **mixture** ({x['modes']} mode{'s' if x['modes'] != 1 else ''}, 95 %: "
+            f"{x['q025_m']:.0f} to {x['q975_m']:.0f}) | | {x['mean_m']:.1f} | {x['std_m']:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+def _paper_orbits(state, craft, duration: float, record: SpaceWeather) -> None:
+    """Each integrator on the benchmark atmosphere, then the three NRLMSIS mean orbits."""
+    model = scenarios.benchmark_exponential()
+    print(f"  {'method':<8} {'RHS evals':>10} {'wall [s]':>9}  {'vs dop853 [m]':>13}")
+    reference = None
+    for method in ("dop853", "rk8", "rk4"):
+        t0 = time.perf_counter()
+        tr = propagate(state, craft, model, duration, method=method)
+        wall = time.perf_counter() - t0
+        reference = tr.positions[-1] if reference is None else reference
+        diff = float(np.linalg.norm(tr.positions[-1] - reference))
+        print(f"  {method:<8} {tr.evaluations:>10} {wall:>9.3f}  {diff:>13.3f}")
     print(f"  {'model':<12} {'field+run [s]':>13}  {'along-track vs 2.1 [m]':>23}")
     ref = None
     for version in ("2.1", "2.0", "00"):
         t0 = time.perf_counter()
-        tr = propagate(state, craft, density.Msis(version, space_weather=sw), duration)
+        tr = propagate(state, craft, density.Msis(version, space_weather=record), duration)
         wall = time.perf_counter() - t0
-        if ref is None:
-            ref = tr
+        ref = tr if ref is None else ref
         along = frames.to_rtn(tr.positions[-1], ref.positions[-1], ref.velocities[-1])[1]
         print(f"  {'NRLMSIS ' + version:<12} {wall:>13.2f}  {along:>23.1f}")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .scenario_file import run_scenario_file
+
+    return run_scenario_file(args.scenario, out=args.out)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``rhoprop`` command."""
     parser = argparse.ArgumentParser(
         prog="rhoprop",
-        description="Orbit uncertainty from thermospheric density uncertainty.",
+        description="Orbit uncertainty of LEO objects from thermospheric density uncertainty: "
+        "correlated-density Monte Carlo, the CCSP filter and multi-model ensembles.",
+        epilog="Start with 'rhoprop paper --quick' (about half a minute). "
+        "Exit codes: 0 ok, 1 failure, 2 usage.",
     )
     parser.add_argument("--version", action="version", version=f"rhoprop {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     paper = sub.add_parser(
         "paper",
-        help="run the paper study (orbits, method comparison, CCSP vs Monte Carlo so far)",
-        description="Run the paper study: the paper's orbit for 3 days with each "
-        "integrator and through NRLMSIS 2.1, 2.0 and NRLMSISE-00 (Case I), then the "
-        "Monte Carlo method comparison (paper Fig. 4) and CCSP vs Monte Carlo (Fig. 6): "
-        "figures, summary.json and summary.md in --out. The ensemble stage is not built "
-        "yet.",
+        help="reproduce the paper's study: figures and summary tables",
+        description="Reproduce the paper's study (Paul, Licata & Mehta): mean orbits, the "
+        "Monte Carlo method comparison (Fig. 4), the three-model ensembles for the four "
+        "space-weather cases (Fig. 5) and CCSP vs Monte Carlo (Fig. 6). Writes PNG figures, "
+        "summary.json and summary.md to --out. The paper's ML density models are replaced "
+        "by NRLMSIS 2.1 (reference), NRLMSIS 2.0 and NRLMSISE-00 with a documented "
+        "uncertainty model. A full run takes about two minutes on 2 cores.",
     )
     paper.add_argument(
         "--quick",
         action="store_true",
-        help="a smoke run: 6 hours and 100 members instead of 3 days and 1000",
+        help="a smoke run: 1 day and 100 members instead of 3 days and 1000",
     )
     paper.add_argument(
         "--members",
         type=int,
         default=None,
-        help="Monte Carlo members per case (default 1000, 100 with --quick)",
+        help="Monte Carlo members per run (default 1000, 100 with --quick)",
     )
     paper.add_argument(
         "--out",
@@ -145,6 +191,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="directory for figures and summaries (default ./rhoprop-paper)",
     )
     paper.set_defaults(run=_paper)
+    run = sub.add_parser(
+        "run",
+        help="run your own ensemble study from a TOML scenario file",
+        description="Run an ensemble study described by a TOML file (epoch, state, "
+        "spacecraft, models, method, duration, outputs). See examples/scenario.toml.",
+    )
+    run.add_argument("scenario", help="path of the TOML scenario file")
+    run.add_argument("--out", default=None, help="output directory (overrides the file's)")
+    run.set_defaults(run=_run)
     return parser
 
 
@@ -155,11 +210,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 2
+    if getattr(args, "members", None) is not None and args.members < 2:
+        parser.error("--members must be at least 2")
     try:
         return int(args.run(args))
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        print("\ninterrupted", file=sys.stderr)
         return 130
+    except (ValueError, TypeError, OSError) as err:
+        print(f"rhoprop: error: {err}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

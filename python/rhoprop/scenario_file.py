@@ -1,0 +1,247 @@
+"""TOML scenario files for ``rhoprop run``: parsed and validated with errors naming the
+bad key, then run as an ensemble. See ``examples/scenario.toml`` for the schema."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from . import kappa as kappa_mod
+from .density import Exponential, Msis
+from .orbit import OrbitState, Spacecraft
+from .spaceweather import SpaceWeather
+
+SECTIONS = {"scenario", "state", "spacecraft", "models", "method", "output"}
+KAPPA_TYPES = {
+    "gauss_markov": (kappa_mod.GaussMarkov, {"half_life"}),
+    "interpolated": (kappa_mod.Interpolated, {"interval"}),
+    "white": (kappa_mod.White, {"step"}),
+    "constant": (kappa_mod.Constant, set()),
+    "piecewise_constant": (kappa_mod.PiecewiseConstant, {"interval", "correlation"}),
+}
+
+
+class ScenarioError(ValueError):
+    """A scenario file is invalid; the message names the key."""
+
+
+def _table(doc: dict, key: str) -> dict:
+    value = doc.get(key)
+    if not isinstance(value, dict):
+        raise ScenarioError(f"[{key}] is missing or not a table")
+    return value
+
+
+def _get(table: dict, where: str, key: str, kind: Any, default: Any = ...) -> Any:
+    if key not in table:
+        if default is ...:
+            raise ScenarioError(f"{where}.{key} is missing")
+        return default
+    value = table[key]
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
+        name = getattr(kind, "__name__", str(kind))
+        raise ScenarioError(f"{where}.{key} must be a {name}, got {value!r}")
+    return value
+
+
+def _unknown(table: dict, where: str, allowed: set[str]) -> None:
+    extra = set(table) - allowed
+    if extra:
+        raise ScenarioError(
+            f"{where} has unknown key(s) {sorted(extra)}; allowed: {sorted(allowed)}"
+        )
+
+
+def _space_weather(value: str, where: str, cache: dict) -> Any:
+    if value not in cache:
+        if value == "observed":
+            cache[value] = SpaceWeather()
+        elif value == "mean-geomagnetic":
+            cache[value] = SpaceWeather().mean_geomagnetic()
+        elif Path(value).exists():
+            cache[value] = SpaceWeather(value)
+        else:
+            raise ScenarioError(
+                f"{where}.space_weather must be 'observed', 'mean-geomagnetic' or an existing "
+                f"file, got {value!r}"
+            )
+    return cache[value]
+
+
+def _model(entry: Any, where: str, cache: dict) -> tuple[str, Any, bool, float]:
+    if not isinstance(entry, dict):
+        raise ScenarioError(f"{where} must be a table")
+    name = _get(entry, where, "name", str)
+    kind = _get(entry, where, "type", str)
+    reference = _get(entry, where, "reference", bool, False)
+    weight = _get(entry, where, "weight", float, 1.0)
+    common = {"name", "type", "reference", "weight"}
+    try:
+        if kind == "msis":
+            _unknown(entry, where, common | {"version", "space_weather"})
+            sw = _space_weather(_get(entry, where, "space_weather", str, "observed"), where, cache)
+            model = Msis(_get(entry, where, "version", str, "2.1"), space_weather=sw)
+        elif kind == "exponential":
+            _unknown(entry, where, common | {"rho0", "h0", "scale_height", "rel_sigma"})
+            model = Exponential(
+                _get(entry, where, "rho0", float),
+                _get(entry, where, "h0", float),
+                _get(entry, where, "scale_height", float),
+                _get(entry, where, "rel_sigma", float, 0.0),
+            )
+        else:
+            raise ScenarioError(f"{where}.type must be 'msis' or 'exponential', got {kind!r}")
+    except ScenarioError:
+        raise
+    except (ValueError, TypeError) as err:
+        raise ScenarioError(f"{where}: {err}") from err
+    return name, model, reference, weight
+
+
+def load_scenario(path: str | Path) -> dict[str, Any]:
+    """Parses and validates a scenario file into the arguments of
+    :func:`rhoprop.ensemble.ensemble` plus ``name`` and ``directory``."""
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text())
+    except FileNotFoundError as err:
+        raise ScenarioError(f"scenario file {p} does not exist") from err
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError(f"{p} is not valid TOML: {err}") from err
+    _unknown(doc, "the file", SECTIONS)
+    sc = _table(doc, "scenario")
+    _unknown(sc, "scenario", {"name", "epoch", "duration"})
+    st = _table(doc, "state")
+    _unknown(st, "state", {"position", "velocity"})
+    cr = _table(doc, "spacecraft")
+    _unknown(cr, "spacecraft", {"cd", "area_to_mass"})
+    try:
+        state = OrbitState(
+            _get(sc, "scenario", "epoch", str),
+            _get(st, "state", "position", list),
+            _get(st, "state", "velocity", list),
+        )
+    except (ValueError, TypeError) as err:
+        raise ScenarioError(f"[state] / scenario.epoch: {err}") from err
+    try:
+        craft = Spacecraft(
+            _get(cr, "spacecraft", "cd", float), _get(cr, "spacecraft", "area_to_mass", float)
+        )
+    except ValueError as err:
+        raise ScenarioError(f"[spacecraft]: {err}") from err
+    duration = _get(sc, "scenario", "duration", float)
+    if not duration > 0:
+        raise ScenarioError(f"scenario.duration must be > 0, got {duration}")
+
+    entries = doc.get("models")
+    if not isinstance(entries, list) or not entries:
+        raise ScenarioError("[[models]] must list at least one model")
+    cache: dict = {}
+    models, weights, references = {}, [], []
+    for i, entry in enumerate(entries):
+        name, model, is_ref, weight = _model(entry, f"models[{i}]", cache)
+        if name in models:
+            raise ScenarioError(f"models[{i}].name {name!r} is used twice")
+        models[name] = model
+        weights.append(weight)
+        if is_ref:
+            references.append(name)
+    if len(references) != 1:
+        raise ScenarioError(f"exactly one model must have reference = true, got {references}")
+
+    me = _table(doc, "method")
+    kind = _get(me, "method", "kind", str, "monte_carlo")
+    options: dict[str, Any] = {}
+    if kind == "monte_carlo":
+        _unknown(me, "method", {"kind", "members", "seed", "output_step", "kappa", "perturbation"})
+        options["n"] = _get(me, "method", "members", int, 1000)
+        options["seed"] = _get(me, "method", "seed", int, 0)
+        options["output_step"] = _get(me, "method", "output_step", float, 3600.0)
+        options["perturbation"] = _get(me, "method", "perturbation", str, "additive")
+        if "kappa" in me:
+            kp = _get(me, "method", "kappa", dict)
+            ktype = _get(kp, "method.kappa", "type", str)
+            if ktype not in KAPPA_TYPES:
+                raise ScenarioError(
+                    f"method.kappa.type must be one of {sorted(KAPPA_TYPES)}, got {ktype!r}"
+                )
+            cls, params = KAPPA_TYPES[ktype]
+            _unknown(kp, "method.kappa", params | {"type"})
+            try:
+                options["kappa"] = cls(**{k: float(kp[k]) for k in params if k in kp})
+            except (ValueError, TypeError) as err:
+                raise ScenarioError(f"method.kappa: {err}") from err
+    elif kind == "ccsp":
+        _unknown(me, "method", {"kind", "update_interval", "perturbation"})
+        options["update_interval"] = _get(me, "method", "update_interval", float, 3600.0)
+        options["perturbation"] = _get(me, "method", "perturbation", str, "additive")
+    else:
+        raise ScenarioError(f"method.kind must be 'monte_carlo' or 'ccsp', got {kind!r}")
+    outp = doc.get("output", {})
+    if not isinstance(outp, dict):
+        raise ScenarioError("[output] must be a table")
+    _unknown(outp, "output", {"directory"})
+    return {
+        "name": _get(sc, "scenario", "name", str, p.stem),
+        "directory": _get(outp, "output", "directory", str, "rhoprop-run"),
+        "state": state,
+        "spacecraft": craft,
+        "models": models,
+        "reference": references[0],
+        "method": kind,
+        "weights": weights,
+        "duration": duration,
+        "options": options,
+    }
+
+
+def run_scenario_file(path: str | Path, out: str | None = None) -> int:
+    """Runs a scenario file: the ensemble, its figure, summary.json and summary.md."""
+    from .ensemble import ensemble
+    from .studies import ensemble_figure
+
+    sc = load_scenario(path)
+    directory = Path(out or sc["directory"])
+    directory.mkdir(parents=True, exist_ok=True)
+    print(
+        f"rhoprop run: {sc['name']}: {len(sc['models'])} models, {sc['method']}, "
+        f"{sc['duration'] / 86400:g} days"
+    )
+    ens = ensemble(
+        sc["state"],
+        sc["spacecraft"],
+        sc["models"],
+        sc["reference"],
+        method=sc["method"],
+        weights=sc["weights"],
+        duration=sc["duration"],
+        **sc["options"],
+    )
+    figure = ensemble_figure({sc["name"]: ens}, directory / "ensemble.png")
+    summary = {"scenario": sc["name"], "epoch": str(sc["state"].epoch) + "Z", **ens.summary()}
+    (directory / "summary.json").write_text(json.dumps(summary, indent=2))
+    lines = [
+        "| model | Cd | along-track mean [m] | along-track std [m] |",
+        "| --- | --- | --- | --- |",
+    ]
+    for name, m in summary["models"].items():
+        lines.append(
+            f"| {name} | {m['cd']:.4f} | {m['along_track_mean_m']:.1f} "
+            f"| {m['along_track_std_m']:.1f} |"
+        )
+    mix = summary["mixture"]
+    lines.append(f"| mixture ({mix['modes']} modes) | | {mix['mean_m']:.1f} | {mix['std_m']:.1f} |")
+    table = "\n".join(lines)
+    (directory / "summary.md").write_text(f"# {sc['name']}\n\n{table}\n")
+    print(table)
+    print(f"  wrote {figure}, {directory / 'summary.json'}, {directory / 'summary.md'}")
+    return 0

@@ -1,0 +1,160 @@
+"""Multi-model ensembles: debiasing, the mixture, the paper's four cases end to end, and
+TOML scenario files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+from rhoprop import scenarios, studies
+from rhoprop.cli import main
+from rhoprop.scenario_file import ScenarioError, load_scenario
+
+
+@pytest.fixture(scope="module")
+def analytic():
+    state, craft = scenarios.paper_state(), scenarios.paper_spacecraft()
+    models = {
+        "ref": rp.density.Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=0.2),
+        "denser": rp.density.Exponential(1.2 * 3.725e-12, 400e3, 58.515e3, rel_sigma=0.2),
+    }
+    return state, craft, models
+
+
+def test_monte_carlo_ensemble_on_analytic_models(analytic):
+    state, craft, models = analytic
+    ens = rp.ensemble(state, craft, models, "ref", duration=86400.0, n=300, progress=False)
+    assert ens.cd["ref"] == 3.0912
+    assert ens.cd["denser"] == pytest.approx(3.0912 / 1.2, rel=1e-12)
+    # Debiased with a constant ratio, both models give the same drag: same mean offsets
+    # (within 3 standard errors of the MC means) and the mixture mean is their average.
+    m = ens.component_means[-1]
+    s = np.sqrt(ens.component_covariances[-1, :, 1, 1])
+    assert abs(m[0, 1] - m[1, 1]) < 3 * np.hypot(*s) / np.sqrt(300)
+    mix = ens.along_track_mixture()
+    assert mix.mean()[0] == pytest.approx(m[:, 1].mean(), abs=1e-9)
+    x = np.linspace(-8 * s.max(), 8 * s.max(), 4001) + m[:, 1].mean()
+    assert np.trapezoid(ens.along_track_pdf(x), x) == pytest.approx(1.0, abs=1e-4)
+    summary = ens.summary()
+    assert set(summary["models"]) == {"ref", "denser"}
+    assert (
+        summary["mixture"]["q025_m"] < summary["mixture"]["mean_m"] < summary["mixture"]["q975_m"]
+    )
+
+
+def test_ccsp_ensemble_and_weights(analytic):
+    state, craft, models = analytic
+    ens = rp.ensemble(
+        state,
+        craft,
+        models,
+        "ref",
+        method="ccsp",
+        duration=86400.0,
+        weights=[3.0, 1.0],
+        cds={"denser": 3.0912},
+    )
+    np.testing.assert_allclose(ens.weights, [0.75, 0.25])
+    # Undebiased, the denser model's orbit runs ahead of the reference.
+    assert ens.component_means[-1, 1, 1] > ens.component_means[-1, 0, 1] + 10.0
+    assert abs(ens.component_means[-1, 0, 1]) < 1e-6  # the reference is the mean orbit
+    with pytest.raises(ValueError, match="reference 'nope'"):
+        rp.ensemble(state, craft, models, "nope", method="ccsp", duration=3600.0)
+    with pytest.raises(ValueError, match="weights must be 2"):
+        rp.ensemble(state, craft, models, "ref", method="ccsp", duration=3600.0, weights=[1.0])
+
+
+def test_four_cases_end_to_end_solar_max_spreads_more():
+    ens = studies.case_ensembles(n=40, duration=86400.0, progress=False)
+    assert list(ens) == list(scenarios.CASE_EPOCHS)
+    std = {case: e.summary()["mixture"]["std_m"] for case, e in ens.items()}
+    print(std)
+    # The paper's finding: solar maximum (denser, more uncertain) spreads more.
+    assert std["solar-max-storm"] > std["solar-min"]
+    assert std["solar-max-simulated"] > std["solar-min-simulated"]
+    # NRLMSIS 2.0 duplicates 2.1 in mass density (to float32 rounding): same Cd.
+    e = ens["solar-min"]
+    assert e.cd["NRLMSIS 2.0"] == pytest.approx(e.cd["NRLMSIS 2.1"], rel=1e-6)
+
+
+GOOD = """
+[scenario]
+name = "tiny"
+epoch = "2002-09-07T01:00:00Z"
+duration = 7200.0
+[state]
+position = [3782900.7032, -5441600.6779, -1420075.1327]
+velocity = [-606.6600, 1539.2559, -7488.3946]
+[spacecraft]
+cd = 3.0912
+area_to_mass = 0.0015
+[[models]]
+name = "a"
+type = "exponential"
+rho0 = 3.725e-12
+h0 = 400e3
+scale_height = 58515.0
+rel_sigma = 0.2
+reference = true
+[[models]]
+name = "b"
+type = "exponential"
+rho0 = 4e-12
+h0 = 400e3
+scale_height = 58515.0
+rel_sigma = 0.2
+[method]
+kind = "monte_carlo"
+members = 20
+kappa = { type = "gauss_markov", half_life = 1080.0 }
+"""
+
+
+def test_scenario_file_runs(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(GOOD)
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert set(summary["models"]) == {"a", "b"} and summary["mixture"]["modes"] >= 1
+    assert (tmp_path / "out" / "ensemble.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (lambda s: s.replace("cd = 3.0912", 'cd = "big"'), r"spacecraft\.cd must be a float"),
+        (lambda s: s.replace("duration = 7200.0\n", ""), r"scenario\.duration is missing"),
+        (lambda s: s.replace("reference = true\n", ""), "exactly one model must have reference"),
+        (
+            lambda s: s.replace(
+                'type = "exponential"\nrho0 = 4e-12', 'type = "hasdm"\nrho0 = 4e-12'
+            ),
+            r"models\[1\]\.type must be 'msis' or 'exponential'",
+        ),
+        (
+            lambda s: s.replace("members = 20", "members = 20\ncolour = 3"),
+            r"method has unknown key",
+        ),
+        (lambda s: s.replace("gauss_markov", "brownian"), r"method\.kappa\.type must be one of"),
+        (lambda s: s.replace("half_life = 1080.0", "half_life = -5.0"), "half_life must be > 0"),
+        (lambda s: s.replace("rho0 = 4e-12", "rho0 = -4e-12"), r"models\[1\]: rho0 must be > 0"),
+        (lambda s: s + "\n[extra]\n", "unknown key"),
+        (lambda s: s.replace("[spacecraft]", "[spacecraft"), "not valid TOML"),
+    ],
+)
+def test_scenario_errors_name_the_key(tmp_path, edit, match):
+    path = tmp_path / "s.toml"
+    path.write_text(edit(GOOD))
+    with pytest.raises(ScenarioError, match=match):
+        load_scenario(path)
+    assert main(["run", str(path)]) == 1
+
+
+def test_example_scenario_is_valid():
+    from pathlib import Path
+
+    sc = load_scenario(Path(__file__).parents[1] / "examples" / "scenario.toml")
+    assert sc["reference"] == "NRLMSIS 2.1" and sc["options"]["n"] == 500
