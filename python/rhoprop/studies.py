@@ -394,10 +394,10 @@ def ensemble_figure(ensembles: dict[str, Any], path: str | Path) -> Path:
                 label=f"{name} (Cd {ens.cd[name]:.3f})",
             )
         ax.plot(x / 1e3, mix.pdf(x) * 1e3, "k", lw=2.6, label="mixture")
-        epoch = str(scenarios.CASE_EPOCHS[case])[:16].replace("T", " ")
+        epoch = str(ens.results[ens.reference].epoch)[:16].replace("T", " ")
         ax.set_title(f"{case}  ({epoch} UTC)", fontsize=10)
         days = ens.times[-1] / 86400.0
-        ax.set_xlabel(f"along-track at {days:g} days vs NRLMSIS 2.1 mean orbit [km]")
+        ax.set_xlabel(f"along-track at {days:g} days vs the {ens.reference} mean orbit [km]")
         ax.set_ylabel("PDF [1/km]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
