@@ -102,12 +102,17 @@ pub fn perturb(mean: f64, sigma: f64, kappa: f64, perturbation: Perturbation) ->
 }
 
 impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> {
-    #[inline]
+    #[inline(always)]
     fn eval(&mut self, t: f64, y: &State<W>, dy: &mut State<W>) -> Result<(), CoreError> {
         self.evaluations += 1;
         let ut1 = self.epoch + t;
-        // One Earth-rotation angle per stage, shared by all lanes.
-        let rot = EarthRotation::new(gmst(ut1));
+        // One Earth-rotation angle per stage, shared by all lanes (skipped when the
+        // atmosphere does not need it).
+        let rot = if self.atmosphere.uses_earth_rotation() {
+            EarthRotation::new(gmst(ut1))
+        } else {
+            EarthRotation { cos: 1.0, sin: 0.0 }
+        };
         let kj2 = -1.5 * J2 * MU * R_EARTH * R_EARTH;
         for l in 0..W {
             let (x, yy, z) = (y[0][l], y[1][l], y[2][l]);

@@ -52,6 +52,10 @@ impl Atmosphere for Exponential {
         let mean = self.at_altitude(norm(r) - R_EARTH);
         Ok((mean, self.rel_sigma * mean))
     }
+
+    fn uses_earth_rotation(&self) -> bool {
+        false
+    }
 }
 
 #[cfg(test)]

@@ -22,4 +22,10 @@ pub trait Atmosphere: Sync {
         r: [f64; 3],
         rot: &EarthRotation,
     ) -> Result<(f64, f64), CoreError>;
+
+    /// Whether `mean_sigma` reads the Earth rotation; when false the caller may skip
+    /// computing GMST (an analytic atmosphere of |r| alone).
+    fn uses_earth_rotation(&self) -> bool {
+        true
+    }
 }

@@ -48,6 +48,7 @@ fn combine<const W: usize>(tmp: &mut State<W>, y: &State<W>, h: f64, coef: &[f64
 
 impl<const W: usize> FixedStepper<W> {
     /// Advances `y` from `t` by one step `h`.
+    #[inline(always)]
     pub fn step<R: BatchRhs<W>>(
         &mut self,
         method: FixedMethod,
