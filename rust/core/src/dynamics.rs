@@ -129,22 +129,27 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             dy[4][l] = -MU * yy * inv_r3 + j2f * yy * (1.0 - zz);
             dy[5][l] = -MU * z * inv_r3 + j2f * z * (3.0 - zz);
         }
+        // Density per lane first (the only fallible, branchy part), then the drag
+        // arithmetic in a straight loop over lanes that the compiler vectorises.
+        let mut rho = [0.0; W];
         for l in 0..W {
-            if self.drag[l] == 0.0 {
-                continue;
+            if self.drag[l] != 0.0 {
+                let r = [y[0][l], y[1][l], y[2][l]];
+                let (mean, sigma) = self.atmosphere.mean_sigma(ut1, r, &rot)?;
+                let (value, clipped) = perturb(mean, sigma, self.kappa.at(l, t), self.perturbation);
+                self.clipped[l] += u64::from(clipped);
+                rho[l] = value;
             }
-            let r = [y[0][l], y[1][l], y[2][l]];
-            let (mean, sigma) = self.atmosphere.mean_sigma(ut1, r, &rot)?;
-            let (rho, clipped) = perturb(mean, sigma, self.kappa.at(l, t), self.perturbation);
-            self.clipped[l] += u64::from(clipped);
+        }
+        for l in 0..W {
             // v_rel = v - omega x r with omega = (0, 0, OMEGA_EARTH).
             let vr = [
-                y[3][l] + OMEGA_EARTH * r[1],
-                y[4][l] - OMEGA_EARTH * r[0],
+                y[3][l] + OMEGA_EARTH * y[1][l],
+                y[4][l] - OMEGA_EARTH * y[0][l],
                 y[5][l],
             ];
             let vn = (vr[0] * vr[0] + vr[1] * vr[1] + vr[2] * vr[2]).sqrt();
-            let f = -0.5 * rho * self.drag[l] * vn;
+            let f = -0.5 * rho[l] * self.drag[l] * vn;
             dy[3][l] += f * vr[0];
             dy[4][l] += f * vr[1];
             dy[5][l] += f * vr[2];

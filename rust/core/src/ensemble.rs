@@ -3,6 +3,7 @@
 //! (structure of arrays), batches in parallel with rayon. Memory grows with members x
 //! output times, never with steps.
 
+use crate::constants::R_EARTH;
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{finite, positive, CoreError};
@@ -316,7 +317,11 @@ fn run_batch<A: Atmosphere + ?Sized>(
         }
         stepper.step(cfg.method, &mut dynamics, t, t_next - t, &mut y)?;
         for l in 0..LANES {
+            // Geodetic altitude >= |r| - Re, so only orbits dipping below Re + floor need
+            // the full geodetic conversion.
+            let r = (y[0][l] * y[0][l] + y[1][l] * y[1][l] + y[2][l] * y[2][l]).sqrt();
             if frozen[l].is_none()
+                && r < R_EARTH + cfg.floor_altitude
                 && altitude(cfg.epoch + t_next, [y[0][l], y[1][l], y[2][l]]) < cfg.floor_altitude
             {
                 frozen[l] = Some(std::array::from_fn(|c| y[c][l]));
