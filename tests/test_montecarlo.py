@@ -220,7 +220,6 @@ def test_decayed_members_are_reported(setup):
         ({"initial_covariance": np.diag([1.0, 1, 1, 1, 1, -1])}, "semi-definite"),
         ({"initial_covariance": np.eye(6) + np.triu(np.ones((6, 6)), 1)}, "symmetric"),
         ({"perturbation": "multiplicative"}, "unknown perturbation"),
-        ({"output_step": 1000.0}, "multiple of the integration step"),
         ({"seed": -1}, "seed must be a non-negative integer"),
         ({"method": "dop853"}, "a Monte Carlo uses 'rk8' or 'rk4'"),
     ],

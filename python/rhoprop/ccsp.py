@@ -58,6 +58,7 @@ def ccsp(
     perturbation: str = "additive",
     step: float = 180.0,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    update_times: Any = None,
 ) -> CcspResult:
     """Propagates mean and covariance with the CCSP filter.
 
@@ -84,6 +85,9 @@ def ccsp(
         perturbation: ``"additive"`` or ``"lognormal"``.
         step: largest RK8 step, s.
         floor_altitude: decay floor, m.
+        update_times: explicit update times, s from the epoch (increasing, > 0; the last
+            is the end), instead of ``update_interval`` (used to align objects on common
+            output epochs).
     """
     if not isinstance(state, OrbitState):
         raise TypeError(f"state must be an OrbitState, got {type(state).__name__}")

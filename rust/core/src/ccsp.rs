@@ -32,10 +32,8 @@ pub struct CcspConfig {
     pub drag: f64,
     /// Initial 6x6 state covariance (row-major), positive definite.
     pub p0: [[f64; 6]; 6],
-    /// Update interval, s.
-    pub update_interval: f64,
-    /// Span, s (the last interval may be shorter).
-    pub duration: f64,
+    /// Update times, s from the epoch: increasing, > 0; the last is the end.
+    pub update_times: Vec<f64>,
     /// (lambda1 + n, lambda2 + p), both > 0; the paper uses (3, 3).
     pub scaling: (f64, f64),
     pub perturbation: Perturbation,
@@ -94,8 +92,14 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
 ) -> Result<CcspOutput, CoreError> {
     finite("epoch", cfg.epoch)?;
     positive("drag parameter Cd*A/m", cfg.drag)?;
-    positive("update_interval", cfg.update_interval)?;
-    positive("duration", cfg.duration)?;
+    crate::integrators::check_times("update times", 0.0, &cfg.update_times)?;
+    if cfg.update_times.windows(2).any(|w| w[1] <= w[0]) || cfg.update_times[0] <= 0.0 {
+        return Err(CoreError::invalid(
+            "update times",
+            cfg.update_times[0],
+            "must increase strictly from > 0",
+        ));
+    }
     positive("step", cfg.max_step)?;
     positive("scaling[0] (lambda1 + n)", cfg.scaling.0)?;
     positive("scaling[1] (lambda2 + p)", cfg.scaling.1)?;
@@ -128,8 +132,7 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
         cross: vec![[0.0; 6]],
     };
     let mut t = 0.0;
-    while t < cfg.duration * (1.0 - 1e-12) {
-        let t1 = (t + cfg.update_interval).min(cfg.duration);
+    for &t1 in &cfg.update_times {
         let s = factor(&p, &c, l1, l2, t)?;
         // Sigma points [state; kappa] around the mean (kappa mean 0).
         let mut points = [[0.0f64; 7]; POINTS];

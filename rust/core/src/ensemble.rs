@@ -76,26 +76,57 @@ struct BatchOut {
     decay: [f64; LANES],
 }
 
-/// Step indices of the outputs on the uniform grid of `h` ending at the last output.
-fn output_steps(times: &[f64], h: f64, end: f64) -> Result<(Vec<usize>, usize), CoreError> {
-    let n_steps = ((end / h) * (1.0 - 1e-12)).ceil().max(0.0) as usize;
-    let mut idx = Vec::with_capacity(times.len());
-    for (i, &t) in times.iter().enumerate() {
-        let k = (t / h).round();
-        let on_grid = (t - k * h).abs() <= 1e-6 * h.max(1.0);
-        if t == end {
-            idx.push(n_steps);
-        } else if on_grid {
-            idx.push(k as usize);
-        } else {
-            return Err(CoreError::invalid(
-                format!("output time {i}"),
-                t,
-                format!("must be a multiple of the integration step {h} s (or the end)"),
-            ));
+/// Step boundaries of a run: the uniform grid k h (kappa nodes fall on it) up to the last
+/// output, plus every output time, so outputs need not be multiples of the step.
+#[derive(Debug, Clone, PartialEq)]
+struct Schedule {
+    times: Vec<f64>,
+    /// The grid index k of a boundary that lies on the uniform grid.
+    grid: Vec<Option<usize>>,
+    /// Boundary index of each output.
+    outputs: Vec<usize>,
+}
+
+fn schedule(outputs: &[f64], h: f64) -> Schedule {
+    let end = *outputs.last().expect("checked non-empty");
+    let n = ((end / h) * (1.0 - 1e-12)).ceil().max(0.0) as usize;
+    let mut points: Vec<(f64, Option<usize>)> = (0..=n)
+        .map(|k| (if k == n { end } else { k as f64 * h }, Some(k)))
+        .collect();
+    points.extend(outputs.iter().map(|&t| (t, None)));
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let tol = 1e-9 * h.max(1.0);
+    let mut times: Vec<f64> = Vec::with_capacity(points.len());
+    let mut grid: Vec<Option<usize>> = Vec::with_capacity(points.len());
+    for (t, k) in points {
+        match times.last() {
+            Some(&last) if (t - last).abs() <= tol => {
+                let g = grid.last_mut().expect("same length");
+                if g.is_none() {
+                    *g = k;
+                    if k.is_some() {
+                        *times.last_mut().expect("same length") = t;
+                    }
+                }
+            }
+            _ => {
+                times.push(t);
+                grid.push(k);
+            }
         }
     }
-    Ok((idx, n_steps))
+    let outputs = outputs
+        .iter()
+        .map(|&t| {
+            let j = times.partition_point(|&b| b < t - tol);
+            j.min(times.len() - 1)
+        })
+        .collect();
+    Schedule {
+        times,
+        grid,
+        outputs,
+    }
 }
 
 /// Runs the ensemble. `progress.done` counts finished members; setting `progress.cancel`
@@ -115,8 +146,7 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
         return Err(CoreError::invalid("members", 0.0, "must be >= 1"));
     }
     let h = cfg.kappa.integration_step(cfg.max_step);
-    let end = *cfg.output_times.last().expect("checked non-empty");
-    let (out_steps, n_steps) = output_steps(&cfg.output_times, h, end)?;
+    let plan = schedule(&cfg.output_times, h);
     let nt = cfg.output_times.len();
     let batches = cfg.members.div_ceil(LANES);
 
@@ -128,7 +158,7 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
             }
             let first = b * LANES;
             let lanes = LANES.min(cfg.members - first);
-            let out = run_batch_dispatch(atmosphere, cfg, h, n_steps, &out_steps, first, lanes)?;
+            let out = run_batch_dispatch(atmosphere, cfg, h, &plan, first, lanes)?;
             progress.done.fetch_add(lanes, Ordering::Relaxed);
             Ok(out)
         })
@@ -166,8 +196,7 @@ fn run_batch_dispatch<A: Atmosphere + ?Sized>(
     atmosphere: &A,
     cfg: &MonteCarloConfig,
     h: f64,
-    n_steps: usize,
-    out_steps: &[usize],
+    plan: &Schedule,
     first: usize,
     lanes: usize,
 ) -> Result<BatchOut, CoreError> {
@@ -176,10 +205,10 @@ fn run_batch_dispatch<A: Atmosphere + ?Sized>(
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the CPU supports AVX2 and FMA, checked just above.
-            return unsafe { run_batch_avx2(atmosphere, cfg, h, n_steps, out_steps, first, lanes) };
+            return unsafe { run_batch_avx2(atmosphere, cfg, h, plan, first, lanes) };
         }
     }
-    run_batch(atmosphere, cfg, h, n_steps, out_steps, first, lanes)
+    run_batch(atmosphere, cfg, h, plan, first, lanes)
 }
 
 /// `run_batch` compiled for AVX2 + FMA (the step, RHS and stage arithmetic inline into it).
@@ -189,12 +218,11 @@ unsafe fn run_batch_avx2<A: Atmosphere + ?Sized>(
     atmosphere: &A,
     cfg: &MonteCarloConfig,
     h: f64,
-    n_steps: usize,
-    out_steps: &[usize],
+    plan: &Schedule,
     first: usize,
     lanes: usize,
 ) -> Result<BatchOut, CoreError> {
-    run_batch(atmosphere, cfg, h, n_steps, out_steps, first, lanes)
+    run_batch(atmosphere, cfg, h, plan, first, lanes)
 }
 
 /// Integrates members `first .. first + lanes` as one batch (unused lanes repeat the
@@ -204,13 +232,11 @@ fn run_batch<A: Atmosphere + ?Sized>(
     atmosphere: &A,
     cfg: &MonteCarloConfig,
     h: f64,
-    n_steps: usize,
-    out_steps: &[usize],
+    plan: &Schedule,
     first: usize,
     lanes: usize,
 ) -> Result<BatchOut, CoreError> {
-    let nt = out_steps.len();
-    let end = *cfg.output_times.last().expect("non-empty");
+    let nt = plan.outputs.len();
     let mut streams: [MemberStream; LANES] =
         std::array::from_fn(|l| MemberStream::new(cfg.seed, (first + l.min(lanes - 1)) as u64));
     let mut y: State<LANES> = [[0.0; LANES]; 6];
@@ -273,7 +299,7 @@ fn run_batch<A: Atmosphere + ?Sized>(
                   frozen: &[Option<[f64; 6]>; LANES],
                   out: &mut BatchOut|
      -> Result<(), CoreError> {
-        for (i, _) in out_steps.iter().enumerate().filter(|(_, &s)| s == k) {
+        for (i, _) in plan.outputs.iter().enumerate().filter(|(_, &s)| s == k) {
             for l in 0..LANES {
                 let s: [f64; 6] = frozen[l].unwrap_or_else(|| std::array::from_fn(|c| y[c][l]));
                 let o = (l * nt + i) * 3;
@@ -293,14 +319,9 @@ fn run_batch<A: Atmosphere + ?Sized>(
     record(0, 0.0, &y, &dynamics, &frozen, &mut out)?;
 
     let mut stepper = FixedStepper::<LANES>::default();
-    for k in 0..n_steps {
-        let t = k as f64 * h;
-        let t_next = if k + 1 == n_steps {
-            end
-        } else {
-            (k + 1) as f64 * h
-        };
-        if k > 0 && k % per_node == 0 {
+    for j in 0..plan.times.len() - 1 {
+        let (t, t_next) = (plan.times[j], plan.times[j + 1]);
+        if matches!(plan.grid[j], Some(k) if k > 0 && k % per_node == 0) {
             // A new kappa node segment starts at this step.
             let kl = &mut dynamics.kappa;
             let d = spacing.expect("nodes exist when per_node is finite");
@@ -331,10 +352,10 @@ fn run_batch<A: Atmosphere + ?Sized>(
                 dynamics.drag[l] = 0.0;
             }
         }
-        record(k + 1, t_next, &y, &dynamics, &frozen, &mut out)?;
+        record(j + 1, t_next, &y, &dynamics, &frozen, &mut out)?;
         if frozen[..lanes].iter().all(Option::is_some) {
-            for kk in k + 2..=n_steps {
-                record(kk, kk as f64 * h, &y, &dynamics, &frozen, &mut out)?;
+            for jj in j + 2..plan.times.len() {
+                record(jj, plan.times[jj], &y, &dynamics, &frozen, &mut out)?;
             }
             break;
         }
@@ -508,17 +529,34 @@ mod tests {
     }
 
     #[test]
-    fn outputs_off_the_step_grid_are_rejected() {
-        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.3).unwrap();
+    fn outputs_off_the_step_grid_are_step_boundaries() {
+        // Outputs between kappa nodes: with zero sigma the members follow the deterministic
+        // orbit there (to the integrator's accuracy: different step partitions).
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
         let mut cfg = config(2, KappaProcess::Interpolated { interval: 1080.0 });
-        cfg.output_times = vec![100.0, 3600.0];
-        let e = monte_carlo(&atm, &cfg, &Progress::default()).unwrap_err();
-        assert!(
-            e.to_string().contains("multiple of the integration step"),
-            "{e}"
-        );
-        cfg.output_times = vec![3600.0, 3650.0]; // the end may be off the grid
-        assert!(monte_carlo(&atm, &cfg, &Progress::default()).is_ok());
+        cfg.output_times = vec![100.0, 3650.0, 7000.0];
+        let out = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
+        let det = propagate(
+            &atm,
+            cfg.epoch,
+            PAPER,
+            cfg.drag,
+            &cfg.output_times,
+            Method::Rk8 { step: 60.0 },
+            120e3,
+        )
+        .unwrap();
+        for (i, s) in det.states.iter().enumerate() {
+            let d: f64 = (0..3)
+                .map(|c| (out.positions[i * 3 + c] - s[c]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(d < 1e-3, "output {i}: {d} m");
+        }
+        let plan = schedule(&[100.0, 360.0, 400.0], 180.0);
+        assert_eq!(plan.times, vec![0.0, 100.0, 180.0, 360.0, 400.0]);
+        assert_eq!(plan.grid, vec![Some(0), None, Some(1), Some(2), Some(3)]);
+        assert_eq!(plan.outputs, vec![1, 3, 4]);
     }
 
     #[test]

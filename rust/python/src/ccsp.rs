@@ -14,10 +14,10 @@ use rhoprop_core::dynamics::Perturbation;
 use rhoprop_core::integrators::FixedMethod;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
-/// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6).
+/// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), nt = updates + 1.
 #[pyfunction]
-#[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_interval,
-    duration, scaling, perturbation, step, floor_altitude))]
+#[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
+    scaling, perturbation, step, floor_altitude))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -26,8 +26,7 @@ pub fn ccsp<'py>(
     state: PyReadonlyArray1<'py, f64>,
     drag: f64,
     initial_covariance: PyReadonlyArray2<'py, f64>,
-    update_interval: f64,
-    duration: f64,
+    update_times: PyReadonlyArray1<'py, f64>,
     scaling: (f64, f64),
     perturbation: &str,
     step: f64,
@@ -55,8 +54,7 @@ pub fn ccsp<'py>(
         y0: fixed::<6>("state", &state)?,
         drag,
         p0: std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]])),
-        update_interval,
-        duration,
+        update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),
         scaling,
         perturbation,
         method: FixedMethod::Rk8,
