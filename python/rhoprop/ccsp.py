@@ -101,15 +101,19 @@ def ccsp(
     p0 = np.ascontiguousarray(p0, dtype=float)
     if p0.shape != (6, 6):
         raise ValueError(f"initial_covariance must have shape (6, 6), got {p0.shape}")
-    atmosphere = as_atmosphere(model, state, span)
+    if update_times is None:
+        n = int(np.ceil(span / dt * (1 - 1e-12)))
+        times = np.minimum(np.arange(1, n + 1) * dt, span)
+    else:
+        times = np.asarray(update_times, dtype=float)
+    atmosphere = as_atmosphere(model, state, float(times[-1]))
     out = _core.ccsp(
         atmosphere,
         seconds_since_j2000(state.epoch),
         state.state,
         spacecraft.drag_parameter,
         p0,
-        dt,
-        span,
+        times,
         (l1, l2),
         perturbation,
         _validate.positive("step", step),
