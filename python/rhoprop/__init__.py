@@ -1,7 +1,7 @@
 """rhoprop: orbit uncertainty of low-Earth-orbit objects caused by uncertainty in
 thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3)."""
 
-from . import density, frames, kappa, scenarios
+from . import catalog, density, frames, io, kappa, scenarios
 from ._core import DensityFieldError, IntegrationError, RhopropError
 from .ccsp import CcspResult, ccsp
 from .debias import debias_drag_coefficient
@@ -27,11 +27,13 @@ __all__ = [
     "Spacecraft",
     "Trajectory",
     "__version__",
+    "catalog",
     "ccsp",
     "debias_drag_coefficient",
     "density",
     "ensemble",
     "frames",
+    "io",
     "kappa",
     "monte_carlo",
     "propagate",

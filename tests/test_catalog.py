@@ -1,0 +1,202 @@
+"""Catalogs: TLE/OMM parsing against sgp4 itself, malformed input, decay, OEM round trip
+through an independent reader, Parquet summary, Dask equals local, the CLI."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sgp4 import exporter
+from sgp4.api import Satrec
+
+import rhoprop as rp
+from rhoprop import catalog, io
+from rhoprop.cli import main
+
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+END = "2002-09-07T06:00:00"
+
+
+def tle_pairs():
+    lines = SAMPLE.read_text().splitlines()
+    return [(lines[i], lines[i + 1], lines[i + 2]) for i in range(0, len(lines), 3)]
+
+
+def test_tle_states_equal_sgp4_at_epoch():
+    cat = catalog.load(SAMPLE)
+    assert len(cat) == 6 and not cat.skipped
+    for obj, (name, l1, l2) in zip(cat, tle_pairs(), strict=True):
+        sat = Satrec.twoline2rv(l1, l2)
+        _, r, v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
+        np.testing.assert_array_equal(obj.state.position, np.array(r) * 1e3)
+        np.testing.assert_array_equal(obj.state.velocity, np.array(v) * 1e3)
+        assert obj.name == name and obj.norad_id == sat.satnum
+        # Cd A/m = 2 B* / rho0, rho0 = 0.15696615 kg m^-2 ER^-1 (12.7416 B*).
+        assert obj.drag_parameter == pytest.approx(2 * sat.bstar / 0.15696615, rel=1e-12)
+
+
+def omm_records():
+    return [exporter.export_omm(Satrec.twoline2rv(l1, l2), name) for name, l1, l2 in tle_pairs()]
+
+
+def write_xml(records, path):
+    meta = (
+        "OBJECT_NAME",
+        "OBJECT_ID",
+        "CENTER_NAME",
+        "REF_FRAME",
+        "TIME_SYSTEM",
+        "MEAN_ELEMENT_THEORY",
+    )
+    mean = (
+        "EPOCH",
+        "MEAN_MOTION",
+        "ECCENTRICITY",
+        "INCLINATION",
+        "RA_OF_ASC_NODE",
+        "ARG_OF_PERICENTER",
+        "MEAN_ANOMALY",
+    )
+    segs = []
+    for r in records:
+
+        def tags(keys, r=r):
+            return "".join(f"<{k}>{r[k]}</{k}>" for k in keys if k in r)
+
+        rest = [k for k in r if k not in meta and k not in mean]
+        segs.append(
+            f"<segment><metadata>{tags(meta)}</metadata><data><meanElements>"
+            f"{tags(mean)}</meanElements><tleParameters>{tags(rest)}</tleParameters>"
+            "</data></segment>"
+        )
+    path.write_text(f"<ndm><omm><body>{''.join(segs)}</body></omm></ndm>")
+
+
+@pytest.mark.parametrize("kind", ["json", "csv", "xml"])
+def test_omm_formats_match_the_tles(tmp_path, kind):
+    records = omm_records()
+    path = tmp_path / f"cat.{kind}"
+    if kind == "json":
+        path.write_text(json.dumps(records))
+    elif kind == "csv":
+        with path.open("w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(records[0]))
+            w.writeheader()
+            w.writerows(records)
+    else:
+        write_xml(records, path)
+    omm = catalog.load(path)
+    tle = catalog.load(SAMPLE)
+    for a, b in zip(omm, tle, strict=True):
+        # OMM text carries the same elements as the TLE, with more digits: within metres.
+        assert np.linalg.norm(a.state.position - b.state.position) < 10.0
+        assert a.norad_id == b.norad_id and a.name == b.name
+
+
+def test_malformed_input_is_named_or_skipped(tmp_path):
+    lines = SAMPLE.read_text().splitlines()
+    bad = lines.copy()
+    bad[4] = bad[4][:-1] + str((int(bad[4][-1]) + 1) % 10)  # line 5: checksum broken
+    path = tmp_path / "bad.tle"
+    path.write_text("\n".join(bad))
+    with pytest.raises(ValueError, match="line 5 fails its checksum"):
+        catalog.load(path)
+    cat = catalog.load(path, errors="skip")
+    assert len(cat) == 5 and len(cat.skipped) == 1 and "lines 5-6" in cat.skipped[0][0]
+    records = omm_records()
+    del records[2]["MEAN_MOTION"]
+    jpath = tmp_path / "bad.json"
+    jpath.write_text(json.dumps(records))
+    with pytest.raises(ValueError, match=r"JSON record 2: missing field 'MEAN_MOTION'"):
+        catalog.load(jpath)
+    neg = lines.copy()
+    neg[1] = neg[1][:53] + "-10000-3" + neg[1][61:68]
+    neg[1] += str(exporter.compute_checksum(neg[1]))
+    npath = tmp_path / "neg.tle"
+    npath.write_text("\n".join(neg))
+    with pytest.raises(ValueError, match=r"B\* = -0.0001 is not positive"):
+        catalog.load(npath)
+    cat = catalog.load(npath, drag_parameters={90001: 0.005})
+    assert cat[0].drag_parameter == 0.005
+    with pytest.raises(ValueError, match="errors must be"):
+        catalog.load(SAMPLE, errors="ignore")
+
+
+@pytest.fixture(scope="module")
+def local_result():
+    return catalog.propagate_catalog(
+        catalog.load(SAMPLE),
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        progress=False,
+    )
+
+
+def test_common_epochs_and_decay(local_result):
+    r = local_result
+    assert r.epochs[-1] == np.datetime64(END, "ns")
+    assert r.epochs[0] >= max(o.state.epoch for o in r.objects)
+    assert r.mean.shape == (6, len(r.epochs), 6) and r.valid.all() and np.isnat(r.decay_epoch).all()
+    # A very dense atmosphere brings the low objects down inside the window.
+    dense = rp.density.Exponential(3e-9, 400e3, 58.515e3, rel_sigma=0.2)
+    d = catalog.propagate_catalog(catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False)
+    assert (~np.isnat(d.decay_epoch)).any()
+    k = int(np.flatnonzero(~np.isnat(d.decay_epoch))[0])
+    assert not d.valid[k, -1] and np.isfinite(d.mean).all()
+
+
+def test_oem_round_trip_with_an_independent_reader(tmp_path, local_result):
+    from oem import OrbitEphemerisMessage
+
+    paths = io.write_oem(local_result, tmp_path)
+    assert len(paths) == 6
+    oem = OrbitEphemerisMessage.open(str(paths[1]))
+    segment = oem.segments[0]
+    states = np.array([s.vector for s in segment.states])  # km, km/s
+    np.testing.assert_allclose(states * 1e3, local_result.mean[1], rtol=1e-8)
+    cov = np.array([c.matrix for c in segment.covariances])  # km^2 ...
+    np.testing.assert_allclose(cov * 1e6, local_result.covariance[1], rtol=1e-8, atol=1e-12)
+
+
+def test_parquet_summary(tmp_path, local_result):
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(io.write_summary(local_result, tmp_path / "s.parquet"))
+    assert table.num_rows == 6
+    assert {"norad_id", "along_track_std_m", "decay_epoch"} <= set(table.column_names)
+    assert (np.asarray(table["along_track_std_m"]) > 0).all()
+
+
+def test_dask_cluster_equals_local(local_result):
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        remote = catalog.propagate_catalog(
+            catalog.load(SAMPLE),
+            rp.scenarios.benchmark_exponential(0.2),
+            END,
+            output_step=1800.0,
+            client=client,
+            chunk_size=2,
+            progress=False,
+        )
+    np.testing.assert_array_equal(remote.mean, local_result.mean)
+    np.testing.assert_array_equal(remote.covariance, local_result.covariance)
+
+
+def test_cli_catalog(tmp_path, capsys):
+    code = main(
+        ["catalog", str(SAMPLE), "--end", END, "--out", str(tmp_path), "--model", "exponential"]
+    )
+    assert code == 0
+    assert len(list((tmp_path / "oem").glob("*.oem"))) == 6
+    assert (tmp_path / "summary.parquet").exists()
+    assert "objects/s" in capsys.readouterr().out
