@@ -69,7 +69,7 @@ def main() -> None:
     local = catalog.propagate_catalog(cat, field, end, progress=False)
     wall = time.perf_counter() - t0
     print(
-        f"local (rayon over sigma points, 2 cores): {len(cat)} objects in {wall:.1f} s = "
+        f"local (objects on threads, sigma points on rayon): {len(cat)} objects in {wall:.1f} s = "
         f"{len(cat) / wall:.1f} objects/s"
     )
     import distributed

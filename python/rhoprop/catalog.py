@@ -14,6 +14,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -451,12 +452,18 @@ def propagate_catalog(
     chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
     results: dict[int, dict] = {}
     if client is None:
+        # Objects run concurrently on threads (the core releases the GIL), each also
+        # parallel over its own sigma points or members.
+        from concurrent.futures import ThreadPoolExecutor
+
         local = _model_from_payload(payload)
-        for c, chunk in enumerate(chunks):
-            for i, o in chunk:
-                results[i] = _run_object(o, local, epochs, i, cfg)
-            if progress and sys.stderr.isatty():
-                sys.stderr.write(f"\rcatalog: {min(len(objs), (c + 1) * chunk_size)}/{len(objs)}")
+        workers = os.cpu_count() or 1
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            runs = pool.map(lambda item: _run_object(item[1], local, epochs, item[0], cfg), indexed)
+            for i, r in enumerate(runs):
+                results[i] = r
+                if progress and sys.stderr.isatty() and (i + 1) % 10 == 0:
+                    sys.stderr.write(f"\rcatalog: {i + 1}/{len(objs)}")
     else:
         from distributed import as_completed
 
