@@ -13,7 +13,14 @@ from . import _core, _validate, frames
 from .density.base import as_atmosphere
 from .epochs import offsets_to_epochs, seconds_since_j2000
 from .kappa import GaussMarkov, KappaProcess
-from .orbit import DEFAULT_FLOOR_ALTITUDE, OrbitState, Spacecraft, Trajectory, output_grid
+from .orbit import (
+    DEFAULT_FLOOR_ALTITUDE,
+    OrbitState,
+    Spacecraft,
+    Trajectory,
+    output_grid,
+    trajectory_from_core,
+)
 
 
 @dataclass(frozen=True)
@@ -205,19 +212,22 @@ def monte_carlo(
         if bar is not None:
             bar.close()
     h = float(out["step"])
-    t, states, decayed_at, evaluations, clipped = _core.propagate(
-        atmosphere, epoch, state.state, spacecraft.drag_parameter, times, method, h, None, floor
+    mean = trajectory_from_core(
+        state.epoch,
+        _core.propagate(
+            atmosphere,
+            epoch,
+            state.state,
+            spacecraft.drag_parameter,
+            times,
+            method,
+            h,
+            None,
+            floor,
+        ),
+        method,
     )
-    mean = Trajectory(
-        epoch=state.epoch,
-        times=t,
-        positions=states[:, :3],
-        velocities=states[:, 3:],
-        decayed_at=decayed_at,
-        evaluations=int(evaluations),
-        clipped=int(clipped),
-        method=method,
-    )
+    t, decayed_at = mean.times, mean.decayed_at
     if len(t) < len(times):
         raise ValueError(
             f"the mean orbit decays below the floor at {decayed_at} s; shorten the duration"

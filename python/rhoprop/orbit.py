@@ -115,6 +115,21 @@ class Trajectory:
         return OrbitState(self.epochs[index], self.positions[index], self.velocities[index])
 
 
+def trajectory_from_core(epoch: np.datetime64, out: tuple, method: str) -> Trajectory:
+    """A :class:`Trajectory` from the tuple ``_core.propagate`` returns."""
+    t, states, decayed_at, evaluations, clipped = out
+    return Trajectory(
+        epoch=epoch,
+        times=t,
+        positions=states[:, :3],
+        velocities=states[:, 3:],
+        decayed_at=decayed_at,
+        evaluations=int(evaluations),
+        clipped=int(clipped),
+        method=method,
+    )
+
+
 def output_grid(duration: float, output_step: float | None) -> np.ndarray:
     """Output times 0, step, 2 step, ... and always ``duration`` itself, s."""
     if output_step is None:
@@ -188,7 +203,7 @@ def propagate(
     times = output_grid(span, output_step)
     epoch = seconds_since_j2000(state.epoch)
     atmosphere = as_atmosphere(density, state, span)
-    t, states, decayed_at, evaluations, clipped = _core.propagate(
+    out = _core.propagate(
         atmosphere,
         epoch,
         state.state,
@@ -199,13 +214,4 @@ def propagate(
         DEFAULT_RTOL if rtol is None and method == "dop853" else rtol,
         floor,
     )
-    return Trajectory(
-        epoch=state.epoch,
-        times=t,
-        positions=states[:, :3],
-        velocities=states[:, 3:],
-        decayed_at=decayed_at,
-        evaluations=int(evaluations),
-        clipped=int(clipped),
-        method=method,
-    )
+    return trajectory_from_core(state.epoch, out, method)

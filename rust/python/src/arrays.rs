@@ -6,6 +6,7 @@ use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::PyResult;
+use rhoprop_core::dynamics::Perturbation;
 
 /// A (n,) float64 array as a view.
 pub fn vector<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<ArrayView1<'a, f64>> {
@@ -57,4 +58,27 @@ pub fn from_rows<const K: usize>(rows: &[[f64; K]]) -> Array2<f64> {
 /// A Vec as a (n,) array.
 pub fn from_vec(v: Vec<f64>) -> Array1<f64> {
     Array1::from_vec(v)
+}
+
+/// A (6, 6) matrix, row-major.
+pub fn matrix6(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<[[f64; 6]; 6]> {
+    let v = a.as_array();
+    if v.shape() != [6, 6] {
+        return Err(PyValueError::new_err(format!(
+            "{name} must have shape (6, 6), got {:?}",
+            v.shape()
+        )));
+    }
+    Ok(std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]])))
+}
+
+/// The perturbation form from its Python name.
+pub fn perturbation(name: &str) -> PyResult<Perturbation> {
+    match name {
+        "additive" => Ok(Perturbation::Additive),
+        "lognormal" => Ok(Perturbation::Lognormal),
+        other => Err(PyValueError::new_err(format!(
+            "unknown perturbation {other:?}; expected 'additive' or 'lognormal'"
+        ))),
+    }
 }

@@ -5,12 +5,10 @@ use crate::density::AtmosphereRef;
 use crate::detach::detached_with_progress;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rhoprop_core::ccsp::{ccsp as core_ccsp, CcspConfig};
 use rhoprop_core::density::GriddedField;
-use rhoprop_core::dynamics::Perturbation;
 use rhoprop_core::integrators::FixedMethod;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
@@ -33,27 +31,13 @@ pub fn ccsp<'py>(
     floor_altitude: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
-    let perturbation = match perturbation {
-        "additive" => Perturbation::Additive,
-        "lognormal" => Perturbation::Lognormal,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown perturbation {other:?}; expected 'additive' or 'lognormal'"
-            )))
-        }
-    };
-    let v = initial_covariance.as_array();
-    if v.shape() != [6, 6] {
-        return Err(PyValueError::new_err(format!(
-            "initial_covariance must have shape (6, 6), got {:?}",
-            v.shape()
-        )));
-    }
+    let perturbation = crate::arrays::perturbation(perturbation)?;
+    let p0 = crate::arrays::matrix6("initial_covariance", &initial_covariance)?;
     let cfg = CcspConfig {
         epoch,
         y0: fixed::<6>("state", &state)?,
         drag,
-        p0: std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]])),
+        p0,
         update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),
         scaling,
         perturbation,

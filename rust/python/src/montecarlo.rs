@@ -9,7 +9,6 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rhoprop_core::density::GriddedField;
-use rhoprop_core::dynamics::Perturbation;
 use rhoprop_core::ensemble::{covariance_factor, monte_carlo as core_mc, MonteCarloConfig};
 use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::kappa::KappaProcess;
@@ -60,15 +59,7 @@ pub fn monte_carlo<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
-    let perturbation = match perturbation {
-        "additive" => Perturbation::Additive,
-        "lognormal" => Perturbation::Lognormal,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown perturbation {other:?}; expected 'additive' or 'lognormal'"
-            )))
-        }
-    };
+    let perturbation = crate::arrays::perturbation(perturbation)?;
     let method = match method {
         "rk8" => FixedMethod::Rk8,
         "rk4" => FixedMethod::Rk4,
@@ -80,17 +71,10 @@ pub fn monte_carlo<'py>(
     };
     let initial_factor = match initial_covariance {
         None => None,
-        Some(c) => {
-            let v = c.as_array();
-            if v.shape() != [6, 6] {
-                return Err(PyValueError::new_err(format!(
-                    "initial_covariance must have shape (6, 6), got {:?}",
-                    v.shape()
-                )));
-            }
-            let m: [[f64; 6]; 6] = std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]]));
-            Some(covariance_factor(&m).map_err(crate::errors::to_py)?)
-        }
+        Some(c) => Some(
+            covariance_factor(&crate::arrays::matrix6("initial_covariance", &c)?)
+                .map_err(crate::errors::to_py)?,
+        ),
     };
     let cfg = MonteCarloConfig {
         epoch,
