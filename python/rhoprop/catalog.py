@@ -380,6 +380,38 @@ def _run_chunk(
     return [(i, _run_object(o, model, epochs, i, cfg)) for i, o in chunk]
 
 
+def _run_on_dask(
+    client: Any, payload: tuple, chunks: list, epochs: np.ndarray, cfg: dict, progress: bool
+) -> dict[int, dict]:
+    """Runs the chunks on a Dask cluster. The atmosphere is scattered to every worker once
+    (broadcast); tasks retry twice; a chunk whose task is lost with a dying worker (or
+    whose scattered atmosphere went with it) is submitted again, up to three rounds, so no
+    object is lost and none is counted twice (results are keyed by object index)."""
+    import sys
+
+    results: dict[int, dict] = {}
+    pending = list(range(len(chunks)))
+    for _ in range(3):
+        shared = client.scatter(payload, broadcast=True)
+        futures = {
+            c: client.submit(_run_chunk, shared, chunks[c], epochs, cfg, retries=2, pure=False)
+            for c in pending
+        }
+        failed = []
+        for c, fut in futures.items():
+            try:
+                for i, r in fut.result():
+                    results[i] = r
+            except Exception:
+                failed.append(c)
+        if progress and sys.stderr.isatty():
+            sys.stderr.write(f"\rcatalog: {len(chunks) - len(failed)}/{len(chunks)} chunks")
+        if not failed:
+            return results
+        pending = failed
+    raise RuntimeError(f"{len(pending)} catalog chunks failed on the cluster three times")
+
+
 def common_epochs(objects: list[CatalogObject], end: np.datetime64, step: float) -> np.ndarray:
     """Output epochs shared by all objects: end, end - step, ... not before the latest
     object epoch (at least the end itself)."""
@@ -417,8 +449,9 @@ def propagate_catalog(
             members, ``kappa`` process, object i seeded with ``seed + i``).
         output_step: spacing of the common output epochs, s, counted back from ``end``.
         client: a ``dask.distributed.Client``: objects are split into chunks of
-            ``chunk_size``, the atmosphere is scattered to every worker once (broadcast),
-            failed tasks are retried twice; results equal the local run.
+            ``chunk_size``, the atmosphere is sent once and replicated to every worker
+            (recomputed if a worker dies), failed tasks are retried twice; results equal
+            the local run.
         progress: print progress to stderr.
     """
     import sys
@@ -465,20 +498,7 @@ def propagate_catalog(
                 if progress and sys.stderr.isatty() and (i + 1) % 10 == 0:
                     sys.stderr.write(f"\rcatalog: {i + 1}/{len(objs)}")
     else:
-        from distributed import as_completed
-
-        shared = client.scatter(payload, broadcast=True)
-        futures = [
-            client.submit(_run_chunk, shared, chunk, epochs, cfg, retries=2, pure=False)
-            for chunk in chunks
-        ]
-        done = 0
-        for fut in as_completed(futures):
-            for i, r in fut.result():
-                results[i] = r
-            done += 1
-            if progress and sys.stderr.isatty():
-                sys.stderr.write(f"\rcatalog: {done}/{len(chunks)} chunks")
+        results.update(_run_on_dask(client, payload, chunks, epochs, cfg, progress))
     if progress and sys.stderr.isatty():
         sys.stderr.write("\n")
     order = [results[i] for i in range(len(objs))]
