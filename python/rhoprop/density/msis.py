@@ -255,7 +255,7 @@ class Msis(SampledModel):
     ) -> tuple[np.ndarray, np.ndarray]:
         """ln(mean) and sigma/mean on the grid (nt, nalt, nlat, nlon) with pymsis' grid
         mode. A node marked ``left`` takes the drivers just before its epoch. Driver
-        sensitivities are smooth in space and are sampled every second latitude and
+        sensitivities are smooth in space and are sampled every SENSITIVITY_STRIDE-th latitude and
         longitude node, then interpolated linearly."""
         before = epochs - np.where(left, np.timedelta64(1, "us"), np.timedelta64(0, "us"))
         drivers = self.space_weather.drivers(before)
