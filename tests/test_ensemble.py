@@ -11,7 +11,7 @@ import pytest
 import rhoprop as rp
 from rhoprop import scenarios, studies
 from rhoprop.cli import main
-from rhoprop.scenario_file import ScenarioError, load_scenario
+from rhoprop.studies.scenario_file import ScenarioError, load_scenario
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 from scipy.special import logsumexp
 
-from rhoprop.mixture import GaussianMixture
+from rhoprop.ensemble.mixture import GaussianMixture
 
 EPS = np.finfo(float).eps
 

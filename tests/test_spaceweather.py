@@ -340,12 +340,6 @@ def test_drivers_empty(sw):
     assert d.f107.shape == d.f107a.shape == (0,) and d.ap.shape == (0, 7)
 
 
-def test_msis_kwargs(sw):
-    d = sw.drivers(["2002-09-07T01:00", "2002-09-08T12:00"])
-    kwargs = d.msis_kwargs()
-    assert set(kwargs) == {"f107s", "f107as", "aps"} and kwargs["aps"].shape == (2, 7)
-
-
 def test_storm_day_above_quiet_day(sw):
     # 2003-10-29: "... 39 27 400 207 179 179 300 300 204 ..."; 2009-06-02: "... 2 2 0 3 3 3 2 4 2".
     storm, quiet = sw.drivers(["2003-10-29T07:30", "2009-06-02T07:30"]).ap

@@ -1,18 +1,62 @@
 """rhoprop: orbit uncertainty of low-Earth-orbit objects caused by uncertainty in
-thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3)."""
+thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3).
 
-from . import catalog, density, frames, io, kappa, scenarios
-from ._core import DensityFieldError, IntegrationError, RhopropError
-from .ccsp import CcspResult, ccsp
-from .debias import debias_drag_coefficient
-from .ensemble import EnsembleResult, ensemble
-from .epochs import seconds_since_j2000, to_datetime64
-from .mixture import GaussianMixture
-from .montecarlo import MonteCarloResult, monte_carlo
-from .orbit import OrbitState, Spacecraft, Trajectory, propagate
+The package is laid out by stage of the data flow, each importing only from stages
+below it (docs/architecture.md): time, frames, constants, errors -> spaceweather ->
+density -> propagation -> ensemble -> catalog -> studies -> cli. The catalog, the studies
+and the ``io``/``scenarios`` aliases load on first use.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from . import density, frames
+from ._version import __version__
+from .ensemble import EnsembleResult, GaussianMixture, debias_drag_coefficient
+from .ensemble import ensemble as ensemble  # the function; the package stays importable
+from .errors import DensityFieldError, IntegrationError, RhopropError, ScenarioError
+from .propagation import (
+    CcspResult,
+    MonteCarloResult,
+    OrbitState,
+    Spacecraft,
+    StateMoments,
+    Trajectory,
+    ccsp,
+    kappa,
+    monte_carlo,
+    propagate,
+)
 from .spaceweather import SpaceWeather
+from .time import seconds_since_j2000, to_datetime64
 
-__version__ = "0.1.0"
+if TYPE_CHECKING:
+    from . import catalog, studies
+    from .catalog import export as io
+    from .studies import scenarios
+
+#: Heavy or optional parts, imported on first attribute access (PEP 562).
+_LAZY = {
+    "catalog": "rhoprop.catalog",
+    "studies": "rhoprop.studies",
+    "io": "rhoprop.catalog.export",
+    "scenarios": "rhoprop.studies.scenarios",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        module = importlib.import_module(_LAZY[name])
+        globals()[name] = module
+        return module
+    raise AttributeError(f"module 'rhoprop' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_LAZY])
+
 
 __all__ = [
     "CcspResult",
@@ -23,8 +67,10 @@ __all__ = [
     "MonteCarloResult",
     "OrbitState",
     "RhopropError",
+    "ScenarioError",
     "SpaceWeather",
     "Spacecraft",
+    "StateMoments",
     "Trajectory",
     "__version__",
     "catalog",
@@ -39,5 +85,6 @@ __all__ = [
     "propagate",
     "scenarios",
     "seconds_since_j2000",
+    "studies",
     "to_datetime64",
 ]

@@ -1,194 +1,44 @@
-"""The ``rhoprop`` command line: ``rhoprop paper`` (the paper's study) and ``rhoprop run
-SCENARIO.toml`` (a user's own ensemble study). Exit codes: 0 ok, 1 failure, 2 usage."""
+"""The ``rhoprop`` command line: ``rhoprop paper`` (the paper's study), ``rhoprop run
+SCENARIO.toml`` (a user's own ensemble study) and ``rhoprop catalog FILE`` (a TLE/OMM
+catalog). Argument parsing only: each command calls one function of the package.
+Exit codes: 0 ok, 1 failure, 2 usage."""
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-import time
 from collections.abc import Sequence
-from pathlib import Path
-from typing import Any
 
-import numpy as np
-
-from . import __version__, density, frames, scenarios, studies
-from .orbit import propagate
-from .spaceweather import SpaceWeather
-
-
-def _stage(title: str, start: float) -> None:
-    print(f"\n== {title}  (t = {time.perf_counter() - start:.0f} s)", flush=True)
+from ._version import __version__
+from .catalog.job import MODEL_NAMES
 
 
 def _paper(args: argparse.Namespace) -> int:
-    """The paper's study: deterministic orbits, Fig. 4, Fig. 5 (four cases), Fig. 6."""
-    start = time.perf_counter()
-    members = args.members or (100 if args.quick else 1000)
-    duration = 86400.0 if args.quick else scenarios.PAPER_DURATION
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    record = SpaceWeather()
-    state, craft = scenarios.paper_state(), scenarios.paper_spacecraft()
-    print(f"rhoprop paper: {members} members per run, {duration / 86400:g} days, output in {out}")
+    from .studies.report import run_paper
 
-    _stage("Mean orbits, Case I (2002-09-07 storm)", start)
-    _paper_orbits(state, craft, duration, record)
-
-    _stage("Method comparison (paper Fig. 4), NRLMSIS 2.1, Case I", start)
-    comparison = studies.method_comparison(
-        state, craft, density.Msis("2.1", space_weather=record), duration, n=members
-    )
-    figures = [comparison.figure(out / "method_comparison.png")]
-    print(comparison.table())
-
-    _stage("Ensembles for the four space-weather cases (paper Fig. 5)", start)
-    ensembles = studies.case_ensembles(n=members, duration=duration, record=record)
-    figures.append(studies.ensemble_figure(ensembles, out / "ensembles.png"))
-    case_table = _case_table(ensembles)
-    print(case_table)
-
-    _stage("CCSP vs Monte Carlo (paper Fig. 6)", start)
-    sw = record
-    versus = studies.ccsp_vs_monte_carlo(
-        state,
-        craft,
-        density.Msis("2.1", space_weather=sw),
-        density.Msis("00", space_weather=sw),
-        duration,
-        n=members,
-    )
-    figures.append(versus.figure(out / "ccsp_vs_monte_carlo.png"))
-    print(versus.table())
-
-    summary = {
-        "members": members,
-        "duration_s": duration,
-        "method_comparison": comparison.along_track_std,
-        "method_ratios": [
-            {"a": a, "b": b, "measured": m, "long_time_theory": t}
-            for a, b, m, t in comparison.ratios()
-        ],
-        "cases": {
-            case: {"epoch": str(scenarios.CASE_EPOCHS[case]) + "Z", **ens.summary()}
-            for case, ens in ensembles.items()
-        },
-        "ccsp_vs_monte_carlo": {
-            k: {
-                "cd": versus.cd[k],
-                "mc_along_track_mean_m": float(versus.mc_along[k].mean()),
-                "mc_along_track_std_m": float(versus.mc_along[k].std(ddof=1)),
-                "ccsp_along_track_mean_m": versus.ccsp_mean[k],
-                "ccsp_along_track_std_m": versus.ccsp_std[k],
-                "mc_seconds": versus.seconds[k][0],
-                "ccsp_seconds": versus.seconds[k][1],
-            }
-            for k in versus.mc_along
-        },
-        "wall_seconds": time.perf_counter() - start,
-    }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    days = f"{duration / 86400:g}"
-    (out / "summary.md").write_text(
-        f"# rhoprop paper study\n\n{members} members per Monte Carlo run, {days} days.\n\n"
-        f"## Method comparison (Fig. 4)\n\n{comparison.table()}\n\n"
-        f"## Ensembles (Fig. 5): along-track at {days} days\n\n{case_table}\n\n"
-        f"## CCSP vs Monte Carlo (Fig. 6)\n\n{versus.table()}\n"
-    )
-    _stage("Done", start)
-    for path in [*figures, out / "summary.json", out / "summary.md"]:
-        print(f"  wrote {path}")
+    run_paper(args.out, quick=args.quick, members=args.members)
     return 0
 
 
-def _case_table(ensembles: dict[str, Any]) -> str:
-    """Markdown table of the ensembles: per case and model Cd, along-track mean and std;
-    mixture mean, std, 95 % interval and number of modes."""
-    lines = [
-        "| case | model | Cd | along-track mean [m] | along-track std [m] |",
-        "| --- | --- | --- | --- | --- |",
-    ]
-    for case, ens in ensembles.items():
-        s = ens.summary()
-        for name, m in s["models"].items():
-            lines.append(
-                f"| {case} | {name} | {m['cd']:.4f} | {m['along_track_mean_m']:.1f} "
-                f"| {m['along_track_std_m']:.1f} |"
-            )
-        x = s["mixture"]
-        lines.append(
-            f"| {case} | **mixture** ({x['modes']} mode{'s' if x['modes'] != 1 else ''}, 95 %: "
-            f"{x['q025_m']:.0f} to {x['q975_m']:.0f}) | | {x['mean_m']:.1f} | {x['std_m']:.1f} |"
-        )
-    return "\n".join(lines)
-
-
-def _paper_orbits(state, craft, duration: float, record: SpaceWeather) -> None:
-    """Each integrator on the benchmark atmosphere, then the three NRLMSIS mean orbits."""
-    model = scenarios.benchmark_exponential()
-    print(f"  {'method':<8} {'RHS evals':>10} {'wall [s]':>9}  {'vs dop853 [m]':>13}")
-    reference = None
-    for method in ("dop853", "rk8", "rk4"):
-        t0 = time.perf_counter()
-        tr = propagate(state, craft, model, duration, method=method)
-        wall = time.perf_counter() - t0
-        reference = tr.positions[-1] if reference is None else reference
-        diff = float(np.linalg.norm(tr.positions[-1] - reference))
-        print(f"  {method:<8} {tr.evaluations:>10} {wall:>9.3f}  {diff:>13.3f}")
-    print(f"  {'model':<12} {'field+run [s]':>13}  {'along-track vs 2.1 [m]':>23}")
-    ref = None
-    for version in ("2.1", "2.0", "00"):
-        t0 = time.perf_counter()
-        tr = propagate(state, craft, density.Msis(version, space_weather=record), duration)
-        wall = time.perf_counter() - t0
-        ref = tr if ref is None else ref
-        along = frames.to_rtn(tr.positions[-1], ref.positions[-1], ref.velocities[-1])[1]
-        print(f"  {'NRLMSIS ' + version:<12} {wall:>13.2f}  {along:>23.1f}")
-
-
 def _catalog(args: argparse.Namespace) -> int:
-    """Propagate a TLE/OMM catalog to a common end epoch; OEM files and a Parquet summary."""
-    from . import catalog, io
+    from .catalog.job import run_catalog_file
 
-    cat = catalog.load(args.file, errors="skip" if args.skip_bad else "raise")
-    for where, message in cat.skipped:
-        print(f"skipped {where}: {message}", file=sys.stderr)
-    model = (
-        scenarios.benchmark_exponential(0.2)
-        if args.model == "exponential"
-        else density.Msis(args.model)
-    )
-    client = None
-    if args.scheduler:
-        from distributed import Client
-
-        client = Client(args.scheduler)
-    t0 = time.perf_counter()
-    result = catalog.propagate_catalog(
-        cat,
-        model,
+    run_catalog_file(
+        args.file,
         args.end,
+        args.out,
         method=args.method,
-        n=args.members,
-        client=client,
+        members=args.members,
+        model=args.model,
         output_step=args.output_step,
+        scheduler=args.scheduler,
+        skip_bad=args.skip_bad,
     )
-    wall = time.perf_counter() - t0
-    out = Path(args.out)
-    paths = io.write_oem(result, out / "oem")
-    summary = io.write_summary(result, out / "summary.parquet")
-    decayed = int(np.count_nonzero(~np.isnat(result.decay_epoch)))
-    print(
-        f"{len(cat)} objects ({len(cat.skipped)} skipped), {args.method}, to {args.end}: "
-        f"{wall:.1f} s ({len(cat) / wall:.1f} objects/s); {decayed} decay within the window"
-    )
-    print(f"wrote {len(paths)} OEM files to {out / 'oem'} and {summary}")
     return 0
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .scenario_file import run_scenario_file
+    from .studies.scenario_file import run_scenario_file
 
     return run_scenario_file(args.scenario, out=args.out)
 
@@ -259,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument(
         "--model",
         default="2.1",
-        choices=("2.1", "2.0", "00", "exponential"),
+        choices=MODEL_NAMES,
         help="NRLMSIS version (default 2.1) or the benchmark exponential",
     )
     cat.add_argument("--scheduler", default=None, help="Dask scheduler address")

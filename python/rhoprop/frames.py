@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .epochs import J2000, EpochLike, seconds_since_j2000
+from .time import EpochLike, seconds_since_j2000, to_seconds
 
 
 def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
@@ -29,7 +29,7 @@ def _ut1(epochs: Any, n: int) -> np.ndarray:
     arr = np.asarray(epochs).astype("datetime64[ns]")
     if len(arr) != n:
         raise ValueError(f"got {len(arr)} epochs for {n} positions")
-    return (arr - J2000).astype(np.int64) * 1e-9
+    return to_seconds(arr)
 
 
 def gmst(epochs: EpochLike | Any) -> np.ndarray | float:
@@ -44,6 +44,16 @@ def inertial_to_fixed(epochs: Any, positions: Any) -> np.ndarray:
     ``epochs`` (one epoch or n)."""
     p, single = _rows("positions", positions)
     out = _core.inertial_to_fixed(_ut1(epochs, len(p)), p)
+    return out[0] if single else out
+
+
+def fixed_to_inertial(epochs: Any, positions_fixed: Any) -> np.ndarray:
+    """Earth-fixed positions (3,) or (n, 3), m -> inertial, rotated about z by -GMST at
+    ``epochs`` (one epoch or n); the inverse of :func:`inertial_to_fixed`."""
+    p, single = _rows("positions_fixed", positions_fixed)
+    theta = _core.gmst(_ut1(epochs, len(p)))
+    c, s = np.cos(theta), np.sin(theta)
+    out = np.stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1], p[:, 2]], axis=1)
     return out[0] if single else out
 
 

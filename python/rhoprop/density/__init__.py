@@ -8,13 +8,17 @@ thermospheric density (kg/m^3) and an atmosphere the Rust core evaluates.
 - :class:`PcaRom`: a PCA reduced-order model as HASDM-ML outputs it.
 - :class:`FromFunction`: any callable (times, lat, lon, alt) -> (mean, std).
 - :class:`DensityField`: a sampled field (what :meth:`SampledModel.field` returns).
+
+Layout: ``_inputs`` (input checks, altitude band) <- ``field`` (sampling, the field type)
+<- ``model`` (the protocol and the sampling base) <- one module per model.
 """
 
-from .base import DensityModel, SampledModel, altitude_band, as_atmosphere
+from ._inputs import altitude_band
 from .exponential import Exponential
 from .field import DensityField, FieldResolution
 from .function import FromFunction
 from .gridded import Gridded
+from .model import DensityModel, SampledModel, as_atmosphere
 from .msis import DriverUncertainty, Msis, RelativeSigma
 from .pcarom import PcaRom
 

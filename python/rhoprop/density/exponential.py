@@ -7,10 +7,8 @@ from typing import Any
 import numpy as np
 
 from .. import _core, _validate
-from .base import broadcast_inputs
-
-#: Earth's equatorial radius, m (the core's constant; spherical altitude is |r| - Re).
-R_EARTH = 6378137.0
+from ..constants import R_EARTH
+from ._inputs import broadcast_inputs
 
 
 class Exponential:
@@ -36,6 +34,16 @@ class Exponential:
         if self.rel_sigma < 0:
             raise ValueError(f"rel_sigma must be >= 0, got {self.rel_sigma}")
         self._core = _core.ExponentialAtmosphere(rho0, h0, scale_height, rel_sigma)
+
+    @classmethod
+    def benchmark(cls, rel_sigma: float = 0.0) -> Exponential:
+        """The analytic benchmark atmosphere: rho = 3.725e-12 kg/m^3 at 400 km, scale height
+        58.515 km, with ``rel_sigma`` relative 1-sigma uncertainty."""
+        return cls(3.725e-12, 400e3, 58.515e3, rel_sigma=rel_sigma)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # The core object does not pickle; the parameters rebuild it (e.g. on Dask workers).
+        return (Exponential, (self.rho0, self.h0, self.scale_height, self.rel_sigma))
 
     def __repr__(self) -> str:
         return (

@@ -15,13 +15,22 @@ import itertools
 import json
 import os
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .. import _core, _validate
-from ..epochs import EpochLike, offsets_to_epochs, seconds_since_j2000, to_datetime64
+from .. import _core, _validate, frames
+from ..cache import cache_dir
+from ..time import (
+    EpochLike,
+    add_seconds,
+    offsets_to_epochs,
+    seconds_between,
+    seconds_since_j2000,
+    to_datetime64,
+    to_seconds,
+)
+from ._inputs import broadcast_inputs
 
 
 @dataclass(frozen=True)
@@ -121,40 +130,45 @@ class DensityField:
         )
         return cls(e, t, alt, lat, lon, lnm, rs, core)
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # The core object does not pickle; the arrays rebuild it (e.g. on Dask workers).
+        return (
+            DensityField.from_arrays,
+            (
+                self.epoch,
+                self.times,
+                self.altitudes,
+                self.latitudes,
+                self.longitudes,
+                self.ln_mean,
+                self.rel_sigma,
+            ),
+        )
+
     @property
     def start(self) -> np.datetime64:
         """First epoch covered."""
-        return self.epoch + np.timedelta64(round(self.times[0] * 1e9), "ns")
+        return add_seconds(self.epoch, float(self.times[0]))
 
     @property
     def end(self) -> np.datetime64:
         """Last epoch covered."""
-        return self.epoch + np.timedelta64(round(self.times[-1] * 1e9), "ns")
+        return add_seconds(self.epoch, float(self.times[-1]))
 
     def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
         """Interpolated mean and standard deviation (kg/m^3) at UTC ``times``, geodetic
         ``lat``/``lon`` (deg) and ``alt`` (m); raises ``DensityFieldError`` outside."""
-        from .base import broadcast_inputs
-
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
         shape = la.shape
         fixed = _core.geodetic_to_fixed(np.stack([la.ravel(), lo.ravel(), al.ravel()], axis=1))
-        ut1 = (t.ravel() - to_datetime64("2000-01-01T12:00:00")).astype(np.int64) * 1e-9
-        inertial = _rotate_to_inertial(ut1, fixed)
+        ut1 = to_seconds(t.ravel())
+        inertial = frames.fixed_to_inertial(t.ravel(), fixed).reshape(-1, 3)
         mean, sigma = self.core.mean_sigma(ut1, inertial)
         return mean.reshape(shape), sigma.reshape(shape)
 
     def atmosphere(self, state: Any, duration: float) -> Any:
         """The core atmosphere (the field itself); it must cover the propagation."""
         return self.core
-
-
-def _rotate_to_inertial(ut1: np.ndarray, fixed: np.ndarray) -> np.ndarray:
-    theta = _core.gmst(ut1)
-    c, s = np.cos(theta), np.sin(theta)
-    return np.stack(
-        [c * fixed[:, 0] - s * fixed[:, 1], s * fixed[:, 0] + c * fixed[:, 1], fixed[:, 2]], axis=1
-    )
 
 
 def _uniform(name: str, arr: np.ndarray) -> float:
@@ -206,15 +220,6 @@ def grid_axes(
     return alt, np.linspace(-90.0, 90.0, nlat), np.arange(nlon) * resolution.longitude
 
 
-def cache_dir() -> Path:
-    """The user cache directory: ``$RHOPROP_CACHE``, else ``$XDG_CACHE_HOME/rhoprop``, else
-    ``~/.cache/rhoprop``."""
-    if os.environ.get("RHOPROP_CACHE"):
-        return Path(os.environ["RHOPROP_CACHE"])
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "rhoprop"
-
-
 def sample_field(
     model: Any,
     start: EpochLike,
@@ -232,12 +237,12 @@ def sample_field(
     """
     res = resolution or FieldResolution()
     t0, t1 = to_datetime64(start, "start"), to_datetime64(end, "end")
-    span = float((t1 - t0) / np.timedelta64(1, "ns")) * 1e-9
+    span = seconds_between(t0, t1)
     if not span > 0:
         raise ValueError(f"end ({t1}) must be after start ({t0})")
     alt, lat, lon = grid_axes(altitude_range, res)
     breaks = np.asarray(model._breaks(t0, t1), dtype="datetime64[ns]")
-    offsets = (breaks - t0).astype(np.int64) * 1e-9
+    offsets = to_seconds(breaks, t0)
     nodes, left = time_nodes(span, res.time, offsets)
 
     key = model.cache_key(t0, t1) if cache else None

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from .base import SampledModel, broadcast_inputs
+from ._inputs import broadcast_inputs
+from .model import SampledModel
 
 
 class FromFunction(SampledModel):

@@ -6,8 +6,9 @@ from typing import Any
 
 import numpy as np
 
-from .base import SampledModel
+from ..time import to_seconds
 from .field import DensityField, FieldResolution, sample_field
+from .model import SampledModel
 
 
 class Gridded(SampledModel):
@@ -40,7 +41,7 @@ class Gridded(SampledModel):
             raise ValueError("mean must be finite and > 0 everywhere")
         if not (np.isfinite(s).all() and (s >= 0).all()):
             raise ValueError("std must be finite and >= 0 everywhere")
-        offsets = (epochs - epochs[0]).astype(np.int64) * 1e-9
+        offsets = to_seconds(epochs, epochs[0])
         self._field = DensityField.from_arrays(epochs[0], offsets, alt, lat, lon, np.log(m), s / m)
 
     @classmethod

@@ -14,7 +14,9 @@ from typing import Any
 import numpy as np
 
 from .. import _validate
-from .base import SampledModel, broadcast_inputs
+from ..spaceweather import SpaceWeather
+from ._inputs import broadcast_inputs
+from .model import SampledModel
 
 #: ap values of the 28 Kp levels 0, 0+, 1-, ..., 9 (Bartels' Kp -> ap table).
 AP_LEVELS = np.array(
@@ -142,7 +144,7 @@ class Msis(SampledModel):
     def __init__(
         self,
         version: str = "2.1",
-        space_weather: Any = None,
+        space_weather: SpaceWeather | None = None,
         uncertainty: DriverUncertainty | RelativeSigma | None = None,
     ) -> None:
         key = str(version)
@@ -150,8 +152,6 @@ class Msis(SampledModel):
             raise ValueError(f"unknown NRLMSIS version {version!r}; expected '2.1', '2.0' or '00'")
         self.version = _VERSIONS[key]
         if space_weather is None:
-            from ..spaceweather import SpaceWeather
-
             space_weather = SpaceWeather()
         self.space_weather = space_weather
         self.uncertainty = DriverUncertainty() if uncertainty is None else uncertainty

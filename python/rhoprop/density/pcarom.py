@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from .base import SampledModel, broadcast_inputs
+from ._inputs import broadcast_inputs
+from .model import SampledModel
 
 #: ln(10): density = 10^x = exp(LN10 x).
 LN10 = float(np.log(10.0))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -13,33 +14,31 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from . import kappa as kappa_mod
-from .density import Exponential, Msis
-from .orbit import OrbitState, Spacecraft
-from .spaceweather import SpaceWeather
+from ..density import DensityModel, Exponential, Msis
+from ..ensemble import ensemble
+from ..errors import ScenarioError
+from ..propagation import OrbitState, Spacecraft, kappa
+from ..spaceweather import SpaceWeather
+from .plots import ensemble_figure
 
 SECTIONS = {"scenario", "state", "spacecraft", "models", "method", "output"}
+#: kappa.type -> (process class, its parameter names): the kinds the core knows.
 KAPPA_TYPES = {
-    "gauss_markov": (kappa_mod.GaussMarkov, {"half_life"}),
-    "interpolated": (kappa_mod.Interpolated, {"interval"}),
-    "white": (kappa_mod.White, {"step"}),
-    "constant": (kappa_mod.Constant, set()),
-    "piecewise_constant": (kappa_mod.PiecewiseConstant, {"interval", "correlation"}),
+    kind: (cls, {f.name for f in fields(cls)})  # type: ignore[arg-type]
+    for kind, cls in kappa.KINDS.items()
 }
 
-
-class ScenarioError(ValueError):
-    """A scenario file is invalid; the message names the key."""
+__all__ = ["ScenarioError", "load_scenario", "run_scenario_file"]
 
 
-def _table(doc: dict, key: str) -> dict:
+def _table(doc: dict[str, Any], key: str) -> dict[str, Any]:
     value = doc.get(key)
     if not isinstance(value, dict):
         raise ScenarioError(f"[{key}] is missing or not a table")
     return value
 
 
-def _get(table: dict, where: str, key: str, kind: Any, default: Any = ...) -> Any:
+def _get(table: dict[str, Any], where: str, key: str, kind: Any, default: Any = ...) -> Any:
     if key not in table:
         if default is ...:
             raise ScenarioError(f"{where}.{key} is missing")
@@ -53,7 +52,7 @@ def _get(table: dict, where: str, key: str, kind: Any, default: Any = ...) -> An
     return value
 
 
-def _unknown(table: dict, where: str, allowed: set[str]) -> None:
+def _unknown(table: dict[str, Any], where: str, allowed: set[str]) -> None:
     extra = set(table) - allowed
     if extra:
         raise ScenarioError(
@@ -61,7 +60,7 @@ def _unknown(table: dict, where: str, allowed: set[str]) -> None:
         )
 
 
-def _space_weather(value: str, where: str, cache: dict) -> Any:
+def _space_weather(value: str, where: str, cache: dict[str, SpaceWeather]) -> SpaceWeather:
     if value not in cache:
         if value == "observed":
             cache[value] = SpaceWeather()
@@ -77,7 +76,9 @@ def _space_weather(value: str, where: str, cache: dict) -> Any:
     return cache[value]
 
 
-def _model(entry: Any, where: str, cache: dict) -> tuple[str, Any, bool, float]:
+def _model(
+    entry: Any, where: str, cache: dict[str, SpaceWeather]
+) -> tuple[str, DensityModel, bool, float]:
     if not isinstance(entry, dict):
         raise ScenarioError(f"{where} must be a table")
     name = _get(entry, where, "name", str)
@@ -109,7 +110,7 @@ def _model(entry: Any, where: str, cache: dict) -> tuple[str, Any, bool, float]:
 
 def load_scenario(path: str | Path) -> dict[str, Any]:
     """Parses and validates a scenario file into the arguments of
-    :func:`rhoprop.ensemble.ensemble` plus ``name`` and ``directory``."""
+    :func:`rhoprop.ensemble` plus ``name`` and ``directory``."""
     p = Path(path)
     try:
         doc = tomllib.loads(p.read_text())
@@ -145,7 +146,7 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
     entries = doc.get("models")
     if not isinstance(entries, list) or not entries:
         raise ScenarioError("[[models]] must list at least one model")
-    cache: dict = {}
+    cache: dict[str, SpaceWeather] = {}
     models, weights, references = {}, [], []
     for i, entry in enumerate(entries):
         name, model, is_ref, weight = _model(entry, f"models[{i}]", cache)
@@ -206,9 +207,6 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
 
 def run_scenario_file(path: str | Path, out: str | None = None) -> int:
     """Runs a scenario file: the ensemble, its figure, summary.json and summary.md."""
-    from .ensemble import ensemble
-    from .studies import ensemble_figure
-
     sc = load_scenario(path)
     directory = Path(out or sc["directory"])
     directory.mkdir(parents=True, exist_ok=True)

@@ -1,15 +1,17 @@
-"""Orbit states, spacecraft, trajectories and deterministic propagation."""
+"""Deterministic propagation of one orbit at the mean density."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from . import _core, _validate
-from .density.base import as_atmosphere
-from .epochs import EpochLike, offsets_to_epochs, seconds_since_j2000, to_datetime64
+from .. import _core, _validate
+from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..density.model import DensityModel, as_atmosphere
+from ..time import seconds_since_j2000
+from .results import Trajectory, trajectory_from_core
+from .state import OrbitState, Spacecraft
 
 #: Methods of :func:`propagate` and their default step (s) or tolerance.
 METHODS = ("dop853", "rk8", "rk4")
@@ -19,115 +21,6 @@ METHODS = ("dop853", "rk8", "rk4")
 DEFAULT_STEP = {"rk8": 180.0, "rk4": 5.0}
 #: Default relative tolerance of the adaptive DOP853 (per step, on |r| and |v|).
 DEFAULT_RTOL = 1e-10
-#: Default decay floor: geodetic altitude below which an object counts as re-entered, m.
-DEFAULT_FLOOR_ALTITUDE = 120e3
-
-
-@dataclass(frozen=True)
-class OrbitState:
-    """An inertial orbit state.
-
-    Args:
-        epoch: UTC epoch: ISO string (``"2002-09-07T01:00:00Z"``), ``datetime`` (naive =
-            UTC) or ``numpy.datetime64``.
-        position: inertial position (3,), m.
-        velocity: inertial velocity (3,), m/s.
-
-    The inertial frame is treated as J2000/GCRF; the Earth-fixed frame is a rotation about
-    z by GMST (IAU-82), precession-nutation neglected.
-    """
-
-    epoch: np.datetime64
-    position: np.ndarray
-    velocity: np.ndarray
-
-    def __init__(self, epoch: EpochLike, position: Any, velocity: Any) -> None:
-        object.__setattr__(self, "epoch", to_datetime64(epoch))
-        object.__setattr__(self, "position", _validate.vector3("position", position))
-        object.__setattr__(self, "velocity", _validate.vector3("velocity", velocity))
-
-    @property
-    def state(self) -> np.ndarray:
-        """[x, y, z, vx, vy, vz] (6,), m and m/s."""
-        return np.concatenate([self.position, self.velocity])
-
-
-@dataclass(frozen=True)
-class Spacecraft:
-    """Drag properties of the object.
-
-    Args:
-        cd: drag coefficient (dimensionless, > 0).
-        area_to_mass: cross-section area over mass, m^2/kg (> 0).
-    """
-
-    cd: float
-    area_to_mass: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "cd", _validate.positive("cd", self.cd))
-        object.__setattr__(
-            self, "area_to_mass", _validate.positive("area_to_mass", self.area_to_mass)
-        )
-
-    @property
-    def drag_parameter(self) -> float:
-        """Cd * A / m, m^2/kg."""
-        return self.cd * self.area_to_mass
-
-
-@dataclass(frozen=True)
-class Trajectory:
-    """A propagated trajectory.
-
-    Attributes:
-        epoch: initial epoch (UTC, ``datetime64[ns]``).
-        times: output times, s from ``epoch``, float64 (nt,).
-        positions: inertial positions (nt, 3), m.
-        velocities: inertial velocities (nt, 3), m/s.
-        decayed_at: time (s from ``epoch``) of the first step that ended below the floor
-            altitude, or None. Outputs stop there.
-        evaluations: number of right-hand-side evaluations.
-        clipped: number of density evaluations clipped at zero.
-    """
-
-    epoch: np.datetime64
-    times: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
-    decayed_at: float | None = None
-    evaluations: int = 0
-    clipped: int = 0
-    method: str = field(default="dop853")
-
-    @property
-    def epochs(self) -> np.ndarray:
-        """Output epochs, ``datetime64[ns]`` (nt,)."""
-        return offsets_to_epochs(self.epoch, self.times)
-
-    @property
-    def states(self) -> np.ndarray:
-        """States (nt, 6): position m, velocity m/s."""
-        return np.concatenate([self.positions, self.velocities], axis=1)
-
-    def state_at(self, index: int = -1) -> OrbitState:
-        """The output ``index`` as an :class:`OrbitState`."""
-        return OrbitState(self.epochs[index], self.positions[index], self.velocities[index])
-
-
-def trajectory_from_core(epoch: np.datetime64, out: tuple, method: str) -> Trajectory:
-    """A :class:`Trajectory` from the tuple ``_core.propagate`` returns."""
-    t, states, decayed_at, evaluations, clipped = out
-    return Trajectory(
-        epoch=epoch,
-        times=t,
-        positions=states[:, :3],
-        velocities=states[:, 3:],
-        decayed_at=decayed_at,
-        evaluations=int(evaluations),
-        clipped=int(clipped),
-        method=method,
-    )
 
 
 def output_grid(duration: float, output_step: float | None) -> np.ndarray:
@@ -147,7 +40,7 @@ def output_grid(duration: float, output_step: float | None) -> np.ndarray:
 def propagate(
     state: OrbitState,
     spacecraft: Spacecraft,
-    density: Any,
+    density: DensityModel,
     duration: Any,
     *,
     output_step: float | None = None,
@@ -214,4 +107,4 @@ def propagate(
         DEFAULT_RTOL if rtol is None and method == "dop853" else rtol,
         floor,
     )
-    return trajectory_from_core(state.epoch, out, method)
+    return trajectory_from_core(state.epoch, out)

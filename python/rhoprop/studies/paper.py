@@ -1,5 +1,6 @@
-"""The paper's studies as functions. ``method_comparison`` is the paper's section 3 /
-Fig. 4: the same orbit with five kappa processes."""
+"""The paper's studies as computations (their figures: :mod:`.plots`).
+``method_comparison`` is the paper's section 3 / Fig. 4: the same orbit with five kappa
+processes; ``case_ensembles`` Fig. 5; ``ccsp_vs_monte_carlo`` Fig. 6."""
 
 from __future__ import annotations
 
@@ -9,9 +10,12 @@ from typing import Any
 
 import numpy as np
 
-from . import frames, kappa, scenarios
-from .montecarlo import MonteCarloResult, monte_carlo
-from .orbit import OrbitState, Spacecraft
+from .. import frames
+from ..density import Msis
+from ..ensemble import debias_drag_coefficient, ensemble
+from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
+from ..spaceweather import SpaceWeather
+from . import scenarios
 
 #: The five processes of the paper's comparison, keyed as in ``summary.json``.
 METHODS: dict[str, kappa.KappaProcess] = {
@@ -78,48 +82,10 @@ class MethodComparison:
 
     def figure(self, path: str | Path) -> Path:
         """Density traces of the first five members (mean in bold) per method, and the
-        along-track normal PDFs at the end; saved as PNG."""
-        import matplotlib
+        along-track PDFs at the end; saved as PNG (see :mod:`rhoprop.studies.plots`)."""
+        from .plots import method_comparison_figure
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        keys = list(self.results)
-        fig = plt.figure(figsize=(16, 8.5), layout="constrained")
-        grid = fig.add_gridspec(2, len(keys), height_ratios=[1, 1.2])
-        for i, k in enumerate(keys):
-            ax = fig.add_subplot(grid[0, i])
-            t, rho = self.traces[k]
-            for member in rho:
-                ax.plot(t / 3600.0, member * 1e12, lw=0.8)
-            ax.plot(t / 3600.0, self.mean_trace[k] * 1e12, "k", lw=2.2, label="mean")
-            ax.set_title(LABELS[k], fontsize=10)
-            ax.set_xlabel("time [h]")
-            if i == 0:
-                ax.set_ylabel("density [1e-12 kg/m^3]")
-                ax.legend(fontsize=8)
-        ax = fig.add_subplot(grid[1, :])
-        stds = sorted(self.along_track_std.values())
-        x = np.linspace(-4 * stds[-1], 4 * stds[-1], 4001)
-        for k in keys:
-            at = self.results[k].along_track[:, -1]
-            mu, sd = at.mean(), self.along_track_std[k]
-            pdf = np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
-            note = " (peak off scale)" if len(stds) > 1 and sd < stds[1] / 2 else ""
-            ax.plot(x / 1e3, pdf * 1e3, lw=2, label=f"{LABELS[k]} (std {sd:,.0f} m){note}")
-        if len(stds) > 1:
-            # Scale to the second narrowest PDF: a very narrow one would flatten the rest.
-            ax.set_ylim(0, 1.25e3 / (stds[1] * np.sqrt(2 * np.pi)))
-        ax.set_xlabel(f"along-track error after {days_text(self.results[keys[0]].times[-1])} [km]")
-        ax.set_ylabel("normal PDF [1/km]")
-        ax.legend()
-        ax.grid(alpha=0.3)
-        fig.suptitle("Density perturbation methods: member densities (top) and along-track PDFs")
-        out = Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-        plt.close(fig)
-        return out
+        return method_comparison_figure(self, path)
 
 
 def method_comparison(
@@ -144,8 +110,6 @@ def method_comparison(
         methods: {key: process} (default :data:`METHODS`).
         progress: show progress bars.
     """
-    from .density import Msis
-
     state = state or scenarios.paper_state()
     spacecraft = spacecraft or scenarios.paper_spacecraft()
     model = model if model is not None else Msis("2.1")
@@ -196,12 +160,6 @@ def _mean_density(model: Any, result: MonteCarloResult) -> np.ndarray:
     return np.asarray(mean)
 
 
-def days_text(seconds: float) -> str:
-    """'1 day', '3 days', '0.25 days'."""
-    days = seconds / 86400.0
-    return "1 day" if days == 1 else f"{days:g} days"
-
-
 def model_label(model: Any) -> str:
     """A short human label for a density model."""
     version = getattr(model, "version", None)
@@ -241,41 +199,11 @@ class CcspComparison:
         return "\n".join(lines)
 
     def figure(self, path: str | Path) -> Path:
-        """Along-track PDFs per configuration: MC histogram, MC normal fit (dashed) and the
-        CCSP normal (solid); saved as PNG."""
-        import matplotlib
+        """Along-track PDFs per configuration: MC histogram, MC normal fit and the CCSP
+        normal; saved as PNG (see :mod:`rhoprop.studies.plots`)."""
+        from .plots import ccsp_comparison_figure
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        keys = list(self.mc_along)
-        fig, axes = plt.subplots(
-            1, len(keys), figsize=(5.2 * len(keys), 4.4), layout="constrained", squeeze=False
-        )
-        for ax, k in zip(axes[0], keys, strict=True):
-            at = self.mc_along[k] / 1e3
-            mu, sd = at.mean(), at.std(ddof=1)
-            cm, cs = self.ccsp_mean[k] / 1e3, self.ccsp_std[k] / 1e3
-            lo, hi = min(mu - 4 * sd, cm - 4 * cs), max(mu + 4 * sd, cm + 4 * cs)
-            x = np.linspace(lo, hi, 600)
-            ax.hist(at, bins=40, density=True, alpha=0.3, color="C0", label="Monte Carlo")
-            ax.plot(x, _normal(x, mu, sd), "--", color="C0", lw=2, label=f"MC normal ({sd:.2f} km)")
-            ax.plot(x, _normal(x, cm, cs), color="C3", lw=2, label=f"CCSP ({cs:.2f} km)")
-            ax.set_title(f"{k}\nCd = {self.cd[k]:.4f}", fontsize=10)
-            ax.set_xlabel(f"along-track after {days_text(self.duration)} vs reference [km]")
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=8)
-        axes[0][0].set_ylabel("PDF [1/km]")
-        fig.suptitle("CCSP vs Monte Carlo (Gauss-Markov 18 min)")
-        out = Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-        plt.close(fig)
-        return out
-
-
-def _normal(x: np.ndarray, mu: float, sd: float) -> np.ndarray:
-    return np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
+        return ccsp_comparison_figure(self, path)
 
 
 def ccsp_vs_monte_carlo(
@@ -296,11 +224,6 @@ def ccsp_vs_monte_carlo(
     :func:`~rhoprop.debias_drag_coefficient` over 8 h when None). Defaults: the paper's
     state and sphere, NRLMSIS 2.1 as reference and NRLMSISE-00 as second model."""
     import time
-
-    from .ccsp import ccsp
-    from .debias import debias_drag_coefficient
-    from .density import Msis
-    from .spaceweather import SpaceWeather
 
     state = state or scenarios.paper_state()
     spacecraft = spacecraft or scenarios.paper_spacecraft()
@@ -352,9 +275,6 @@ def case_ensembles(
     """The paper's Fig. 5: the three-model ensemble for each space-weather case (default
     all four), Monte Carlo GaussMarkov(18 min) per model, Cd debiased over 8 h against
     NRLMSIS 2.1. Returns {case: EnsembleResult}."""
-    from .ensemble import ensemble
-    from .spaceweather import SpaceWeather
-
     record = record if record is not None else SpaceWeather()
     out = {}
     for case in cases or scenarios.CASE_EPOCHS:
@@ -373,51 +293,4 @@ def case_ensembles(
             duration=duration,
             **options,
         )
-    return out
-
-
-def ensemble_figure(ensembles: dict[str, Any], path: str | Path) -> Path:
-    """Along-track PDFs per case: each model's normal (dashed) and the mixture (bold)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    cases = list(ensembles)
-    cols = 2 if len(cases) > 1 else 1
-    rows = int(np.ceil(len(cases) / cols))
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(7 * cols, 4.6 * rows), layout="constrained", squeeze=False
-    )
-    for ax, case in zip(axes.ravel(), cases, strict=False):
-        ens = ensembles[case]
-        mix = ens.along_track_mixture()
-        means = ens.component_means[-1, :, 1]
-        stds = np.sqrt(ens.component_covariances[-1, :, 1, 1])
-        lo, hi = (means - 4 * stds).min(), (means + 4 * stds).max()
-        x = np.linspace(lo, hi, 1200)
-        for i, name in enumerate(ens.names):
-            ax.plot(
-                x / 1e3,
-                _normal(x, means[i], stds[i]) * 1e3,
-                "--",
-                lw=1.5,
-                label=f"{name} (Cd {ens.cd[name]:.3f})",
-            )
-        ax.plot(x / 1e3, mix.pdf(x) * 1e3, "k", lw=2.6, label="mixture")
-        epoch = str(ens.results[ens.reference].epoch)[:16].replace("T", " ")
-        ax.set_title(f"{case}  ({epoch} UTC)", fontsize=10)
-        ax.set_xlabel(
-            f"along-track after {days_text(ens.times[-1])} vs the {ens.reference} mean orbit [km]"
-        )
-        ax.set_ylabel("PDF [1/km]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    for ax in axes.ravel()[len(cases) :]:
-        ax.set_visible(False)
-    fig.suptitle("Ensemble along-track PDFs (Monte Carlo, Gauss-Markov 18 min)")
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
     return out

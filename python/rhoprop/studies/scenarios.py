@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
-
-from .density.exponential import Exponential
-from .epochs import EpochLike
-from .orbit import OrbitState, Spacecraft
+from ..density import DensityModel, Exponential, Msis
+from ..propagation import OrbitState, Spacecraft
+from ..spaceweather import SpaceWeather
+from ..time import EpochLike
 
 #: Initial inertial position, m, and velocity, m/s.
 PAPER_POSITION = (3782900.7032, -5441600.6779, -1420075.1327)
@@ -37,7 +36,7 @@ def paper_spacecraft(cd: float = PAPER_CD) -> Spacecraft:
 
 def benchmark_exponential(rel_sigma: float = 0.0) -> Exponential:
     """The analytic benchmark atmosphere: rho = 3.725e-12 kg/m^3 at 400 km, H = 58.515 km."""
-    return Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=rel_sigma)
+    return Exponential.benchmark(rel_sigma)
 
 
 #: Names of the three default models; the first is the reference (Cd_ref = 3.0912).
@@ -45,24 +44,20 @@ DEFAULT_MODELS = ("NRLMSIS 2.1", "NRLMSIS 2.0", "NRLMSISE-00")
 REFERENCE_MODEL = DEFAULT_MODELS[0]
 
 
-def case_space_weather(case: str, record: Any = None) -> Any:
+def case_space_weather(case: str, record: SpaceWeather | None = None) -> SpaceWeather:
     """The space-weather record of a case: observed for Cases I/II, geomagnetic indices at
     their 2000-2019 mean for the simulated Cases III/IV."""
-    from .spaceweather import SpaceWeather
-
     if case not in CASE_EPOCHS:
         raise ValueError(f"unknown case {case!r}; expected one of {list(CASE_EPOCHS)}")
     record = record if record is not None else SpaceWeather()
     return record.mean_geomagnetic() if case.endswith("-simulated") else record
 
 
-def case_models(case: str, record: Any = None) -> dict[str, Any]:
+def case_models(case: str, record: SpaceWeather | None = None) -> dict[str, DensityModel]:
     """The paper's three stand-in models for a case: NRLMSIS 2.1 (reference), NRLMSIS 2.0
     and NRLMSISE-00, all with the default driver uncertainty. Note: NRLMSIS 2.0 and 2.1
     give identical mass densities (2.1 changed only nitric oxide), so they are the same
     component twice; see docs/conventions.md."""
-    from .density import Msis
-
     sw = case_space_weather(case, record)
     return {
         "NRLMSIS 2.1": Msis("2.1", space_weather=sw),

@@ -3,53 +3,25 @@ consider parameter (paper section 4, as made unambiguous in DESIGN.md section 6)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from . import _core, _validate, frames
-from .density.base import as_atmosphere
-from .epochs import offsets_to_epochs, seconds_since_j2000
-from .orbit import DEFAULT_FLOOR_ALTITUDE, OrbitState, Spacecraft
+from .. import _core, _validate
+from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..density.model import DensityModel, as_atmosphere
+from ..time import seconds_since_j2000
+from .results import CcspResult, StateMoments
+from .state import OrbitState, Spacecraft
 
 #: The paper's near-zero initial covariance: 1 mm and 1 um/s (1 sigma) on each axis.
 DEFAULT_INITIAL_COVARIANCE = np.diag([1e-6, 1e-6, 1e-6, 1e-12, 1e-12, 1e-12])
 
 
-@dataclass(frozen=True)
-class CcspResult:
-    """CCSP outputs at every update time.
-
-    Attributes:
-        epoch: initial epoch (UTC).
-        times: update times, s from ``epoch`` (nt,), starting at 0.
-        mean: mean state (nt, 6), m and m/s, inertial.
-        covariance: state covariance (nt, 6, 6), SI units.
-        rtn_covariance: position covariance in the RTN frame of the mean (nt, 3, 3), m^2.
-        along_track_std: sqrt of the along-track variance (nt,), m.
-        cross_covariance: covariance of the state with the normalised density offset kappa
-            (nt, 6), m and m/s.
-    """
-
-    epoch: np.datetime64
-    times: np.ndarray
-    mean: np.ndarray
-    covariance: np.ndarray
-    rtn_covariance: np.ndarray
-    along_track_std: np.ndarray
-    cross_covariance: np.ndarray
-
-    @property
-    def epochs(self) -> np.ndarray:
-        """Update epochs, datetime64[ns] (nt,)."""
-        return offsets_to_epochs(self.epoch, self.times)
-
-
 def ccsp(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: Any,
+    model: DensityModel,
     duration: Any,
     *,
     update_interval: float = 3600.0,
@@ -119,14 +91,13 @@ def ccsp(
         _validate.positive("step", step),
         _validate.real("floor_altitude", floor_altitude),
     )
-    mean, cov = out["means"], out["covariances"]
-    basis = frames.rtn_basis(mean[:, :3], mean[:, 3:])
-    rtn = np.einsum("tij,tjk,tlk->til", basis, cov[:, :3, :3], basis)
+    moments = StateMoments(state.epoch, out["times"], out["means"], out["covariances"])
+    rtn = moments.rtn_covariance
     return CcspResult(
         epoch=state.epoch,
-        times=out["times"],
-        mean=mean,
-        covariance=cov,
+        times=moments.times,
+        mean=moments.mean,
+        covariance=moments.covariance,
         rtn_covariance=rtn,
         along_track_std=np.sqrt(rtn[:, 1, 1]),
         cross_covariance=out["cross"],

@@ -9,12 +9,17 @@ from typing import Any
 
 import numpy as np
 
-from . import frames
-from .ccsp import CcspResult, ccsp
+from ..density import DensityModel
+from ..propagation import (
+    CcspResult,
+    MonteCarloResult,
+    OrbitState,
+    Spacecraft,
+    ccsp,
+    monte_carlo,
+)
 from .debias import debias_drag_coefficient
 from .mixture import GaussianMixture
-from .montecarlo import MonteCarloResult, monte_carlo
-from .orbit import OrbitState, Spacecraft
 
 METHODS = ("monte_carlo", "ccsp")
 
@@ -86,25 +91,10 @@ class EnsembleResult:
         return {"models": models, "mixture": mixture}
 
 
-def _components(result: MonteCarloResult | CcspResult, ref_p: np.ndarray, ref_v: np.ndarray):
-    """(means (nt, 3), covariances (nt, 3, 3)) of a model's positions in the RTN frame of
-    the reference mean orbit."""
-    basis = frames.rtn_basis(ref_p, ref_v)
-    if isinstance(result, MonteCarloResult):
-        rtn = np.einsum("tij,ntj->nti", basis, result.positions - ref_p[None])
-        means = rtn.mean(axis=0)
-        d = rtn - means[None]
-        covs = np.einsum("nti,ntj->tij", d, d) / (rtn.shape[0] - 1)
-        return means, covs
-    means = np.einsum("tij,tj->ti", basis, result.mean[:, :3] - ref_p)
-    covs = np.einsum("tij,tjk,tlk->til", basis, result.covariance[:, :3, :3], basis)
-    return means, covs
-
-
 def ensemble(
     state: OrbitState,
     spacecraft: Spacecraft,
-    models: dict[str, Any],
+    models: dict[str, DensityModel],
     reference: str,
     *,
     method: str = "monte_carlo",
@@ -163,7 +153,7 @@ def ensemble(
         ref_p, ref_v = ref.mean_orbit.positions, ref.mean_orbit.velocities
     else:
         ref_p, ref_v = ref.mean[:, :3], ref.mean[:, 3:]
-    parts = [_components(results[name], ref_p, ref_v) for name in names]
+    parts = [results[name].moments().position_in_frame(ref_p, ref_v) for name in names]
     return EnsembleResult(
         names=names,
         reference=reference,

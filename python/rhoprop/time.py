@@ -1,17 +1,25 @@
-"""UTC epochs: conversion of user input to ``numpy.datetime64`` and to the core's time
-scale, seconds since J2000 (2000-01-01T12:00:00 UTC). UT1 = UTC is assumed, as the design
-contract allows; leap seconds are not modelled (numpy's datetime64 has none)."""
+"""UTC epochs: conversion of user input to ``numpy.datetime64[ns]`` and between epochs
+and the core's time scale, seconds (float) since J2000 (2000-01-01T12:00:00 UTC) or since
+another epoch. UT1 = UTC is assumed, as the design contract allows; leap seconds are not
+modelled (numpy's datetime64 has none).
+
+Every datetime64 <-> seconds conversion of the package goes through this module.
+"""
 
 from __future__ import annotations
 
 import datetime as _dt
+import math
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 EpochLike = str | _dt.datetime | _dt.date | np.datetime64
 
 #: The J2000 epoch, 2000-01-01T12:00:00 (UTC, taken as UT1).
 J2000 = np.datetime64("2000-01-01T12:00:00", "ns")
+_NS = np.timedelta64(1, "ns")
 
 
 def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
@@ -47,13 +55,31 @@ def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
     )
 
 
+def seconds_between(start: np.datetime64, end: np.datetime64) -> float:
+    """``end - start`` in seconds (float) for datetime64 values."""
+    return float((end - start) / _NS) * 1e-9
+
+
+def to_seconds(epochs: Any, origin: np.datetime64 = J2000) -> NDArray[np.float64]:
+    """Seconds (float array) from ``origin`` (default J2000) to each of ``epochs``
+    (datetime64 array-like)."""
+    arr = np.asarray(epochs).astype("datetime64[ns]")
+    return np.asarray((arr - origin).astype(np.int64) * 1e-9, dtype=np.float64)
+
+
 def seconds_since_j2000(epoch: EpochLike, name: str = "epoch") -> float:
     """Seconds (float) from J2000 to ``epoch`` (UTC = UT1)."""
-    delta = to_datetime64(epoch, name) - J2000
-    return float(delta.astype("timedelta64[ns]").astype(np.int64)) * 1e-9
+    return seconds_between(J2000, to_datetime64(epoch, name))
 
 
-def offsets_to_epochs(epoch: EpochLike, seconds: np.ndarray) -> np.ndarray:
+def add_seconds(epoch: np.datetime64, seconds: float, *, round_up: bool = False) -> np.datetime64:
+    """``epoch`` plus ``seconds`` (float), to the nearest nanosecond (``round_up``: the next
+    nanosecond at or after, so that a window surely covers the span)."""
+    ns = math.ceil(seconds * 1e9) if round_up else round(seconds * 1e9)
+    return np.datetime64(epoch, "ns") + np.timedelta64(int(ns), "ns")
+
+
+def offsets_to_epochs(epoch: EpochLike, seconds: Any) -> NDArray[np.datetime64]:
     """``datetime64[ns]`` array of ``epoch`` plus ``seconds`` (float array, s)."""
     base = to_datetime64(epoch)
     ns = np.round(np.asarray(seconds, dtype=float) * 1e9).astype(np.int64)

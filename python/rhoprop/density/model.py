@@ -14,12 +14,9 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from .. import _core
-from ..epochs import EpochLike
+from ..time import EpochLike, add_seconds
+from ._inputs import altitude_band
 from .field import DensityField, FieldResolution, sample_field
-
-MU = 3.986004418e14
-R_EQUATOR = 6378137.0
-R_POLE = 6356752.314245
 
 #: Core atmosphere objects the propagator evaluates directly.
 CoreAtmosphere = (_core.ExponentialAtmosphere, _core.GriddedAtmosphere)
@@ -27,7 +24,10 @@ CoreAtmosphere = (_core.ExponentialAtmosphere, _core.GriddedAtmosphere)
 
 @runtime_checkable
 class DensityModel(Protocol):
-    """A density model with uncertainty."""
+    """What the propagators accept as ``model``: a density model with uncertainty
+    (DESIGN.md section 2). Every model of :mod:`rhoprop.density` satisfies it; a user's
+    own model usually derives from :class:`SampledModel` or wraps a function in
+    :class:`~rhoprop.density.FromFunction`."""
 
     def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of density, kg/m^3, broadcast over the inputs."""
@@ -49,53 +49,6 @@ def as_atmosphere(model: Any, state: Any, duration: float) -> Any:
         "density must be a rhoprop density model (e.g. rhoprop.density.Exponential), "
         f"got {type(model).__name__}"
     )
-
-
-def broadcast_inputs(
-    times: Any, lat: Any, lon: Any, alt: Any
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Broadcasts and checks ``mean_std`` inputs: datetime64[ns] times, finite latitude
-    in [-90, 90] deg, finite longitude (deg) and altitude (m)."""
-    t = np.asarray(times)
-    if not np.issubdtype(t.dtype, np.datetime64):
-        try:
-            t = t.astype("datetime64[ns]")
-        except (TypeError, ValueError) as err:
-            raise TypeError("times must be UTC datetime64 values or ISO strings") from err
-    t = t.astype("datetime64[ns]")
-    arrays = []
-    for name, value in (("lat", lat), ("lon", lon), ("alt", alt)):
-        a = np.asarray(value, dtype=float)
-        bad = ~np.isfinite(a)
-        if bad.any():
-            raise ValueError(f"{name} must be finite; got {a[bad].flat[0]}")
-        arrays.append(a)
-    la, lo, al = arrays
-    if (np.abs(la) > 90.0).any():
-        raise ValueError(f"lat must lie in [-90, 90] deg; got {la[np.abs(la) > 90].flat[0]}")
-    if np.isnat(t).any():
-        raise ValueError("times contain NaT")
-    t, la, lo, al = np.broadcast_arrays(t, la, lo, al)
-    return t, la, lo, al
-
-
-def altitude_band(
-    position: Any, velocity: Any, below: float = 50e3, above: float = 25e3
-) -> tuple[float, float]:
-    """Geodetic altitude range (m) an orbit can reach: perigee radius minus the equatorial
-    radius, apogee radius minus the polar radius, widened by ``below``/``above`` m for
-    decay and margin."""
-    r = np.asarray(position, dtype=float)
-    v = np.asarray(velocity, dtype=float)
-    rn = np.linalg.norm(r)
-    a = 1.0 / (2.0 / rn - v @ v / MU)
-    e_vec = np.cross(v, np.cross(r, v)) / MU - r / rn
-    e = float(np.linalg.norm(e_vec))
-    if not (a > 0 and e < 1):
-        raise ValueError("the orbit is not elliptic: a sampled density field needs a bounded orbit")
-    low = a * (1 - e) - R_EQUATOR - below
-    high = a * (1 + e) - R_POLE + above
-    return max(low, 0.0), high
 
 
 class SampledModel(abc.ABC):
@@ -137,7 +90,7 @@ class SampledModel(abc.ABC):
 
     def atmosphere(self, state: Any, duration: float) -> Any:
         """The sampled field covering ``duration`` s of the orbit from ``state``."""
-        end = state.epoch + np.timedelta64(int(np.ceil(duration * 1e9)), "ns")
+        end = add_seconds(state.epoch, duration, round_up=True)
         band = altitude_band(state.position, state.velocity)
         return self.field(state.epoch, end, altitude_range=band).core
 

@@ -4,17 +4,24 @@ a member sees is rho = mean + kappa * sigma (additive) or mean * exp(kappa s - s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import ClassVar
 
-from . import _validate
+from .. import _validate
 
 
 class KappaProcess:
-    """Base of the kappa processes."""
+    """Base of the kappa processes. Each process is a frozen dataclass whose fields are
+    its parameters (s, or dimensionless for a correlation); ``kind`` is the name the core
+    and scenario files know it by (one of ``rhoprop._core.KAPPA_KINDS``)."""
+
+    kind: ClassVar[str] = ""
 
     def _spec(self) -> tuple[str, float, float]:
-        """(kind, a, b) for the core."""
-        raise TypeError(f"{type(self).__name__} is not a kappa process")  # pragma: no cover
+        """(kind, a, b) for the core: the kind and up to two parameters, in field order."""
+        values = [float(getattr(self, f.name)) for f in fields(self)]  # type: ignore[arg-type]
+        a, b = [*values, 0.0, 0.0][:2]
+        return (self.kind, a, b)
 
     def correlation_time(self) -> float:
         """Integral of the autocorrelation, D (s): the long-time along-track variance grows
@@ -27,13 +34,12 @@ class White(KappaProcess):
     """i.i.d. N(0,1) drawn every ``step`` s and held over the step (the paper's
     "traditional" Monte Carlo; the integration step becomes ``step`` or a divisor)."""
 
+    kind: ClassVar[str] = "white"
+
     step: float = 10.0
 
     def __post_init__(self) -> None:
         _validate.positive("step", self.step)
-
-    def _spec(self) -> tuple[str, float, float]:
-        return ("white", float(self.step), 0.0)
 
     def correlation_time(self) -> float:
         return float(self.step)
@@ -43,13 +49,12 @@ class White(KappaProcess):
 class Interpolated(KappaProcess):
     """i.i.d. N(0,1) nodes every ``interval`` s, linear in between (paper's method 1)."""
 
+    kind: ClassVar[str] = "interpolated"
+
     interval: float
 
     def __post_init__(self) -> None:
         _validate.positive("interval", self.interval)
-
-    def _spec(self) -> tuple[str, float, float]:
-        return ("interpolated", float(self.interval), 0.0)
 
     def correlation_time(self) -> float:
         # The integral of kappa over a long span is the trapezoid sum of i.i.d. nodes, whose
@@ -63,13 +68,12 @@ class GaussMarkov(KappaProcess):
     variance, exact discretisation at the integration step, linear between nodes (paper's
     method 2; 18 min = 1080 s is the default)."""
 
+    kind: ClassVar[str] = "gauss_markov"
+
     half_life: float = 1080.0
 
     def __post_init__(self) -> None:
         _validate.positive("half_life", self.half_life)
-
-    def _spec(self) -> tuple[str, float, float]:
-        return ("gauss_markov", float(self.half_life), 0.0)
 
     def correlation_time(self) -> float:
         return 2.0 * self.half_life / 0.6931471805599453
@@ -79,8 +83,7 @@ class GaussMarkov(KappaProcess):
 class Constant(KappaProcess):
     """One N(0,1) draw per member held for the whole run: a pure density-scale bias."""
 
-    def _spec(self) -> tuple[str, float, float]:
-        return ("constant", 0.0, 0.0)
+    kind: ClassVar[str] = "constant"
 
     def correlation_time(self) -> float:
         return float("inf")
@@ -91,6 +94,8 @@ class PiecewiseConstant(KappaProcess):
     """N(0,1) held over each ``interval`` s, AR(1) with ``correlation`` between
     consecutive intervals: the process the CCSP filter is equivalent to."""
 
+    kind: ClassVar[str] = "piecewise_constant"
+
     interval: float
     correlation: float = 0.0
 
@@ -100,11 +105,21 @@ class PiecewiseConstant(KappaProcess):
         if not -1 < rho < 1:
             raise ValueError(f"correlation must lie in (-1, 1), got {rho}")
 
-    def _spec(self) -> tuple[str, float, float]:
-        return ("piecewise_constant", float(self.interval), float(self.correlation))
-
     def correlation_time(self) -> float:
         return self.interval * (1 + self.correlation) / (1 - self.correlation)
 
 
-__all__ = ["Constant", "GaussMarkov", "Interpolated", "KappaProcess", "PiecewiseConstant", "White"]
+#: The processes by kind name.
+KINDS: dict[str, type[KappaProcess]] = {
+    cls.kind: cls for cls in (White, Interpolated, GaussMarkov, Constant, PiecewiseConstant)
+}
+
+__all__ = [
+    "KINDS",
+    "Constant",
+    "GaussMarkov",
+    "Interpolated",
+    "KappaProcess",
+    "PiecewiseConstant",
+    "White",
+]

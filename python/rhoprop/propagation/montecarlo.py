@@ -2,124 +2,25 @@
 
 from __future__ import annotations
 
-import sys
-import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from . import _core, _validate, frames
-from .density.base import as_atmosphere
-from .epochs import offsets_to_epochs, seconds_since_j2000
+from .. import _core, _validate, frames
+from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..density.model import DensityModel, as_atmosphere
+from ..progress import ProgressBar
+from ..time import seconds_since_j2000
 from .kappa import GaussMarkov, KappaProcess
-from .orbit import (
-    DEFAULT_FLOOR_ALTITUDE,
-    OrbitState,
-    Spacecraft,
-    Trajectory,
-    output_grid,
-    trajectory_from_core,
-)
-
-
-@dataclass(frozen=True)
-class RtnStats:
-    """Per output time: mean and standard deviation of the RTN errors, m (nt, 3) each."""
-
-    mean: np.ndarray
-    std: np.ndarray
-
-
-@dataclass(frozen=True)
-class MonteCarloResult:
-    """An ensemble of members propagated with their own density perturbation.
-
-    Attributes:
-        epoch: initial epoch (UTC).
-        times: output times, s from ``epoch`` (nt,).
-        positions: member positions (n, nt, 3), m, inertial.
-        velocities: member velocities (n, nt, 3), m/s.
-        mean_orbit: the orbit at the mean density (kappa = 0), same integrator and step.
-        rtn_errors: member position minus mean orbit, in the mean orbit's RTN frame
-            (n, nt, 3), m.
-        clipped: density evaluations clipped at zero per member (additive form) (n,).
-        decay_times: decay time per member, s from ``epoch`` (inf: no decay) (n,).
-        densities: density each member saw at the output times (n, nt), kg/m^3, or None.
-        kappa: the kappa process; seed: the seed; step: the integration step used, s.
-    """
-
-    epoch: np.datetime64
-    times: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
-    mean_orbit: Trajectory
-    rtn_errors: np.ndarray
-    clipped: np.ndarray
-    decay_times: np.ndarray
-    densities: np.ndarray | None
-    kappa: KappaProcess
-    seed: int
-    step: float
-
-    @property
-    def epochs(self) -> np.ndarray:
-        """Output epochs, datetime64[ns] (nt,)."""
-        return offsets_to_epochs(self.epoch, self.times)
-
-    @property
-    def along_track(self) -> np.ndarray:
-        """Along-track error of each member (n, nt), m: position difference projected on T."""
-        return self.rtn_errors[..., 1]
-
-    @property
-    def decayed(self) -> np.ndarray:
-        """Whether each member decayed below the floor altitude (n,)."""
-        return np.isfinite(self.decay_times)
-
-    def along_track_curvilinear(self) -> np.ndarray:
-        """Curvilinear along-track error (n, nt), m: r_mean times the angle between the
-        member and the mean position within the mean orbit's plane."""
-        basis = frames.rtn_basis(self.mean_orbit.positions, self.mean_orbit.velocities)
-        radial = np.einsum("tj,ntj->nt", basis[:, 0], self.positions)
-        along = np.einsum("tj,ntj->nt", basis[:, 1], self.positions)
-        r_mean = np.linalg.norm(self.mean_orbit.positions, axis=1)
-        return r_mean * np.arctan2(along, radial)
-
-    def stats(self) -> RtnStats:
-        """Mean and standard deviation (ddof = 1) of the RTN errors per output time."""
-        return RtnStats(self.rtn_errors.mean(axis=0), self.rtn_errors.std(axis=0, ddof=1))
-
-
-class _ProgressBar:
-    """A one-line progress bar on a terminal, shown once a run has taken 1 s."""
-
-    def __init__(self, total: int, label: str) -> None:
-        self.total, self.label = total, label
-        self.start = time.perf_counter()
-        self.shown = False
-
-    def __call__(self, done: int) -> None:
-        elapsed = time.perf_counter() - self.start
-        if elapsed < 1.0 or not sys.stderr.isatty():
-            return
-        self.shown = True
-        frac = done / self.total
-        bar = "#" * int(30 * frac)
-        sys.stderr.write(
-            f"\r{self.label} [{bar:<30}] {done}/{self.total} members  {elapsed:5.1f} s"
-        )
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.shown:
-            sys.stderr.write("\n")
+from .propagate import output_grid
+from .results import MonteCarloResult, trajectory_from_core
+from .state import OrbitState, Spacecraft
 
 
 def monte_carlo(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: Any,
+    model: DensityModel,
     duration: Any,
     *,
     n: int = 1000,
@@ -188,7 +89,7 @@ def monte_carlo(
     times = output_grid(span, output_step)
     epoch = seconds_since_j2000(state.epoch)
     atmosphere = as_atmosphere(model, state, span)
-    bar = _ProgressBar(int(n), "Monte Carlo") if progress else None
+    bar = ProgressBar(int(n), "Monte Carlo") if progress else None
     try:
         out = _core.monte_carlo(
             atmosphere,
@@ -225,7 +126,6 @@ def monte_carlo(
             None,
             floor,
         ),
-        method,
     )
     t, decayed_at = mean.times, mean.decayed_at
     if len(t) < len(times):

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
-from . import _core, _validate, frames
-from .density.base import SampledModel, altitude_band, as_atmosphere
-from .epochs import offsets_to_epochs, seconds_since_j2000
-from .orbit import OrbitState, Spacecraft
+from .. import _core, _validate, frames
+from ..density import DensityModel, SampledModel, altitude_band, as_atmosphere
+from ..propagation import OrbitState, Spacecraft
+from ..time import add_seconds, offsets_to_epochs, seconds_since_j2000
 
 #: Cadence of the density samples along the backward orbit, s.
 DEBIAS_CADENCE = 60.0
@@ -18,14 +16,14 @@ DEBIAS_CADENCE = 60.0
 def backward_orbit(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: Any,
+    model: DensityModel,
     window: float,
     cadence: float = DEBIAS_CADENCE,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The mean orbit through ``model`` propagated backwards over ``window`` s before the
     epoch (RK8, 180 s or shorter steps). Returns (epochs (k,), inertial positions (k, 3) m)
     at every ``cadence`` s from the epoch back to ``epoch - window``."""
-    start = state.epoch - np.timedelta64(round(window * 1e9), "ns")
+    start = add_seconds(state.epoch, -window)
     if isinstance(model, SampledModel):
         band = altitude_band(state.position, state.velocity, below=25e3, above=25e3)
         atmosphere = model.field(start, state.epoch, altitude_range=band).core
@@ -50,8 +48,8 @@ def backward_orbit(
 def debias_drag_coefficient(
     state: OrbitState,
     spacecraft: Spacecraft,
-    reference_model: Any,
-    model: Any,
+    reference_model: DensityModel,
+    model: DensityModel,
     window: float = 8 * 3600.0,
     *,
     cadence: float = DEBIAS_CADENCE,

@@ -1,4 +1,4 @@
-"""Output files: CCSDS OEM (KVN, version 2.0 per CCSDS 502.0-B-3, with covariance blocks)
+"""Catalog output files: CCSDS OEM (KVN, version 2.0 per CCSDS 502.0-B-3, with covariance blocks)
 and a columnar Parquet summary of per-object statistics."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from . import frames
+from .. import frames
 
 
 def _iso(t: np.datetime64) -> str:

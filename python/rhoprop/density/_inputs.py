@@ -1,0 +1,57 @@
+"""Checks and broadcasting of density-model inputs, and the altitude band an orbit can
+reach: a leaf module that the model protocol and the sampled field both use."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..constants import MU, R_EARTH, R_POLE
+
+
+def broadcast_inputs(
+    times: Any, lat: Any, lon: Any, alt: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Broadcasts and checks ``mean_std`` inputs: datetime64[ns] times, finite latitude
+    in [-90, 90] deg, finite longitude (deg) and altitude (m)."""
+    t = np.asarray(times)
+    if not np.issubdtype(t.dtype, np.datetime64):
+        try:
+            t = t.astype("datetime64[ns]")
+        except (TypeError, ValueError) as err:
+            raise TypeError("times must be UTC datetime64 values or ISO strings") from err
+    t = t.astype("datetime64[ns]")
+    arrays = []
+    for name, value in (("lat", lat), ("lon", lon), ("alt", alt)):
+        a = np.asarray(value, dtype=float)
+        bad = ~np.isfinite(a)
+        if bad.any():
+            raise ValueError(f"{name} must be finite; got {a[bad].flat[0]}")
+        arrays.append(a)
+    la, lo, al = arrays
+    if (np.abs(la) > 90.0).any():
+        raise ValueError(f"lat must lie in [-90, 90] deg; got {la[np.abs(la) > 90].flat[0]}")
+    if np.isnat(t).any():
+        raise ValueError("times contain NaT")
+    t, la, lo, al = np.broadcast_arrays(t, la, lo, al)
+    return t, la, lo, al
+
+
+def altitude_band(
+    position: Any, velocity: Any, below: float = 50e3, above: float = 25e3
+) -> tuple[float, float]:
+    """Geodetic altitude range (m) an orbit can reach: perigee radius minus the equatorial
+    radius, apogee radius minus the polar radius, widened by ``below``/``above`` m for
+    decay and margin."""
+    r = np.asarray(position, dtype=float)
+    v = np.asarray(velocity, dtype=float)
+    rn = np.linalg.norm(r)
+    a = 1.0 / (2.0 / rn - v @ v / MU)
+    e_vec = np.cross(v, np.cross(r, v)) / MU - r / rn
+    e = float(np.linalg.norm(e_vec))
+    if not (a > 0 and e < 1):
+        raise ValueError("the orbit is not elliptic: a sampled density field needs a bounded orbit")
+    low = a * (1 - e) - R_EARTH - below
+    high = a * (1 + e) - R_POLE + above
+    return max(low, 0.0), high

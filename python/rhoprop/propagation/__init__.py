@@ -1,0 +1,38 @@
+"""Propagation: plain state types (``state``), result types sharing one moments API
+(``results``), deterministic propagation (``propagate``), the kappa processes
+(``kappa``), the correlated-density Monte Carlo (``montecarlo``) and the CCSP filter
+(``ccsp``). Everything here runs in the Rust core with the GIL released."""
+
+from . import kappa
+from .ccsp import DEFAULT_INITIAL_COVARIANCE, ccsp
+from .montecarlo import monte_carlo
+from .propagate import DEFAULT_RTOL, DEFAULT_STEP, METHODS, output_grid, propagate
+from .results import (
+    CcspResult,
+    MonteCarloResult,
+    RtnStats,
+    StateMoments,
+    Trajectory,
+    sample_moments,
+)
+from .state import OrbitState, Spacecraft
+
+__all__ = [
+    "DEFAULT_INITIAL_COVARIANCE",
+    "DEFAULT_RTOL",
+    "DEFAULT_STEP",
+    "METHODS",
+    "CcspResult",
+    "MonteCarloResult",
+    "OrbitState",
+    "RtnStats",
+    "Spacecraft",
+    "StateMoments",
+    "Trajectory",
+    "ccsp",
+    "kappa",
+    "monte_carlo",
+    "output_grid",
+    "propagate",
+    "sample_moments",
+]

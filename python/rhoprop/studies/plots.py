@@ -1,0 +1,139 @@
+"""Figures of the studies (matplotlib, loaded only when a figure is drawn). The studies
+compute; this module only draws. A library never selects a matplotlib backend for its
+user: figures are drawn on a ``Figure`` object and saved, without pyplot state."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .paper import LABELS
+
+if TYPE_CHECKING:
+    from ..ensemble import EnsembleResult
+    from .paper import CcspComparison, MethodComparison
+
+
+def method_comparison_figure(self: MethodComparison, path: str | Path) -> Path:
+    """Density traces of the first five members (mean in bold) per method, and the
+    along-track normal PDFs at the end; saved as PNG."""
+    from matplotlib.figure import Figure
+
+    keys = list(self.results)
+    fig = Figure(figsize=(16, 8.5), layout="constrained")
+    grid = fig.add_gridspec(2, len(keys), height_ratios=[1, 1.2])
+    for i, k in enumerate(keys):
+        ax = fig.add_subplot(grid[0, i])
+        t, rho = self.traces[k]
+        for member in rho:
+            ax.plot(t / 3600.0, member * 1e12, lw=0.8)
+        ax.plot(t / 3600.0, self.mean_trace[k] * 1e12, "k", lw=2.2, label="mean")
+        ax.set_title(LABELS[k], fontsize=10)
+        ax.set_xlabel("time [h]")
+        if i == 0:
+            ax.set_ylabel("density [1e-12 kg/m^3]")
+            ax.legend(fontsize=8)
+    ax = fig.add_subplot(grid[1, :])
+    stds = sorted(self.along_track_std.values())
+    x = np.linspace(-4 * stds[-1], 4 * stds[-1], 4001)
+    for k in keys:
+        at = self.results[k].along_track[:, -1]
+        mu, sd = at.mean(), self.along_track_std[k]
+        pdf = np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
+        note = " (peak off scale)" if len(stds) > 1 and sd < stds[1] / 2 else ""
+        ax.plot(x / 1e3, pdf * 1e3, lw=2, label=f"{LABELS[k]} (std {sd:,.0f} m){note}")
+    if len(stds) > 1:
+        # Scale to the second narrowest PDF: a very narrow one would flatten the rest.
+        ax.set_ylim(0, 1.25e3 / (stds[1] * np.sqrt(2 * np.pi)))
+    ax.set_xlabel(f"along-track error after {days_text(self.results[keys[0]].times[-1])} [km]")
+    ax.set_ylabel("normal PDF [1/km]")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.suptitle("Density perturbation methods: member densities (top) and along-track PDFs")
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    return out
+
+
+def ccsp_comparison_figure(self: CcspComparison, path: str | Path) -> Path:
+    """Along-track PDFs per configuration: MC histogram, MC normal fit (dashed) and the
+    CCSP normal (solid); saved as PNG."""
+    from matplotlib.figure import Figure
+
+    keys = list(self.mc_along)
+    fig = Figure(figsize=(5.2 * len(keys), 4.4), layout="constrained")
+    axes = fig.subplots(1, len(keys), squeeze=False)
+    for ax, k in zip(axes[0], keys, strict=True):
+        at = self.mc_along[k] / 1e3
+        mu, sd = at.mean(), at.std(ddof=1)
+        cm, cs = self.ccsp_mean[k] / 1e3, self.ccsp_std[k] / 1e3
+        lo, hi = min(mu - 4 * sd, cm - 4 * cs), max(mu + 4 * sd, cm + 4 * cs)
+        x = np.linspace(lo, hi, 600)
+        ax.hist(at, bins=40, density=True, alpha=0.3, color="C0", label="Monte Carlo")
+        ax.plot(x, _normal(x, mu, sd), "--", color="C0", lw=2, label=f"MC normal ({sd:.2f} km)")
+        ax.plot(x, _normal(x, cm, cs), color="C3", lw=2, label=f"CCSP ({cs:.2f} km)")
+        ax.set_title(f"{k}\nCd = {self.cd[k]:.4f}", fontsize=10)
+        ax.set_xlabel(f"along-track after {days_text(self.duration)} vs reference [km]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0][0].set_ylabel("PDF [1/km]")
+    fig.suptitle("CCSP vs Monte Carlo (Gauss-Markov 18 min)")
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    return out
+
+
+def _normal(x: np.ndarray, mu: float, sd: float) -> np.ndarray:
+    return np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
+
+
+def days_text(seconds: float) -> str:
+    """'1 day', '3 days', '0.25 days'."""
+    days = seconds / 86400.0
+    return "1 day" if days == 1 else f"{days:g} days"
+
+
+def ensemble_figure(ensembles: dict[str, EnsembleResult], path: str | Path) -> Path:
+    """Along-track PDFs per case: each model's normal (dashed) and the mixture (bold)."""
+    from matplotlib.figure import Figure
+
+    cases = list(ensembles)
+    cols = 2 if len(cases) > 1 else 1
+    rows = int(np.ceil(len(cases) / cols))
+    fig = Figure(figsize=(7 * cols, 4.6 * rows), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False)
+    for ax, case in zip(axes.ravel(), cases, strict=False):
+        ens = ensembles[case]
+        mix = ens.along_track_mixture()
+        means = ens.component_means[-1, :, 1]
+        stds = np.sqrt(ens.component_covariances[-1, :, 1, 1])
+        lo, hi = (means - 4 * stds).min(), (means + 4 * stds).max()
+        x = np.linspace(lo, hi, 1200)
+        for i, name in enumerate(ens.names):
+            ax.plot(
+                x / 1e3,
+                _normal(x, means[i], stds[i]) * 1e3,
+                "--",
+                lw=1.5,
+                label=f"{name} (Cd {ens.cd[name]:.3f})",
+            )
+        ax.plot(x / 1e3, mix.pdf(x) * 1e3, "k", lw=2.6, label="mixture")
+        epoch = str(ens.results[ens.reference].epoch)[:16].replace("T", " ")
+        ax.set_title(f"{case}  ({epoch} UTC)", fontsize=10)
+        ax.set_xlabel(
+            f"along-track after {days_text(ens.times[-1])} vs the {ens.reference} mean orbit [km]"
+        )
+        ax.set_ylabel("PDF [1/km]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    for ax in axes.ravel()[len(cases) :]:
+        ax.set_visible(False)
+    fig.suptitle("Ensemble along-track PDFs (Monte Carlo, Gauss-Markov 18 min)")
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    return out

@@ -1,0 +1,160 @@
+"""The ``rhoprop paper`` run: every study of the paper with its figures, printed tables,
+``summary.json`` and ``summary.md``."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import frames
+from ..density import Msis
+from ..ensemble import EnsembleResult
+from ..propagation import OrbitState, Spacecraft, propagate
+from ..spaceweather import SpaceWeather
+from . import scenarios
+from .paper import case_ensembles, ccsp_vs_monte_carlo, method_comparison
+from .plots import ensemble_figure
+
+
+def _stage(title: str, start: float) -> None:
+    print(f"\n== {title}  (t = {time.perf_counter() - start:.0f} s)", flush=True)
+
+
+def run_paper(out: str | Path, *, quick: bool = False, members: int | None = None) -> list[Path]:
+    """The paper's study: deterministic orbits, Fig. 4, Fig. 5 (four cases), Fig. 6.
+
+    Args:
+        out: output directory (created).
+        quick: a smoke run, 1 day and 100 members instead of 3 days and 1000.
+        members: Monte Carlo members per run (default 1000, 100 with ``quick``).
+
+    Returns:
+        The paths written: three PNG figures, ``summary.json`` and ``summary.md``.
+    """
+    start = time.perf_counter()
+    members = members or (100 if quick else 1000)
+    duration = 86400.0 if quick else scenarios.PAPER_DURATION
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    record = SpaceWeather()
+    state, craft = scenarios.paper_state(), scenarios.paper_spacecraft()
+    print(f"rhoprop paper: {members} members per run, {duration / 86400:g} days, output in {out}")
+
+    _stage("Mean orbits, Case I (2002-09-07 storm)", start)
+    _paper_orbits(state, craft, duration, record)
+
+    _stage("Method comparison (paper Fig. 4), NRLMSIS 2.1, Case I", start)
+    comparison = method_comparison(
+        state, craft, Msis("2.1", space_weather=record), duration, n=members
+    )
+    figures = [comparison.figure(out / "method_comparison.png")]
+    print(comparison.table())
+
+    _stage("Ensembles for the four space-weather cases (paper Fig. 5)", start)
+    ensembles = case_ensembles(n=members, duration=duration, record=record)
+    figures.append(ensemble_figure(ensembles, out / "ensembles.png"))
+    case_table = _case_table(ensembles)
+    print(case_table)
+
+    _stage("CCSP vs Monte Carlo (paper Fig. 6)", start)
+    sw = record
+    versus = ccsp_vs_monte_carlo(
+        state,
+        craft,
+        Msis("2.1", space_weather=sw),
+        Msis("00", space_weather=sw),
+        duration,
+        n=members,
+    )
+    figures.append(versus.figure(out / "ccsp_vs_monte_carlo.png"))
+    print(versus.table())
+
+    summary = {
+        "members": members,
+        "duration_s": duration,
+        "method_comparison": comparison.along_track_std,
+        "method_ratios": [
+            {"a": a, "b": b, "measured": m, "long_time_theory": t}
+            for a, b, m, t in comparison.ratios()
+        ],
+        "cases": {
+            case: {"epoch": str(scenarios.CASE_EPOCHS[case]) + "Z", **ens.summary()}
+            for case, ens in ensembles.items()
+        },
+        "ccsp_vs_monte_carlo": {
+            k: {
+                "cd": versus.cd[k],
+                "mc_along_track_mean_m": float(versus.mc_along[k].mean()),
+                "mc_along_track_std_m": float(versus.mc_along[k].std(ddof=1)),
+                "ccsp_along_track_mean_m": versus.ccsp_mean[k],
+                "ccsp_along_track_std_m": versus.ccsp_std[k],
+                "mc_seconds": versus.seconds[k][0],
+                "ccsp_seconds": versus.seconds[k][1],
+            }
+            for k in versus.mc_along
+        },
+        "wall_seconds": time.perf_counter() - start,
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    days = f"{duration / 86400:g}"
+    (out / "summary.md").write_text(
+        f"# rhoprop paper study\n\n{members} members per Monte Carlo run, {days} days.\n\n"
+        f"## Method comparison (Fig. 4)\n\n{comparison.table()}\n\n"
+        f"## Ensembles (Fig. 5): along-track at {days} days\n\n{case_table}\n\n"
+        f"## CCSP vs Monte Carlo (Fig. 6)\n\n{versus.table()}\n"
+    )
+    _stage("Done", start)
+    written = [*figures, out / "summary.json", out / "summary.md"]
+    for path in written:
+        print(f"  wrote {path}")
+    return written
+
+
+def _case_table(ensembles: dict[str, EnsembleResult]) -> str:
+    """Markdown table of the ensembles: per case and model Cd, along-track mean and std;
+    mixture mean, std, 95 % interval and number of modes."""
+    lines = [
+        "| case | model | Cd | along-track mean [m] | along-track std [m] |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for case, ens in ensembles.items():
+        s = ens.summary()
+        for name, m in s["models"].items():
+            lines.append(
+                f"| {case} | {name} | {m['cd']:.4f} | {m['along_track_mean_m']:.1f} "
+                f"| {m['along_track_std_m']:.1f} |"
+            )
+        x = s["mixture"]
+        lines.append(
+            f"| {case} | **mixture** ({x['modes']} mode{'s' if x['modes'] != 1 else ''}, 95 %: "
+            f"{x['q025_m']:.0f} to {x['q975_m']:.0f}) | | {x['mean_m']:.1f} | {x['std_m']:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+def _paper_orbits(
+    state: OrbitState, craft: Spacecraft, duration: float, record: SpaceWeather
+) -> None:
+    """Each integrator on the benchmark atmosphere, then the three NRLMSIS mean orbits."""
+    model = scenarios.benchmark_exponential()
+    print(f"  {'method':<8} {'RHS evals':>10} {'wall [s]':>9}  {'vs dop853 [m]':>13}")
+    reference = None
+    for method in ("dop853", "rk8", "rk4"):
+        t0 = time.perf_counter()
+        tr = propagate(state, craft, model, duration, method=method)
+        wall = time.perf_counter() - t0
+        reference = tr.positions[-1] if reference is None else reference
+        diff = float(np.linalg.norm(tr.positions[-1] - reference))
+        print(f"  {method:<8} {tr.evaluations:>10} {wall:>9.3f}  {diff:>13.3f}")
+    print(f"  {'model':<12} {'field+run [s]':>13}  {'along-track vs 2.1 [m]':>23}")
+    ref = None
+    for version in ("2.1", "2.0", "00"):
+        t0 = time.perf_counter()
+        tr = propagate(state, craft, Msis(version, space_weather=record), duration)
+        wall = time.perf_counter() - t0
+        ref = tr if ref is None else ref
+        along = frames.to_rtn(tr.positions[-1], ref.positions[-1], ref.velocities[-1])[1]
+        print(f"  {'NRLMSIS ' + version:<12} {wall:>13.2f}  {along:>23.1f}")
