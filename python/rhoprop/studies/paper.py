@@ -16,6 +16,7 @@ from ..ensemble import debias_drag_coefficient, ensemble
 from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
 from ..spaceweather import SpaceWeather
 from . import scenarios
+from .scenarios import LABELS
 
 #: The five processes of the paper's comparison, keyed as in ``summary.json``.
 METHODS: dict[str, kappa.KappaProcess] = {
@@ -24,13 +25,6 @@ METHODS: dict[str, kappa.KappaProcess] = {
     "interpolated_180min": kappa.Interpolated(10800.0),
     "gauss_markov_18min": kappa.GaussMarkov(1080.0),
     "gauss_markov_180min": kappa.GaussMarkov(10800.0),
-}
-LABELS = {
-    "white_10s": "White 10 s",
-    "interpolated_18min": "Interpolated 18 min",
-    "interpolated_180min": "Interpolated 180 min",
-    "gauss_markov_18min": "Gauss-Markov 18 min",
-    "gauss_markov_180min": "Gauss-Markov 180 min",
 }
 #: Ratios of 3-day along-track std and their long-time values, sqrt(D1 / D2).
 RATIOS = [

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .paper import LABELS
+from .scenarios import LABELS
 
 if TYPE_CHECKING:
     from ..ensemble import EnsembleResult

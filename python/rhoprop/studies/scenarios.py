@@ -64,3 +64,12 @@ def case_models(case: str, record: SpaceWeather | None = None) -> dict[str, Dens
         "NRLMSIS 2.0": Msis("2.0", space_weather=sw),
         "NRLMSISE-00": Msis("00", space_weather=sw),
     }
+
+#: Labels of the paper's five kappa processes (the keys of ``studies.METHODS``).
+LABELS = {
+    "white_10s": "White 10 s",
+    "interpolated_18min": "Interpolated 18 min",
+    "interpolated_180min": "Interpolated 180 min",
+    "gauss_markov_18min": "Gauss-Markov 18 min",
+    "gauss_markov_180min": "Gauss-Markov 180 min",
+}

@@ -1,0 +1,191 @@
+"""The package's shape (docs/architecture.md): stages import only from stages below
+them, no module imports itself back through others, heavy parts load lazily, and the
+names that several layers spell (kappa kinds, constants) come from one place."""
+
+from __future__ import annotations
+
+import ast
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+from rhoprop import _core
+
+PACKAGE = Path(rp.__file__).parent
+
+#: Stage of each top-level module or folder of the package, bottom first.
+STAGES = {
+    "_core": 0,
+    "_validate": 0,
+    "_version": 0,
+    "cache": 0,
+    "constants": 0,
+    "errors": 0,
+    "frames": 0,
+    "progress": 0,
+    "time": 0,
+    "spaceweather": 1,
+    "density": 2,
+    "propagation": 3,
+    "ensemble": 4,
+    "catalog": 5,
+    "studies": 6,
+    "cli": 7,
+    "__main__": 8,
+    "__init__": 8,
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _stage(module: str) -> int:
+    parts = module.split(".")
+    return STAGES["__init__" if len(parts) == 1 else parts[1]]
+
+
+def _runtime_imports(path: Path) -> set[str]:
+    """rhoprop modules imported by a file, anywhere (also inside functions), except in
+    ``if TYPE_CHECKING:`` blocks."""
+    tree = ast.parse(path.read_text())
+    module = _module_name(path)
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip.update(id(n) for stmt in node.body for n in ast.walk(stmt))
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.split(".")[0] == "rhoprop")
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - node.level + 1]
+                target = ".".join([*base, node.module] if node.module else base)
+            else:
+                target = node.module or ""
+            if target.split(".")[0] != "rhoprop":
+                continue
+            for alias in node.names:
+                candidate = f"{target}.{alias.name}"
+                found.add(candidate if _is_module(candidate) else target)
+    found.discard(module)
+    return found
+
+
+def _is_module(name: str) -> bool:
+    if name == "rhoprop._core":
+        return True
+    rel = Path(*name.split(".")[1:])
+    return (PACKAGE / rel).with_suffix(".py").exists() or (PACKAGE / rel / "__init__.py").exists()
+
+
+def _graph() -> dict[str, set[str]]:
+    return {_module_name(p): _runtime_imports(p) for p in PACKAGE.rglob("*.py")}
+
+
+def test_every_module_has_a_stage():
+    for module in _graph():
+        assert _stage(module) >= 0, module
+
+
+def test_imports_point_down_the_stages():
+    upward = [
+        f"{module} (stage {_stage(module)}) imports {target} (stage {_stage(target)})"
+        for module, targets in _graph().items()
+        for target in targets
+        if target != "rhoprop._core" and _stage(target) > _stage(module)
+    ]
+    assert not upward, "\n".join(upward)
+
+
+def test_no_import_cycles():
+    graph = _graph()
+    state: dict[str, int] = {}
+    cycles: list[list[str]] = []
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = 1
+        for nxt in sorted(graph.get(node, ())):
+            if nxt not in graph:
+                continue
+            if state.get(nxt) == 1:
+                cycles.append([*stack[stack.index(nxt) :], nxt])
+            elif nxt not in state:
+                visit(nxt, [*stack, nxt])
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [node])
+    assert not cycles, "\n".join(" -> ".join(c) for c in cycles)
+
+
+def test_heavy_parts_load_lazily():
+    code = (
+        "import sys, rhoprop as rp; rp.propagate; "
+        "heavy = [m for m in ('rhoprop.catalog', 'rhoprop.studies', 'matplotlib', 'sgp4', "
+        "'pyarrow', 'distributed') if m in sys.modules]; print(heavy)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_public_names_survive_submodule_imports():
+    import rhoprop.catalog.run  # noqa: F401
+    import rhoprop.ensemble.combine  # noqa: F401
+    import rhoprop.studies.report  # noqa: F401
+
+    assert callable(rp.ensemble) and rp.ensemble.__module__ == "rhoprop.ensemble.combine"
+    assert rp.io.write_oem is rp.catalog.write_oem
+    assert rp.scenarios.paper_state is rp.studies.scenarios.paper_state
+    for name in rp.__all__:
+        assert getattr(rp, name) is not None, name
+
+
+def test_kappa_kinds_are_the_cores():
+    assert set(rp.kappa.KINDS) == set(_core.KAPPA_KINDS)
+    for kind, cls in rp.kappa.KINDS.items():
+        assert cls.kind == kind
+
+
+def test_constants_are_the_cores():
+    from rhoprop import constants
+
+    # DESIGN.md section 3, exactly.
+    assert constants.MU == 3.986004418e14 and constants.R_EARTH == 6378137.0
+    assert constants.J2 == 1.08262668e-3 and constants.OMEGA_EARTH == 7.292115e-5
+    assert constants.WGS84_F == 1 / 298.257223563
+    assert constants.R_POLE == pytest.approx(6356752.314245, abs=1e-6)  # WGS-84 b
+    assert constants.MU is _core.MU or constants.MU == _core.MU
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        rp.density.Exponential(3.725e-12, 400e3, 58.515e3, 0.2),
+        rp.density.DensityField.from_arrays(
+            "2002-09-07T00:00",
+            [0.0, 7200.0],
+            [300e3, 400e3, 500e3],
+            np.linspace(-90, 90, 7),
+            np.arange(0, 360, 30.0),
+            np.log(1e-12) * np.ones((2, 3, 7, 12)),
+            0.1 * np.ones((2, 3, 7, 12)),
+        ),
+    ],
+)
+def test_models_that_travel_pickle_themselves(model):
+    back = pickle.loads(pickle.dumps(model))
+    where = ("2002-09-07T01:00", 10.0, 20.0, 400e3)
+    np.testing.assert_array_equal(back.mean_std(*where), model.mean_std(*where))
