@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import rhoprop as rp
+from machine import describe
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
 from reference import reference_orbit
@@ -30,6 +31,7 @@ SETTINGS = [
 
 
 def main() -> None:
+    print(describe())
     state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
     model = rp.scenarios.benchmark_exponential()
     duration = rp.scenarios.PAPER_DURATION

@@ -18,6 +18,7 @@ from sgp4 import exporter
 from sgp4.api import WGS72, Satrec
 
 import rhoprop as rp
+from machine import describe
 from rhoprop import catalog
 
 JD_EPOCH = 2452524.0  # 2002-09-06 12:00 UTC
@@ -52,6 +53,7 @@ def synthetic_tle(n: int, seed: int = 0) -> str:
 
 
 def main() -> None:
+    print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--objects", type=int, default=2000)
     parser.add_argument("--days", type=float, default=3.0)

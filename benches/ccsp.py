@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 import rhoprop as rp
+from machine import describe, info
 from rhoprop.density import altitude_band
 
 
@@ -27,6 +28,7 @@ def median_time(fn, repeat: int) -> float:
 
 
 def main() -> None:
+    print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
@@ -48,7 +50,9 @@ def main() -> None:
     print(f"Monte Carlo / CCSP cost ratio: {mc / cc:.1f}x")
     out = Path(__file__).parent / "results" / "ccsp.json"
     out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps({"ccsp_s": cc, "monte_carlo_s": mc, "ratio": mc / cc}, indent=2))
+    out.write_text(
+        json.dumps({**info(), "ccsp_s": cc, "monte_carlo_s": mc, "ratio": mc / cc}, indent=2)
+    )
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import rhoprop as rp
+from machine import describe, info
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
 from reference import J2, MU, OMEGA, RE, exponential_rhs, reference_orbit
@@ -245,6 +246,7 @@ B_REF = 3.0912 * 0.0015
 
 
 def main() -> None:
+    print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--members", type=int, default=1000)
@@ -283,9 +285,7 @@ def main() -> None:
     out = Path(__file__).parent / "results" / "compare_peers.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(
-        json.dumps(
-            {"cores": os.cpu_count(), "members": args.members, "days": DAYS, "rows": rows}, indent=2
-        )
+        json.dumps({**info(), "members": args.members, "days": DAYS, "rows": rows}, indent=2)
     )
 
 

@@ -16,11 +16,13 @@ from pathlib import Path
 import numpy as np
 
 import rhoprop as rp
+from machine import describe, info
 from rhoprop.density import altitude_band
 from rhoprop.density.msis import Msis
 
 
 def main() -> None:
+    print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
@@ -61,7 +63,7 @@ def main() -> None:
         )
     out = Path(__file__).parent / "results" / "field_sampling.json"
     out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps({"altitude_band_m": band, "rows": rows}, indent=2))
+    out.write_text(json.dumps({**info(), "altitude_band_m": band, "rows": rows}, indent=2))
 
 
 if __name__ == "__main__":

@@ -9,7 +9,9 @@ from __future__ import annotations
 import time
 
 import rhoprop as rp
+from machine import describe
 
+print(describe())
 state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
 t0 = time.perf_counter()
 mc = rp.monte_carlo(

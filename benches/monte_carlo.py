@@ -16,10 +16,12 @@ from pathlib import Path
 import numpy as np
 
 import rhoprop as rp
+from machine import describe, info
 from rhoprop.density import altitude_band
 
 
 def main() -> None:
+    print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--members", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
@@ -66,7 +68,7 @@ def main() -> None:
         print(f"{process!r:<24} {r.step:>8g} {wall:>9.2f} {rate:>14,.0f}")
     out = Path(__file__).parent / "results" / "monte_carlo.json"
     out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps({"field_sampling_s": sampling, "rows": rows}, indent=2))
+    out.write_text(json.dumps({**info(), "field_sampling_s": sampling, "rows": rows}, indent=2))
 
 
 if __name__ == "__main__":

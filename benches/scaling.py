@@ -12,10 +12,12 @@ import time
 import numpy as np
 
 import rhoprop as rp
+from machine import describe
 from rhoprop.density import altitude_band
 
 
 def main() -> None:
+    print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()

@@ -142,8 +142,8 @@ def test_heavy_parts_load_lazily():
 
 
 def test_public_names_survive_submodule_imports():
-    import rhoprop.catalog.run  # noqa: F401
-    import rhoprop.ensemble.combine  # noqa: F401
+    import rhoprop.catalog.run
+    import rhoprop.ensemble.combine
     import rhoprop.studies.report  # noqa: F401
 
     assert callable(rp.ensemble) and rp.ensemble.__module__ == "rhoprop.ensemble.combine"

@@ -1,0 +1,31 @@
+"""What a benchmark ran on: CPU model, cores and the SIMD path the core dispatched to.
+Every bench script prints :func:`describe` first and stores :func:`info` in its JSON."""
+
+from __future__ import annotations
+
+import os
+import platform
+from pathlib import Path
+
+from rhoprop import _core
+
+
+def cpu_model() -> str:
+    """The CPU model name (Linux /proc/cpuinfo, else the platform's processor string)."""
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or platform.machine()
+
+
+def info() -> dict[str, object]:
+    """CPU model, core count and the core's SIMD path, for the JSON results."""
+    return {"cpu": cpu_model(), "cores": os.cpu_count(), "simd_path": _core.simd_path()}
+
+
+def describe() -> str:
+    """One line: 'CPU: <model>, <n> cores; SIMD path: <path>'."""
+    i = info()
+    return f"CPU: {i['cpu']}, {i['cores']} cores; SIMD path: {i['simd_path']}"
