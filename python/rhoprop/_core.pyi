@@ -12,6 +12,14 @@ _F64 = npt.NDArray[np.float64]
 
 __all__ = [
     "DEFAULT_FLOOR_ALTITUDE",
+    "J2",
+    "KAPPA_KINDS",
+    "MU",
+    "OMEGA_EARTH",
+    "R_EARTH",
+    "R_POLE",
+    "SECONDS_PER_DAY",
+    "WGS84_F",
     "DensityFieldError",
     "ExponentialAtmosphere",
     "GriddedAtmosphere",
@@ -25,9 +33,23 @@ __all__ = [
     "monte_carlo",
     "propagate",
     "rtn_basis",
+    "simd_path",
 ]
 
+# Constants of rhoprop-core (SI units, rad/s; see rust/core/src/constants.rs).
+MU: float
+R_EARTH: float
+R_POLE: float
+J2: float
+WGS84_F: float
+OMEGA_EARTH: float
+SECONDS_PER_DAY: float
 DEFAULT_FLOOR_ALTITUDE: float
+# Names of the kappa processes: the first item of monte_carlo's kappa spec.
+KAPPA_KINDS: tuple[str, ...]
+
+def simd_path() -> str:
+    """Instruction set of the batch kernels on this CPU: "avx2+fma" or "portable"."""
 
 class RhopropError(ValueError):
     """Base of all rhoprop errors (a ValueError)."""

@@ -13,7 +13,7 @@ def real(name: str, value: object) -> float:
     """``value`` as a finite float, else TypeError/ValueError naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
         raise TypeError(f"{name} must be a real number, got {type(value).__name__}")
-    out = float(value)  # type: ignore[arg-type]
+    out = float(value)
     if not math.isfinite(out):
         raise ValueError(f"{name} must be finite, got {out}")
     return out

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .time import EpochLike, seconds_since_j2000, to_seconds
+from .time import seconds_since_j2000, to_seconds
 
 
 def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
@@ -32,7 +32,7 @@ def _ut1(epochs: Any, n: int) -> np.ndarray:
     return to_seconds(arr)
 
 
-def gmst(epochs: EpochLike | Any) -> np.ndarray | float:
+def gmst(epochs: Any) -> np.ndarray | float:
     """Greenwich mean sidereal time (IAU-82), rad in [0, 2 pi), at UTC epochs (UT1 = UTC)."""
     if np.ndim(epochs) == 0:
         return float(_core.gmst(_ut1(epochs, 1))[0])
@@ -91,4 +91,4 @@ def to_rtn(positions: Any, ref_positions: Any, ref_velocities: Any) -> np.ndarra
     carry leading member axes: shape (..., n, 3) against references (n, 3)."""
     basis = rtn_basis(ref_positions, ref_velocities)
     delta = np.asarray(positions, dtype=float) - np.asarray(ref_positions, dtype=float)
-    return np.einsum("...ij,...j->...i", basis, delta)
+    return np.asarray(np.einsum("...ij,...j->...i", basis, delta))

@@ -31,7 +31,8 @@ def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
     if isinstance(epoch, np.datetime64):
         if np.isnat(epoch):
             raise ValueError(f"{name} is NaT (not a time)")
-        return epoch.astype("datetime64[ns]")
+        ns: np.datetime64 = epoch.astype("datetime64[ns]")
+        return ns
     if isinstance(epoch, _dt.datetime):
         if epoch.tzinfo is not None:
             epoch = epoch.astimezone(_dt.timezone.utc).replace(tzinfo=None)
@@ -76,7 +77,8 @@ def add_seconds(epoch: np.datetime64, seconds: float, *, round_up: bool = False)
     """``epoch`` plus ``seconds`` (float), to the nearest nanosecond (``round_up``: the next
     nanosecond at or after, so that a window surely covers the span)."""
     ns = math.ceil(seconds * 1e9) if round_up else round(seconds * 1e9)
-    return np.datetime64(epoch, "ns") + np.timedelta64(int(ns), "ns")
+    start: np.datetime64 = epoch.astype("datetime64[ns]")
+    return start + np.timedelta64(int(ns), "ns")
 
 
 def offsets_to_epochs(epoch: EpochLike, seconds: Any) -> NDArray[np.datetime64]:

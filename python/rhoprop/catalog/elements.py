@@ -93,7 +93,7 @@ def _parse_tle(text: str, path: str) -> list[tuple[str, Any]]:
     from sgp4.api import Satrec
 
     lines = [(i + 1, ln.rstrip()) for i, ln in enumerate(text.splitlines()) if ln.strip()]
-    entries = []
+    entries: list[tuple[str, Any]] = []
     k = 0
     while k < len(lines):
         name = ""
@@ -146,7 +146,7 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
     else:
         records = list(csv.DictReader(io.StringIO(text)))
         kind = "CSV"
-    entries = []
+    entries: list[tuple[str, Any]] = []
     for i, rec in enumerate(records):
         where = f"{path} {kind} record {i}"
         if not isinstance(rec, dict):

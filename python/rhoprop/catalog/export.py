@@ -13,7 +13,7 @@ from .. import frames
 
 
 def _iso(t: np.datetime64) -> str:
-    return str(np.datetime64(t, "us"))
+    return str(t.astype("datetime64[us]"))
 
 
 def write_oem(result: Any, directory: str | Path, *, originator: str = "rhoprop") -> list[Path]:

@@ -56,8 +56,8 @@ class Gridded(SampledModel):
             raise ValueError(
                 f"dataset needs variables {mean!r} and {std!r} on dims {order}: {err}"
             ) from err
-        coords = [np.asarray(dataset[name].values) for name in order]
-        return cls(*coords, m.values, s.values)
+        times, alt, lat, lon = (np.asarray(dataset[name].values) for name in order)
+        return cls(times, alt, lat, lon, m.values, s.values)
 
     @property
     def native_field(self) -> DensityField:

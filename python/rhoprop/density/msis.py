@@ -8,13 +8,14 @@ record (pymsis' own downloader is never used). The storm-time ap mode of the mod
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
 from .. import _validate
-from ..spaceweather import SpaceWeather
+from ..spaceweather import Drivers, SpaceWeather
 from ._inputs import broadcast_inputs
 from .model import SampledModel
 
@@ -58,6 +59,9 @@ SENSITIVITY_STRIDE = 3
 #: Drivers change at most every 3 h, on UT multiples of 3 h (ap) and at 00 UT (F10.7).
 DRIVER_CADENCE = np.timedelta64(3, "h")
 
+#: ``call(f107, f107a, ap)`` -> density: the model at perturbed drivers.
+_DriverCall = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
 
 def ap_sigma(ap: Any) -> np.ndarray:
     """1-sigma uncertainty of an ap value from the resolution of the index: ap is read from
@@ -70,7 +74,9 @@ def ap_sigma(ap: Any) -> np.ndarray:
     spacing[1:-1] = (levels[2:] - levels[:-2]) / 4.0
     spacing[0] = (levels[1] - levels[0]) / 2.0
     spacing[-1] = (levels[-1] - levels[-2]) / 2.0
-    return np.interp(np.asarray(ap, dtype=float), levels, spacing)
+    # A float for a scalar ap, as np.interp gives.
+    sigma: np.ndarray = np.interp(np.asarray(ap, dtype=float), levels, spacing)
+    return sigma
 
 
 @dataclass(frozen=True)
@@ -164,7 +170,16 @@ class Msis(SampledModel):
 
     # -- direct evaluation ---------------------------------------------------------------
 
-    def _calc(self, dates, lons, lats, alts_m, f107, f107a, ap) -> np.ndarray:
+    def _calc(
+        self,
+        dates: np.ndarray,
+        lons: np.ndarray,
+        lats: np.ndarray,
+        alts_m: np.ndarray,
+        f107: np.ndarray,
+        f107a: np.ndarray,
+        ap: np.ndarray,
+    ) -> np.ndarray:
         """Total mass density, kg/m^3, from pymsis (fly-through or grid mode)."""
         import pymsis
 
@@ -179,9 +194,12 @@ class Msis(SampledModel):
             version=self.version,
             geomagnetic_activity=-1,
         )
-        return out[..., 0].astype(float)
+        rho: np.ndarray = out[..., 0].astype(float)
+        return rho
 
-    def _driver_variance(self, call, drivers) -> tuple[np.ndarray, np.ndarray]:
+    def _driver_variance(
+        self, call: _DriverCall, drivers: Drivers
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(mean, variance from the drivers) with ``call(f107, f107a, ap)`` -> density, by
         central differences; zero variance under :class:`RelativeSigma`."""
         f107, f107a, ap = drivers.f107, drivers.f107a, drivers.ap
@@ -216,7 +234,7 @@ class Msis(SampledModel):
         if len(t) == 0:
             return np.zeros(shape), np.zeros(shape)
 
-        def call(f107, f107a, ap):
+        def call(f107: np.ndarray, f107a: np.ndarray, ap: np.ndarray) -> np.ndarray:
             return self._calc(t, lo, la, al, f107, f107a, ap)
 
         mean, var = self._driver_variance(call, drivers)
@@ -260,7 +278,9 @@ class Msis(SampledModel):
         before = epochs - np.where(left, np.timedelta64(1, "us"), np.timedelta64(0, "us"))
         drivers = self.space_weather.drivers(before)
 
-        def grid(la, lo, f107, f107a, ap):
+        def grid(
+            la: np.ndarray, lo: np.ndarray, f107: np.ndarray, f107a: np.ndarray, ap: np.ndarray
+        ) -> np.ndarray:
             # pymsis makes a grid only when the axis lengths differ.
             lens = {len(epochs), len(lo), len(la), len(alt)}
             if len(lens) == 1:
@@ -292,7 +312,7 @@ class Msis(SampledModel):
         sub = mean[:, :, ::klat, ::klon]
         calls = iter([sub])
 
-        def call(f107, f107a, ap):
+        def call(f107: np.ndarray, f107a: np.ndarray, ap: np.ndarray) -> np.ndarray:
             # The first call is the unperturbed mean, already computed on the full grid.
             first = next(calls, None)
             return first if first is not None else grid(la_c, lo_c, f107, f107a, ap)

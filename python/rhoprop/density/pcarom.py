@@ -171,7 +171,7 @@ class PcaRom(SampledModel):
     @property
     def rank(self) -> int:
         """Number of PCA modes r."""
-        return self.modes.shape[3]
+        return int(self.modes.shape[3])
 
     def __repr__(self) -> str:
         nlst, nlat, nalt = self.mean_log10.shape

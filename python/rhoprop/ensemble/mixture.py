@@ -116,7 +116,7 @@ class GaussianMixture:
         total = w.sum()
         if not total > 0.0 or not math.isfinite(total):
             raise ValueError(f"weights must have a finite positive sum, got {total}")
-        return w / total
+        return np.asarray(w / total)
 
     @staticmethod
     def _check_means(means: object) -> np.ndarray:
@@ -151,14 +151,14 @@ class GaussianMixture:
                     f"covariances[{i}] (component {i}) is not symmetric "
                     f"(max |C - C^T| = {asym:.3g})"
                 )
-        return 0.5 * (cov + np.swapaxes(cov, 1, 2))
+        return np.asarray(0.5 * (cov + np.swapaxes(cov, 1, 2)))
 
     @staticmethod
     def _inverse(chol: np.ndarray) -> np.ndarray:
         """Inverse covariances (k, d, d) from the lower Cholesky factors (k, d, d)."""
         eye = np.eye(chol.shape[1])
         inv_chol = np.stack([_solve_lower(c, eye).T for c in chol])  # L^-1
-        return np.einsum("kji,kjl->kil", inv_chol, inv_chol)  # L^-T L^-1
+        return np.asarray(np.einsum("kji,kjl->kil", inv_chol, inv_chol))  # L^-T L^-1
 
     @staticmethod
     def _factorise(cov: np.ndarray) -> np.ndarray:
@@ -226,7 +226,7 @@ class GaussianMixture:
 
     def _log_joint(self, x: np.ndarray) -> np.ndarray:
         """log(w_i N_i(x_n)) (n, k)."""
-        return self._component_logpdf(x) + self._log_weights
+        return np.asarray(self._component_logpdf(x) + self._log_weights)
 
     @staticmethod
     def _logsumexp(a: np.ndarray) -> np.ndarray:
@@ -234,12 +234,12 @@ class GaussianMixture:
         top = np.max(a, axis=1)
         top = np.where(np.isfinite(top), top, 0.0)
         with np.errstate(divide="ignore"):
-            return top + np.log(np.sum(np.exp(a - top[:, None]), axis=1))
+            return np.asarray(top + np.log(np.sum(np.exp(a - top[:, None]), axis=1)))
 
     def _responsibilities(self, x: np.ndarray) -> np.ndarray:
         """Posterior component probabilities p(i | x_n) (n, k)."""
         log_joint = self._log_joint(x)
-        return np.exp(log_joint - self._logsumexp(log_joint)[:, None])
+        return np.asarray(np.exp(log_joint - self._logsumexp(log_joint)[:, None]))
 
     def logpdf(self, x: object) -> np.ndarray:
         """Log density at x (..., d) (or (...,) for d = 1) -> (...)."""
@@ -248,13 +248,15 @@ class GaussianMixture:
 
     def pdf(self, x: object) -> np.ndarray:
         """Density at x (..., d) (or (...,) for d = 1) -> (...)."""
-        return np.exp(self.logpdf(x))
+        # A numpy float for a single point, as np.exp of a 0-d array gives.
+        density: np.ndarray = np.exp(self.logpdf(x))
+        return density
 
     # ------------------------------------------------------------------ moments, sampling
 
     def mean(self) -> np.ndarray:
         """Mixture mean (d,): ``sum_i w_i mu_i``."""
-        return self._weights @ self._means
+        return np.asarray(self._weights @ self._means)
 
     def covariance(self) -> np.ndarray:
         """Mixture covariance (d, d) by the law of total covariance:
@@ -262,7 +264,7 @@ class GaussianMixture:
         dev = self._means - self.mean()
         within = np.einsum("k,kij->ij", self._weights, self._covariances)
         between = (self._weights[:, None] * dev).T @ dev
-        return within + between
+        return np.asarray(within + between)
 
     def sample(
         self, n: int, seed: int | np.random.SeedSequence | np.random.Generator | None = None
@@ -277,7 +279,7 @@ class GaussianMixture:
         rng = np.random.default_rng(seed)
         comp = rng.choice(self.n_components, size=int(n), p=self._weights)
         z = rng.standard_normal((int(n), self.dim))
-        return self._means[comp] + np.einsum("nij,nj->ni", self._chol[comp], z)
+        return np.asarray(self._means[comp] + np.einsum("nij,nj->ni", self._chol[comp], z))
 
     # ------------------------------------------------------------------ marginals
 
@@ -334,12 +336,12 @@ class GaussianMixture:
 
     def _sigmas(self) -> np.ndarray:
         """Component standard deviations (k,) of a 1-D mixture."""
-        return np.sqrt(self._covariances[:, 0, 0])
+        return np.asarray(np.sqrt(self._covariances[:, 0, 0]))
 
     def _cdf_flat(self, x: np.ndarray) -> np.ndarray:
         """cdf at x (n,) of a 1-D mixture: ``sum_i w_i Phi((x - mu_i) / s_i)``."""
         t = (x[:, None] - self._means[:, 0]) / self._sigmas()
-        return (0.5 * _erfc(-t / math.sqrt(2.0))) @ self._weights
+        return np.asarray((0.5 * _erfc(-t / math.sqrt(2.0))) @ self._weights)
 
     def cdf(self, x: object) -> np.ndarray:
         """Cumulative distribution at x (...) (or (..., 1)) -> (...); 1-D mixtures only.
@@ -374,7 +376,7 @@ class GaussianMixture:
             x = new
             if np.all(step <= 1e-14 * (np.abs(x) + scale)):
                 break
-        return x.reshape(shape)
+        return np.asarray(x.reshape(shape))
 
     def _quantile_bracket(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) with cdf(lo) <= p <= cdf(hi): the standard normal tail bound
@@ -429,7 +431,7 @@ class GaussianMixture:
         points = np.array([self._newton_polish(p, step_tol, scale) for p in points])
         candidates = self._merge(points, tol * scale)
         keep = [self._is_local_maximum(c) for c in candidates]
-        return candidates[np.array(keep, dtype=bool)]
+        return np.asarray(candidates[np.array(keep, dtype=bool)])
 
     def n_modes(self, tol: float = 1e-4) -> int:
         """Number of distinct local maxima of the mixture density: ``len(modes(tol))``."""
@@ -481,7 +483,7 @@ class GaussianMixture:
         ``-sum_i r_i g_i`` with ``g_i = C_i^-1 (x - mu_i)``."""
         r = self._responsibilities(x[None, :])[0]
         g = np.einsum("kij,kj->ki", self._precisions, x - self._means)
-        return -(r @ g)
+        return np.asarray(-(r @ g))
 
     def _scaled_hessian(self, x: np.ndarray) -> np.ndarray:
         """Analytic Hessian of the density divided by the density at x (d,) -> (d, d):
@@ -489,7 +491,7 @@ class GaussianMixture:
         prec = self._precisions
         r = self._responsibilities(x[None, :])[0]
         g = np.einsum("kij,kj->ki", prec, x - self._means)
-        return np.einsum("k,ki,kj->ij", r, g, g) - np.einsum("k,kij->ij", r, prec)
+        return np.asarray(np.einsum("k,ki,kj->ij", r, g, g) - np.einsum("k,kij->ij", r, prec))
 
     @staticmethod
     def _negative_definite(matrix: np.ndarray) -> bool:

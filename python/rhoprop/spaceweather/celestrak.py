@@ -109,7 +109,7 @@ def _parse_fields(fields: np.ndarray, names: list[str]) -> np.ndarray:
         raise ValueError(f"space-weather record: unreadable {names[field]} field {text!r}")
     value = np.where(negative, -mantissa, mantissa) / 10.0**decimals
     value[~digits] = np.nan
-    return value
+    return np.asarray(value)
 
 
 def _fixed_width(chars: np.ndarray, spans: dict[str, tuple[int, int]]) -> dict[str, np.ndarray]:
@@ -137,7 +137,7 @@ def _dates_from_ymd(year: np.ndarray, month: np.ndarray, day: np.ndarray) -> np.
     dates = months.astype("datetime64[D]") + (d - 1)
     if (dates.astype("datetime64[M]") != months).any():
         raise ValueError("space-weather record: a row has a day beyond the end of its month")
-    return dates
+    return np.asarray(dates)
 
 
 def _txt_rows(lines: list[str]) -> np.ndarray:

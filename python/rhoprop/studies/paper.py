@@ -141,6 +141,7 @@ def method_comparison(
             progress=False,
             method=integrator,
         )
+        assert trace.densities is not None  # record_density=True
         traces[key] = (trace.times, trace.densities)
         mean_trace[key] = _mean_density(model, trace)
     return MethodComparison(results, traces, mean_trace, stds)

@@ -88,7 +88,7 @@ def ccsp_comparison_figure(self: CcspComparison, path: str | Path) -> Path:
 
 
 def _normal(x: np.ndarray, mu: float, sd: float) -> np.ndarray:
-    return np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
+    return np.asarray(np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi)))
 
 
 def days_text(seconds: float) -> str:

@@ -90,7 +90,7 @@ def _model(
         if kind == "msis":
             _unknown(entry, where, common | {"version", "space_weather"})
             sw = _space_weather(_get(entry, where, "space_weather", str, "observed"), where, cache)
-            model = Msis(_get(entry, where, "version", str, "2.1"), space_weather=sw)
+            model: DensityModel = Msis(_get(entry, where, "version", str, "2.1"), space_weather=sw)
         elif kind == "exponential":
             _unknown(entry, where, common | {"rho0", "h0", "scale_height", "rel_sigma"})
             model = Exponential(

@@ -65,6 +65,7 @@ def case_models(case: str, record: SpaceWeather | None = None) -> dict[str, Dens
         "NRLMSISE-00": Msis("00", space_weather=sw),
     }
 
+
 #: Labels of the paper's five kappa processes (the keys of ``studies.METHODS``).
 LABELS = {
     "white_10s": "White 10 s",
