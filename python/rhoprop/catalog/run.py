@@ -4,7 +4,6 @@ output epochs, locally (objects on threads) or on a Dask cluster, with decay pre
 from __future__ import annotations
 
 import os
-import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,6 +13,7 @@ from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel, altitude_band, as_atmosphere
 from ..errors import RhopropError
+from ..progress import ProgressBar
 from ..propagation import (
     Spacecraft,
     ccsp,
@@ -195,7 +195,7 @@ def _run_on_dask(
     chunks: list[list[tuple[int, CatalogObject]]],
     epochs: np.ndarray,
     cfg: dict[str, Any],
-    progress: bool,
+    bar: ProgressBar | None,
 ) -> dict[int, dict[str, Any]]:
     """Runs the chunks on a Dask cluster. The atmosphere is scattered to every worker once
     (broadcast); tasks retry twice; a chunk whose task is lost with a dying worker (or
@@ -216,8 +216,8 @@ def _run_on_dask(
                     results[i] = r
             except Exception:
                 failed.append(c)
-        if progress and sys.stderr.isatty():
-            sys.stderr.write(f"\rcatalog: {len(chunks) - len(failed)}/{len(chunks)} chunks")
+        if bar is not None:
+            bar(len(results))
         if not failed:
             return results
         pending = failed
@@ -264,7 +264,7 @@ def propagate_catalog(
             ``chunk_size``, the atmosphere is sent once and replicated to every worker
             (recomputed if a worker dies), failed tasks are retried twice; results equal
             the local run.
-        progress: print progress to stderr.
+        progress: show a progress bar (objects done) on a terminal for runs over a second.
     """
     objs = list(objects)
     if not objs:
@@ -292,6 +292,7 @@ def propagate_catalog(
     indexed = list(enumerate(objs))
     chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
     results: dict[int, dict[str, Any]] = {}
+    bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
     if client is None:
         # Objects run concurrently on threads (the core releases the GIL), each also
         # parallel over its own sigma points or members.
@@ -304,12 +305,12 @@ def propagate_catalog(
             )
             for i, r in enumerate(runs):
                 results[i] = r
-                if progress and sys.stderr.isatty() and (i + 1) % 10 == 0:
-                    sys.stderr.write(f"\rcatalog: {i + 1}/{len(objs)}")
+                if bar is not None:
+                    bar(i + 1)
     else:
-        results.update(_run_on_dask(client, shipped, chunks, epochs, cfg, progress))
-    if progress and sys.stderr.isatty():
-        sys.stderr.write("\n")
+        results.update(_run_on_dask(client, shipped, chunks, epochs, cfg, bar))
+    if bar is not None:
+        bar.close()
     order = [results[i] for i in range(len(objs))]
     decay = np.array(
         [
