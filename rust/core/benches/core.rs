@@ -1,10 +1,16 @@
-//! Criterion benches of the inner loop: one RHS evaluation and one RK8 step, for one
-//! member and for a batch of 4 lanes. Run: `cargo bench -p rhoprop-core --bench core`.
+//! Criterion benches of the core: the inner loop (one RHS evaluation and one RK8 step,
+//! for one member and for a batch of 4 lanes) and whole runs (a Monte Carlo ensemble and a
+//! CCSP filter). Run: `cargo bench -p rhoprop-core --bench core`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use rhoprop_core::ccsp::{ccsp, CcspConfig};
 use rhoprop_core::density::Exponential;
-use rhoprop_core::dynamics::{BatchRhs, Dynamics, State};
+use rhoprop_core::dynamics::{BatchRhs, Dynamics, Perturbation, State};
 use rhoprop_core::integrators::{FixedMethod, FixedStepper};
+use rhoprop_core::kappa::KappaProcess;
+use rhoprop_core::montecarlo::{monte_carlo, MonteCarloConfig};
+use rhoprop_core::problem::Problem;
+use rhoprop_core::progress::Progress;
 use std::hint::black_box;
 
 const PAPER: [f64; 6] = [
@@ -61,5 +67,59 @@ fn benches(c: &mut Criterion) {
     });
 }
 
-criterion_group!(core, benches);
+/// Whole runs on the paper's orbit and the benchmark exponential atmosphere (20 % sigma).
+fn runs(c: &mut Criterion) {
+    let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+    let problem = Problem {
+        epoch: 8.4e7,
+        y0: PAPER,
+        drag: 3.0912 * 0.0015,
+        floor_altitude: 120e3,
+    };
+
+    let mut group = c.benchmark_group("monte_carlo");
+    group.sample_size(20);
+    let mc = MonteCarloConfig {
+        problem,
+        initial_factor: None,
+        kappa: KappaProcess::GaussMarkov { half_life: 1080.0 },
+        perturbation: Perturbation::Additive,
+        method: FixedMethod::Rk8,
+        max_step: 180.0,
+        output_times: (0..=24).map(|i| i as f64 * 3600.0).collect(),
+        members: 64,
+        seed: 1,
+        record_density: false,
+    };
+    group.bench_function("exponential/64 members x 1 day", |b| {
+        b.iter(|| monte_carlo(&atm, black_box(&mc), &Progress::default()).unwrap())
+    });
+    group.finish();
+
+    let mut group = c.benchmark_group("ccsp");
+    group.sample_size(20);
+    // The paper's near-zero initial covariance: 1 mm and 1 um/s.
+    let p0: [[f64; 6]; 6] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| match (i == j, i < 3) {
+            (false, _) => 0.0,
+            (true, true) => 1e-6,
+            (true, false) => 1e-12,
+        })
+    });
+    let cfg = CcspConfig {
+        problem,
+        p0,
+        update_times: (1..=72).map(|i| i as f64 * 3600.0).collect(),
+        scaling: (3.0, 3.0),
+        perturbation: Perturbation::Additive,
+        method: FixedMethod::Rk8,
+        max_step: 180.0,
+    };
+    group.bench_function("exponential/3 days, hourly updates", |b| {
+        b.iter(|| ccsp(&atm, black_box(&cfg), &Progress::default()).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(core, benches, runs);
 criterion_main!(core);

@@ -6,24 +6,29 @@
 
 use rhoprop_core::density::Exponential;
 use rhoprop_core::dynamics::Perturbation;
-use rhoprop_core::ensemble::{monte_carlo, MonteCarloConfig, Progress};
 use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::kappa::KappaProcess;
+use rhoprop_core::montecarlo::{monte_carlo, MonteCarloConfig};
+use rhoprop_core::problem::Problem;
+use rhoprop_core::progress::Progress;
 
 fn main() {
     let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).expect("valid atmosphere");
     let members = 64;
     let cfg = MonteCarloConfig {
-        epoch: 8.4e7,
-        y0: [
-            3782900.7032,
-            -5441600.6779,
-            -1420075.1327,
-            -606.66,
-            1539.2559,
-            -7488.3946,
-        ],
-        drag: 3.0912 * 0.0015,
+        problem: Problem {
+            epoch: 8.4e7,
+            y0: [
+                3782900.7032,
+                -5441600.6779,
+                -1420075.1327,
+                -606.66,
+                1539.2559,
+                -7488.3946,
+            ],
+            drag: 3.0912 * 0.0015,
+            floor_altitude: 120e3,
+        },
         initial_factor: None,
         kappa: KappaProcess::Constant,
         perturbation: Perturbation::Additive,
@@ -32,7 +37,6 @@ fn main() {
         output_times: vec![86400.0],
         members,
         seed: 1,
-        floor_altitude: 120e3,
         record_density: false,
     };
     let out = monte_carlo(&atm, &cfg, &Progress::default()).expect("run");

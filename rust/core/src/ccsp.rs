@@ -13,23 +13,20 @@
 
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
-use crate::ensemble::LANES;
 use crate::error::{finite, positive, CoreError};
-use crate::integrators::{integrate_fixed, Control, FixedMethod};
+use crate::integrators::{drive, FixedMethod, StepPlan};
 use crate::kappa::KappaLanes;
-use crate::propagate::check_state;
+use crate::problem::Problem;
+use crate::progress::Progress;
+use crate::simd::{dispatch, Kernel, LANES};
 use nalgebra::{Cholesky, Matrix6, SMatrix, Vector6};
 use rayon::prelude::*;
 
 /// Settings of a CCSP run.
 #[derive(Debug, Clone)]
 pub struct CcspConfig {
-    /// Epoch, seconds since J2000.
-    pub epoch: f64,
-    /// Initial mean state (m, m/s).
-    pub y0: [f64; 6],
-    /// Drag parameter Cd*A/m, m^2/kg.
-    pub drag: f64,
+    /// Epoch, initial mean state, drag parameter and decay floor.
+    pub problem: Problem,
     /// Initial 6x6 state covariance (row-major), positive definite.
     pub p0: [[f64; 6]; 6],
     /// Update times, s from the epoch: increasing, > 0; the last is the end.
@@ -40,7 +37,6 @@ pub struct CcspConfig {
     pub method: FixedMethod,
     /// Largest integration step, s.
     pub max_step: f64,
-    pub floor_altitude: f64,
 }
 
 /// Mean, covariance and state-kappa cross-covariance at every update time.
@@ -85,13 +81,14 @@ pub fn factor(
     Ok(s)
 }
 
-/// Runs the filter.
+/// Runs the filter. `progress.done` counts the updates done; setting `progress.cancel`
+/// stops the run at the next update or batch of sigma points.
 pub fn ccsp<A: Atmosphere + ?Sized>(
     atmosphere: &A,
     cfg: &CcspConfig,
+    progress: &Progress,
 ) -> Result<CcspOutput, CoreError> {
-    finite("epoch", cfg.epoch)?;
-    positive("drag parameter Cd*A/m", cfg.drag)?;
+    cfg.problem.validate()?;
     crate::integrators::check_times("update times", 0.0, &cfg.update_times)?;
     if cfg.update_times.windows(2).any(|w| w[1] <= w[0]) || cfg.update_times[0] <= 0.0 {
         return Err(CoreError::invalid(
@@ -103,7 +100,6 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
     positive("step", cfg.max_step)?;
     positive("scaling[0] (lambda1 + n)", cfg.scaling.0)?;
     positive("scaling[1] (lambda2 + p)", cfg.scaling.1)?;
-    check_state(cfg.epoch, &cfg.y0, cfg.floor_altitude)?;
     let (l1, l2) = cfg.scaling;
     // UKF weights: w0 = lambda / (n + lambda), wi = 1 / (2 (n + lambda)).
     let (w0, wi) = ((l1 - N as f64) / l1, 0.5 / l1);
@@ -122,17 +118,19 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
             "must be symmetric",
         ));
     }
-    let mut mean = Vector6::from_column_slice(&cfg.y0);
+    let y0 = cfg.problem.y0;
+    let mut mean = Vector6::from_column_slice(&y0);
     let mut p = p0;
     let mut c = Vector6::zeros();
     let mut out = CcspOutput {
         times: vec![0.0],
-        means: vec![cfg.y0],
+        means: vec![y0],
         covariances: vec![cfg.p0],
         cross: vec![[0.0; 6]],
     };
     let mut t = 0.0;
     for &t1 in &cfg.update_times {
+        progress.check()?;
         let s = factor(&p, &c, l1, l2, t)?;
         // Sigma points [state; kappa] around the mean (kappa mean 0).
         let mut points = [[0.0f64; 7]; POINTS];
@@ -149,7 +147,7 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
                 pt[i] = base + col.map_or(0.0, |j| sign * s[(i, j)]);
             }
         }
-        let ends = propagate_points(atmosphere, cfg, &points, t, t1)?;
+        let ends = propagate_points(atmosphere, cfg, &points, t, t1, progress)?;
         // Set 1 (state points): mean and covariance.
         let m1: Vector6<f64> = (0..13).map(|k| weight(k, w0, wi) * ends[k]).sum();
         let mut p1 = Matrix6::zeros();
@@ -182,6 +180,7 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
         out.covariances
             .push(std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])));
         out.cross.push(std::array::from_fn(|i| c[i]));
+        progress.add(1);
     }
     Ok(out)
 }
@@ -202,39 +201,64 @@ fn propagate_points<A: Atmosphere + ?Sized>(
     points: &[[f64; 7]; POINTS],
     t0: f64,
     t1: f64,
+    progress: &Progress,
 ) -> Result<Vec<Vector6<f64>>, CoreError> {
+    let plan = StepPlan::equal_steps(t0, &[t1], cfg.max_step)?;
     let batches: Vec<Vec<Vector6<f64>>> = points
         .par_chunks(LANES)
         .map(|chunk| {
-            let lanes = chunk.len();
-            let mut y: State<LANES> = [[0.0; LANES]; 6];
-            let mut kappa = KappaLanes::<LANES>::zero();
-            for l in 0..LANES {
-                let pt = chunk[l.min(lanes - 1)];
-                for c in 0..6 {
-                    y[c][l] = pt[c];
-                }
-                kappa.k0[l] = pt[6];
-            }
-            let mut dynamics = Dynamics::<A, LANES>::new(atmosphere, cfg.epoch, [cfg.drag; LANES]);
-            dynamics.perturbation = cfg.perturbation;
-            dynamics.kappa = kappa;
-            integrate_fixed(
-                cfg.method,
-                &mut dynamics,
-                t0,
-                &mut y,
-                cfg.max_step,
-                &[t1],
-                |_, _| {},
-                |_, _| Control::Continue,
-            )?;
-            Ok((0..lanes)
-                .map(|l| Vector6::from_fn(|c, _| y[c][l]))
-                .collect())
+            progress.check()?;
+            dispatch(SigmaBatch {
+                atmosphere,
+                cfg,
+                chunk,
+                plan: &plan,
+            })
         })
         .collect::<Result<_, CoreError>>()?;
     Ok(batches.into_iter().flatten().collect())
+}
+
+/// Up to `LANES` sigma points [state; kappa] stepped together through `plan` (unused lanes
+/// repeat the last point and are discarded).
+struct SigmaBatch<'a, A: ?Sized> {
+    atmosphere: &'a A,
+    cfg: &'a CcspConfig,
+    chunk: &'a [[f64; 7]],
+    plan: &'a StepPlan,
+}
+
+impl<A: Atmosphere + ?Sized> Kernel for SigmaBatch<'_, A> {
+    type Output = Result<Vec<Vector6<f64>>, CoreError>;
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let SigmaBatch {
+            atmosphere,
+            cfg,
+            chunk,
+            plan,
+        } = self;
+        let lanes = chunk.len();
+        let mut y: State<LANES> = [[0.0; LANES]; 6];
+        let mut kappa = KappaLanes::<LANES>::zero();
+        for l in 0..LANES {
+            let pt = chunk[l.min(lanes - 1)];
+            for c in 0..6 {
+                y[c][l] = pt[c];
+            }
+            kappa.k0[l] = pt[6];
+        }
+        let problem = &cfg.problem;
+        let mut dynamics =
+            Dynamics::<A, LANES>::new(atmosphere, problem.epoch, [problem.drag; LANES]);
+        dynamics.perturbation = cfg.perturbation;
+        dynamics.kappa = kappa;
+        drive(cfg.method, &mut dynamics, &mut y, plan, &mut ())?;
+        Ok((0..lanes)
+            .map(|l| Vector6::from_fn(|c, _| y[c][l]))
+            .collect())
+    }
 }
 
 #[cfg(test)]
@@ -268,5 +292,45 @@ mod tests {
         let p = Matrix6::from_diagonal(&Vector6::new(1.0, 1.0, 1.0, 1.0, 1.0, -1.0));
         let e = factor(&p, &Vector6::zeros(), 3.0, 3.0, 7200.0).unwrap_err();
         assert!(e.to_string().contains("t = 7200 s"), "{e}");
+    }
+
+    #[test]
+    fn cancel_stops_the_run() {
+        use crate::density::Exponential;
+        use std::sync::atomic::Ordering;
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        let mut p0 = [[0.0; 6]; 6];
+        for i in 0..6 {
+            p0[i][i] = if i < 3 { 1e-6 } else { 1e-12 };
+        }
+        let cfg = CcspConfig {
+            problem: Problem {
+                epoch: 8.4e7,
+                y0: [
+                    3782900.7032,
+                    -5441600.6779,
+                    -1420075.1327,
+                    -606.6600,
+                    1539.2559,
+                    -7488.3946,
+                ],
+                drag: 3.0912 * 0.0015,
+                floor_altitude: 120e3,
+            },
+            p0,
+            update_times: vec![3600.0, 7200.0],
+            scaling: (3.0, 3.0),
+            perturbation: Perturbation::Additive,
+            method: FixedMethod::Rk8,
+            max_step: 180.0,
+        };
+        let p = Progress::default();
+        p.cancel.store(true, Ordering::Relaxed);
+        assert_eq!(ccsp(&atm, &cfg, &p).unwrap_err(), CoreError::Cancelled);
+        // Not cancelled: every update is counted.
+        let p = Progress::default();
+        let out = ccsp(&atm, &cfg, &p).unwrap();
+        assert_eq!(out.times, vec![0.0, 3600.0, 7200.0]);
+        assert_eq!(p.done.load(Ordering::Relaxed), 2);
     }
 }

@@ -8,6 +8,8 @@ pub const R_EARTH: f64 = 6378137.0;
 pub const J2: f64 = 1.08262668e-3;
 /// WGS-84 flattening.
 pub const WGS84_F: f64 = 1.0 / 298.257223563;
+/// WGS-84 polar radius (semi-minor axis), m.
+pub const R_POLE: f64 = R_EARTH * (1.0 - WGS84_F);
 /// Earth rotation rate used for the co-rotating atmosphere, rad/s.
 pub const OMEGA_EARTH: f64 = 7.292115e-5;
 /// Seconds per day.
@@ -24,5 +26,6 @@ mod tests {
         assert_eq!(J2, 1.08262668e-3);
         assert_eq!(1.0 / WGS84_F, 298.257223563);
         assert_eq!(OMEGA_EARTH, 7.292115e-5);
+        assert!((R_POLE - 6_356_752.314245).abs() < 1e-6);
     }
 }

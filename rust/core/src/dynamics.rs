@@ -58,11 +58,6 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             evaluations: 0,
         }
     }
-
-    /// Epoch of t = 0, seconds since J2000.
-    pub fn epoch(&self) -> f64 {
-        self.epoch
-    }
 }
 
 impl<A: Atmosphere + ?Sized, const W: usize> Dynamics<'_, A, W> {

@@ -16,6 +16,13 @@ pub enum CoreError {
         value: f64,
         reason: String,
     },
+    /// A name that is not one of the known choices.
+    #[error("unknown {what} {name:?}; expected one of {}", .expected.join(", "))]
+    UnknownName {
+        what: &'static str,
+        name: String,
+        expected: &'static [&'static str],
+    },
     /// An array has the wrong length or shape.
     #[error("{name} has the wrong shape: {reason}")]
     Shape { name: String, reason: String },

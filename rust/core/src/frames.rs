@@ -2,12 +2,11 @@
 //! polar motion neglected per the design contract), Earth-fixed <-> geodetic WGS-84, and
 //! the RTN frame of a reference orbit.
 
-use crate::constants::{R_EARTH, WGS84_F};
+use crate::constants::{R_EARTH, R_POLE, WGS84_F};
+use crate::time::gmst;
 
 /// WGS-84 first eccentricity squared.
 pub const WGS84_E2: f64 = WGS84_F * (2.0 - WGS84_F);
-/// WGS-84 semi-minor axis, m.
-pub const WGS84_B: f64 = R_EARTH * (1.0 - WGS84_F);
 
 /// Rotation from the inertial to the Earth-fixed frame at one instant, kept as the
 /// cosine and sine of the Earth rotation angle so that many positions share one trig call.
@@ -60,7 +59,7 @@ pub struct Geodetic {
 #[inline]
 pub fn geodetic(r: [f64; 3]) -> Geodetic {
     let a = R_EARTH;
-    let b = WGS84_B;
+    let b = R_POLE;
     let e2 = WGS84_E2;
     let ep2 = (a * a - b * b) / (b * b);
     let [x, y, z] = r;
@@ -87,6 +86,12 @@ pub fn geodetic(r: [f64; 3]) -> Geodetic {
         lon: y.atan2(x),
         alt: u * (1.0 - b * b / (a * v)),
     }
+}
+
+/// Geodetic altitude (m) of an inertial position `r` (m) at `ut1` seconds since J2000:
+/// the decay test of every run and the check of every initial state.
+pub fn altitude(ut1: f64, r: [f64; 3]) -> f64 {
+    geodetic(EarthRotation::new(gmst(ut1)).to_fixed(r)).alt
 }
 
 /// Geodetic WGS-84 (rad, rad, m) -> Earth-fixed Cartesian, m.
@@ -160,7 +165,7 @@ mod tests {
             eq.lat.abs() < 1e-15 && (eq.alt - 400e3).abs() < 1e-6,
             "{eq:?}"
         );
-        let pole = geodetic([0.0, 0.0, WGS84_B + 400e3]);
+        let pole = geodetic([0.0, 0.0, R_POLE + 400e3]);
         assert!((pole.lat - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!((pole.alt - 400e3).abs() < 1e-6, "{pole:?}");
     }

@@ -22,6 +22,38 @@ pub enum KappaProcess {
 }
 
 impl KappaProcess {
+    /// Names of the kinds for [`KappaProcess::from_spec`], as the Python API and scenario
+    /// files spell them.
+    pub const KINDS: [&'static str; 5] = [
+        "white",
+        "interpolated",
+        "gauss_markov",
+        "constant",
+        "piecewise_constant",
+    ];
+
+    /// The process named `kind` (one of [`KappaProcess::KINDS`]) with parameters `a`
+    /// (step, interval or half-life, s) and `b` (correlation of "piecewise_constant").
+    pub fn from_spec(kind: &str, a: f64, b: f64) -> Result<Self, CoreError> {
+        Ok(match kind {
+            "white" => Self::White { step: a },
+            "interpolated" => Self::Interpolated { interval: a },
+            "gauss_markov" => Self::GaussMarkov { half_life: a },
+            "constant" => Self::Constant,
+            "piecewise_constant" => Self::PiecewiseConstant {
+                interval: a,
+                correlation: b,
+            },
+            other => {
+                return Err(CoreError::UnknownName {
+                    what: "kappa process",
+                    name: other.to_string(),
+                    expected: &Self::KINDS,
+                })
+            }
+        })
+    }
+
     /// Validates the parameters.
     pub fn check(&self) -> Result<(), CoreError> {
         match *self {
@@ -180,6 +212,23 @@ mod tests {
         let s = KappaProcess::White { step: 600.0 }.integration_step(180.0);
         assert_eq!(s, 150.0);
         assert_eq!(KappaProcess::Constant.integration_step(180.0), 180.0);
+    }
+
+    #[test]
+    fn every_kind_name_parses() {
+        for kind in KappaProcess::KINDS {
+            assert!(KappaProcess::from_spec(kind, 60.0, 0.5).is_ok(), "{kind}");
+        }
+        assert_eq!(
+            KappaProcess::from_spec("gauss_markov", 1080.0, 0.0).unwrap(),
+            KappaProcess::GaussMarkov { half_life: 1080.0 }
+        );
+        let e = KappaProcess::from_spec("brownian", 1.0, 0.0).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("unknown kappa process \"brownian\"; expected one of white,"),
+            "{e}"
+        );
     }
 
     #[test]

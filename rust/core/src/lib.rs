@@ -1,10 +1,20 @@
 //! rhoprop-core: the numerical core of rhoprop.
 //!
 //! Pure Rust, no Python. Orbit propagation (two-body + J2 + drag) of batches of members
-//! held structure-of-arrays, with the thermospheric density given by an [`density::Atmosphere`]
-//! that answers mean and standard deviation. The modules follow the data flow:
-//! [`constants`] -> [`time`] -> [`frames`] -> [`density`] -> [`dynamics`] ->
-//! [`integrators`] -> [`propagate`].
+//! held structure-of-arrays, with the thermospheric density given by an
+//! [`density::Atmosphere`] that answers mean and standard deviation. The modules follow
+//! the data flow:
+//!
+//! - [`constants`], [`time`], [`frames`]: the physical and geometric base;
+//! - [`density`]: where the density comes from (analytic or a sampled field);
+//! - [`problem`]: the initial-value problem every run starts from, validated once;
+//! - [`kappa`], [`rng`]: the stochastic density offset and its per-member streams;
+//! - [`dynamics`]: the one right-hand side every integrator, member and sigma point uses;
+//! - [`integrators`]: fixed-step RK4/RK8 through one step loop, adaptive DOP853;
+//! - [`simd`]: the batch lane width and the runtime instruction-set dispatch;
+//! - [`progress`]: progress and cancellation of long calls;
+//! - [`propagate`], [`montecarlo`], [`ccsp`]: the three runs the binding exposes;
+//! - [`error`]: what can go wrong, with messages fit for the user.
 
 // Structure-of-arrays lane loops index several arrays in lockstep; iterator rewrites of
 // them read worse and vectorise no better.
@@ -14,13 +24,16 @@ pub mod ccsp;
 pub mod constants;
 pub mod density;
 pub mod dynamics;
-pub mod ensemble;
 pub mod error;
 pub mod frames;
 pub mod integrators;
 pub mod kappa;
+pub mod montecarlo;
+pub mod problem;
+pub mod progress;
 pub mod propagate;
 pub mod rng;
+pub mod simd;
 pub mod time;
 
 pub use error::CoreError;

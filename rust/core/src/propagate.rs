@@ -3,15 +3,13 @@
 
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, State};
-use crate::error::{finite, positive, CoreError};
-use crate::frames::{geodetic, EarthRotation};
+use crate::frames::altitude;
 use crate::integrators::{
-    integrate_adaptive, integrate_fixed, AdaptiveOptions, Control, FixedMethod, Outcome,
+    drive, integrate_adaptive, AdaptiveOptions, Control, FixedMethod, Outcome, StepHooks, StepPlan,
 };
-use crate::time::gmst;
-
-/// Default floor altitude below which an object counts as decayed, m.
-pub const DEFAULT_FLOOR_ALTITUDE: f64 = 120e3;
+use crate::problem::Problem;
+use crate::progress::Progress;
+use crate::CoreError;
 
 /// Integration method of a propagation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,68 +37,51 @@ pub struct Trajectory {
     pub clipped: u64,
 }
 
-/// Geodetic altitude of an inertial position at `ut1` seconds since J2000, m.
-pub fn altitude(ut1: f64, r: [f64; 3]) -> f64 {
-    geodetic(EarthRotation::new(gmst(ut1)).to_fixed(r)).alt
+/// Collects the states, stops below the floor, honours cancellation.
+struct Observer<'p> {
+    epoch: f64,
+    floor: f64,
+    progress: &'p Progress,
+    states: Vec<[f64; 6]>,
 }
 
-/// Checks an initial state: finite, and above the floor altitude.
-pub fn check_state(epoch: f64, y0: &[f64; 6], floor: f64) -> Result<(), CoreError> {
-    const NAMES: [&str; 6] = [
-        "position[0]",
-        "position[1]",
-        "position[2]",
-        "velocity[0]",
-        "velocity[1]",
-        "velocity[2]",
-    ];
-    for (name, &v) in NAMES.iter().zip(y0) {
-        finite(name, v)?;
+impl<R> StepHooks<1, R> for Observer<'_> {
+    fn after_step(&mut self, t: f64, y: &mut State<1>, _: &mut R) -> Result<Control, CoreError> {
+        self.progress.check()?;
+        Ok(
+            if altitude(self.epoch + t, [y[0][0], y[1][0], y[2][0]]) < self.floor {
+                Control::Stop
+            } else {
+                Control::Continue
+            },
+        )
     }
-    let alt = altitude(epoch, [y0[0], y0[1], y0[2]]);
-    if alt < 0.0 {
-        return Err(CoreError::invalid(
-            "initial position",
-            alt,
-            "is below the Earth's surface (value is the geodetic altitude in m)",
-        ));
+
+    fn on_output(&mut self, _: usize, _: f64, y: &State<1>, _: &R) -> Result<(), CoreError> {
+        self.states.push(y.map(|c| c[0]));
+        self.progress.add(1);
+        Ok(())
     }
-    if alt < floor {
-        return Err(CoreError::invalid(
-            "initial position",
-            alt,
-            format!("is below the decay floor altitude of {floor} m (value is the geodetic altitude in m)"),
-        ));
-    }
-    Ok(())
 }
 
-/// Propagates `y0` at `epoch` (seconds since J2000) with drag parameter `drag` = Cd*A/m
-/// (m^2/kg) through the increasing `output_times` (s from the epoch, >= 0).
+/// Propagates `problem` through the increasing `output_times` (s from the epoch, >= 0; or
+/// all <= 0 to go backwards with a fixed-step method). `progress.done` counts the output
+/// times reached; setting `progress.cancel` stops the run after the current step.
 pub fn propagate<A: Atmosphere + ?Sized>(
     atmosphere: &A,
-    epoch: f64,
-    y0: [f64; 6],
-    drag: f64,
+    problem: &Problem,
     output_times: &[f64],
     method: Method,
-    floor_altitude: f64,
+    progress: &Progress,
 ) -> Result<Trajectory, CoreError> {
-    finite("epoch", epoch)?;
-    positive("drag parameter Cd*A/m", drag)?;
-    finite("floor_altitude", floor_altitude)?;
-    check_state(epoch, &y0, floor_altitude)?;
-
-    let mut dynamics = Dynamics::<A, 1>::new(atmosphere, epoch, [drag]);
-    let y: State<1> = y0.map(|c| [c]);
-    let mut states = Vec::with_capacity(output_times.len());
-    let on_output = |_: usize, y: &State<1>| states.push(y.map(|c| c[0]));
-    let after_step = |t: f64, y: &State<1>| {
-        if altitude(epoch + t, [y[0][0], y[1][0], y[2][0]]) < floor_altitude {
-            Control::Stop
-        } else {
-            Control::Continue
-        }
+    problem.validate()?;
+    let mut dynamics = Dynamics::<A, 1>::new(atmosphere, problem.epoch, [problem.drag]);
+    let mut y: State<1> = problem.y0.map(|c| [c]);
+    let mut observer = Observer {
+        epoch: problem.epoch,
+        floor: problem.floor_altitude,
+        progress,
+        states: Vec::with_capacity(output_times.len()),
     };
     let outcome = match method {
         Method::Rk4 { step } | Method::Rk8 { step } => {
@@ -109,32 +90,18 @@ pub fn propagate<A: Atmosphere + ?Sized>(
             } else {
                 FixedMethod::Rk8
             };
-            let mut y = y;
-            integrate_fixed(
-                scheme,
-                &mut dynamics,
-                0.0,
-                &mut y,
-                step,
-                output_times,
-                on_output,
-                after_step,
-            )?
+            let plan = StepPlan::equal_steps(0.0, output_times, step)?;
+            drive(scheme, &mut dynamics, &mut y, &plan, &mut observer)?
         }
-        Method::Dop853(opts) => integrate_adaptive(
-            &mut dynamics,
-            0.0,
-            &y,
-            output_times,
-            opts,
-            on_output,
-            after_step,
-        )?,
+        Method::Dop853(opts) => {
+            integrate_adaptive(&mut dynamics, 0.0, &y, output_times, opts, &mut observer)?
+        }
     };
     let decayed_at = match outcome {
         Outcome::Completed => None,
         Outcome::Stopped { t } => Some(t),
     };
+    let states = observer.states;
     let times = output_times[..states.len()].to_vec();
     Ok(Trajectory {
         times,
@@ -150,6 +117,27 @@ mod tests {
     use super::*;
     use crate::constants::{J2, MU, R_EARTH};
     use crate::density::Exponential;
+    use crate::problem::DEFAULT_FLOOR_ALTITUDE;
+    use std::sync::atomic::Ordering;
+
+    /// `propagate` with the problem spelled out and no cancellation.
+    fn run(
+        atm: &Exponential,
+        epoch: f64,
+        y0: [f64; 6],
+        drag: f64,
+        times: &[f64],
+        method: Method,
+        floor_altitude: f64,
+    ) -> Result<Trajectory, CoreError> {
+        let problem = Problem {
+            epoch,
+            y0,
+            drag,
+            floor_altitude,
+        };
+        propagate(atm, &problem, times, method, &Progress::default())
+    }
 
     /// The paper's initial state (DESIGN.md section 7).
     const PAPER: [f64; 6] = [
@@ -167,7 +155,7 @@ mod tests {
     }
 
     fn end_position(method: Method, atm: &Exponential, drag: f64) -> [f64; 3] {
-        let tr = propagate(
+        let tr = run(
             atm,
             0.0,
             PAPER,
@@ -221,7 +209,7 @@ mod tests {
         // E = v^2/2 - mu/r + mu J2 Re^2 (3 z^2/r^2 - 1) / (2 r^3) and h_z are constants.
         let atm = paper_atmosphere();
         let times: Vec<f64> = (0..=72).map(|i| i as f64 * 3600.0).collect();
-        let tr = propagate(
+        let tr = run(
             &atm,
             0.0,
             PAPER,
@@ -259,7 +247,7 @@ mod tests {
         // A very dense atmosphere brings the object down within hours.
         let atm = Exponential::new(1e-9, 400e3, 58.515e3, 0.0).unwrap();
         let times: Vec<f64> = (0..=72).map(|i| i as f64 * 3600.0).collect();
-        let tr = propagate(
+        let tr = run(
             &atm,
             0.0,
             PAPER,
@@ -281,8 +269,8 @@ mod tests {
         // state comes back within a centimetre (RK8 at 180 s: ~1 mm each way).
         let atm = paper_atmosphere();
         let m = Method::Rk8 { step: 180.0 };
-        let fwd = propagate(&atm, 0.0, PAPER, DRAG, &[28800.0], m, 120e3).unwrap();
-        let back = propagate(&atm, 28800.0, fwd.states[0], DRAG, &[-28800.0], m, 120e3).unwrap();
+        let fwd = run(&atm, 0.0, PAPER, DRAG, &[28800.0], m, 120e3).unwrap();
+        let back = run(&atm, 28800.0, fwd.states[0], DRAG, &[-28800.0], m, 120e3).unwrap();
         let d = distance(
             [back.states[0][0], back.states[0][1], back.states[0][2]],
             [PAPER[0], PAPER[1], PAPER[2]],
@@ -296,9 +284,9 @@ mod tests {
         let m = Method::Rk8 { step: 180.0 };
         let mut nan = PAPER;
         nan[4] = f64::NAN;
-        let e = propagate(&atm, 0.0, nan, DRAG, &[10.0], m, 120e3).unwrap_err();
+        let e = run(&atm, 0.0, nan, DRAG, &[10.0], m, 120e3).unwrap_err();
         assert!(e.to_string().contains("velocity[1]"), "{e}");
-        let e = propagate(
+        let e = run(
             &atm,
             0.0,
             [1e6, 0.0, 0.0, 0.0, 7e3, 0.0],
@@ -309,9 +297,9 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("below the Earth's surface"), "{e}");
-        assert!(propagate(&atm, 0.0, PAPER, 0.0, &[10.0], m, 120e3).is_err());
-        assert!(propagate(&atm, 0.0, PAPER, DRAG, &[-10.0, 5.0], m, 120e3).is_err());
-        assert!(propagate(
+        assert!(run(&atm, 0.0, PAPER, 0.0, &[10.0], m, 120e3).is_err());
+        assert!(run(&atm, 0.0, PAPER, DRAG, &[-10.0, 5.0], m, 120e3).is_err());
+        assert!(run(
             &atm,
             0.0,
             PAPER,
@@ -321,5 +309,36 @@ mod tests {
             120e3
         )
         .is_err());
+    }
+
+    #[test]
+    fn cancel_stops_the_run() {
+        let atm = paper_atmosphere();
+        let problem = Problem {
+            epoch: 0.0,
+            y0: PAPER,
+            drag: DRAG,
+            floor_altitude: DEFAULT_FLOOR_ALTITUDE,
+        };
+        let p = Progress::default();
+        p.cancel.store(true, Ordering::Relaxed);
+        for m in [
+            Method::Rk8 { step: 180.0 },
+            Method::Dop853(AdaptiveOptions::default()),
+        ] {
+            let e = propagate(&atm, &problem, &[0.0, 3600.0], m, &p).unwrap_err();
+            assert_eq!(e, CoreError::Cancelled);
+        }
+        // Not cancelled: every output reached is counted.
+        let p = Progress::default();
+        propagate(
+            &atm,
+            &problem,
+            &[0.0, 3600.0, 7200.0],
+            Method::Rk8 { step: 180.0 },
+            &p,
+        )
+        .unwrap();
+        assert_eq!(p.done.load(Ordering::Relaxed), 3);
     }
 }

@@ -1,15 +1,15 @@
 //! `ccsp`: the consider-covariance sigma-point filter.
 
 use crate::arrays::fixed;
-use crate::density::AtmosphereRef;
-use crate::detach::detached_with_progress;
+use crate::density::{with_atmosphere, AtmosphereRef};
+use crate::long_call::long_call;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rhoprop_core::ccsp::{ccsp as core_ccsp, CcspConfig};
-use rhoprop_core::density::GriddedField;
 use rhoprop_core::integrators::FixedMethod;
+use rhoprop_core::problem::Problem;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
 /// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), nt = updates + 1.
@@ -34,20 +34,21 @@ pub fn ccsp<'py>(
     let perturbation = crate::arrays::perturbation(perturbation)?;
     let p0 = crate::arrays::matrix6("initial_covariance", &initial_covariance)?;
     let cfg = CcspConfig {
-        epoch,
-        y0: fixed::<6>("state", &state)?,
-        drag,
+        problem: Problem {
+            epoch,
+            y0: fixed::<6>("state", &state)?,
+            drag,
+            floor_altitude,
+        },
         p0,
         update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),
         scaling,
         perturbation,
         method: FixedMethod::Rk8,
         max_step: step,
-        floor_altitude,
     };
-    let out = detached_with_progress(py, None, |_| match &atm {
-        AtmosphereRef::Exponential(e) => core_ccsp(e, &cfg),
-        AtmosphereRef::Gridded(g) => core_ccsp::<GriddedField>(g, &cfg),
+    let out = long_call(py, None, |progress| {
+        with_atmosphere!(&atm, |a| core_ccsp(a, &cfg, progress))
     })?;
     let nt = out.times.len();
     let dict = PyDict::new(py);

@@ -130,6 +130,24 @@ fn mean_sigma_at<'py, A: Atmosphere + ?Sized>(
     Ok((mean.into_pyarray(py), sigma.into_pyarray(py)))
 }
 
+/// Runs `$body` with `$a` bound to the core atmosphere behind an `&AtmosphereRef`, the
+/// body compiled once per atmosphere type so that the density call inlines into the RHS.
+macro_rules! with_atmosphere {
+    ($atm:expr, |$a:ident| $body:expr) => {
+        match $atm {
+            $crate::density::AtmosphereRef::Exponential(e) => {
+                let $a: &::rhoprop_core::density::Exponential = e;
+                $body
+            }
+            $crate::density::AtmosphereRef::Gridded(g) => {
+                let $a: &::rhoprop_core::density::GriddedField = g;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_atmosphere;
+
 /// A density source extracted from any of the Python atmosphere classes.
 pub enum AtmosphereRef {
     Exponential(Exponential),

@@ -4,10 +4,11 @@
 
 mod arrays;
 mod ccsp;
+mod constants;
 mod density;
-mod detach;
 mod errors;
 mod frames;
+mod long_call;
 mod montecarlo;
 mod propagation;
 
@@ -35,9 +36,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::rtn_basis, m)?)?;
-    m.add(
-        "DEFAULT_FLOOR_ALTITUDE",
-        rhoprop_core::propagate::DEFAULT_FLOOR_ALTITUDE,
-    )?;
+    constants::register(m)?;
     Ok(())
 }

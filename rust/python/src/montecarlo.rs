@@ -1,36 +1,18 @@
 //! `monte_carlo`: the ensemble run.
 
 use crate::arrays::{fixed, vector};
-use crate::density::AtmosphereRef;
-use crate::detach::detached_with_progress;
+use crate::density::{with_atmosphere, AtmosphereRef};
+use crate::errors::to_py;
+use crate::long_call::long_call;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rhoprop_core::density::GriddedField;
-use rhoprop_core::ensemble::{covariance_factor, monte_carlo as core_mc, MonteCarloConfig};
 use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::kappa::KappaProcess;
-
-/// Kappa process from its Python spec (kind, a, b).
-pub fn kappa_from_spec(kind: &str, a: f64, b: f64) -> PyResult<KappaProcess> {
-    Ok(match kind {
-        "white" => KappaProcess::White { step: a },
-        "interpolated" => KappaProcess::Interpolated { interval: a },
-        "gauss_markov" => KappaProcess::GaussMarkov { half_life: a },
-        "constant" => KappaProcess::Constant,
-        "piecewise_constant" => KappaProcess::PiecewiseConstant {
-            interval: a,
-            correlation: b,
-        },
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown kappa process {other:?}"
-            )))
-        }
-    })
-}
+use rhoprop_core::montecarlo::{covariance_factor, monte_carlo as core_mc, MonteCarloConfig};
+use rhoprop_core::problem::Problem;
 
 /// Runs a Monte Carlo ensemble; see `rhoprop.monte_carlo` for the documented API.
 /// Returns a dict of arrays: positions/velocities (n, nt, 3), densities (n, nt) or None,
@@ -72,23 +54,24 @@ pub fn monte_carlo<'py>(
     let initial_factor = match initial_covariance {
         None => None,
         Some(c) => Some(
-            covariance_factor(&crate::arrays::matrix6("initial_covariance", &c)?)
-                .map_err(crate::errors::to_py)?,
+            covariance_factor(&crate::arrays::matrix6("initial_covariance", &c)?).map_err(to_py)?,
         ),
     };
     let cfg = MonteCarloConfig {
-        epoch,
-        y0: fixed::<6>("state", &state)?,
-        drag,
+        problem: Problem {
+            epoch,
+            y0: fixed::<6>("state", &state)?,
+            drag,
+            floor_altitude,
+        },
         initial_factor,
-        kappa: kappa_from_spec(&kappa.0, kappa.1, kappa.2)?,
+        kappa: KappaProcess::from_spec(&kappa.0, kappa.1, kappa.2).map_err(to_py)?,
         perturbation,
         method,
         max_step: step,
         output_times: vector("output_times", &output_times)?.to_vec(),
         members,
         seed,
-        floor_altitude,
         record_density,
     };
     let pool = match threads {
@@ -101,11 +84,8 @@ pub fn monte_carlo<'py>(
         ),
         None => None,
     };
-    let out = detached_with_progress(py, progress, |p| {
-        let run = || match &atm {
-            AtmosphereRef::Exponential(e) => core_mc(e, &cfg, p),
-            AtmosphereRef::Gridded(g) => core_mc::<GriddedField>(g, &cfg, p),
-        };
+    let out = long_call(py, progress, |p| {
+        let run = || with_atmosphere!(&atm, |a| core_mc(a, &cfg, p));
         match &pool {
             Some(pool) => pool.install(run),
             None => run(),

@@ -1,13 +1,13 @@
 //! `propagate`: one deterministic trajectory.
 
 use crate::arrays::{fixed, from_rows, from_vec, vector};
-use crate::density::AtmosphereRef;
-use crate::detach::detached;
+use crate::density::{with_atmosphere, AtmosphereRef};
+use crate::long_call::long_call;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use rhoprop_core::density::GriddedField;
 use rhoprop_core::integrators::AdaptiveOptions;
+use rhoprop_core::problem::Problem;
 use rhoprop_core::propagate::{propagate as core_propagate, Method, Trajectory};
 
 /// Result tuple: (times (n,), states (n, 6), decayed_at or None, rhs evaluations, clipped).
@@ -36,7 +36,12 @@ pub fn propagate<'py>(
     floor_altitude: f64,
 ) -> PyResult<PropagateOut<'py>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
-    let y0 = fixed::<6>("state", &state)?;
+    let problem = Problem {
+        epoch,
+        y0: fixed::<6>("state", &state)?,
+        drag,
+        floor_altitude,
+    };
     let outputs = vector("output_times", &output_times)?.to_vec();
     let need_step =
         || step.ok_or_else(|| PyValueError::new_err(format!("method {method:?} needs a step")));
@@ -54,14 +59,10 @@ pub fn propagate<'py>(
             )))
         }
     };
-    // Monomorphised per atmosphere type so the density call inlines into the RHS.
-    let tr: Trajectory = detached(py, move || match &atm {
-        AtmosphereRef::Exponential(e) => {
-            core_propagate(e, epoch, y0, drag, &outputs, method, floor_altitude)
-        }
-        AtmosphereRef::Gridded(g) => {
-            core_propagate::<GriddedField>(g, epoch, y0, drag, &outputs, method, floor_altitude)
-        }
+    let tr: Trajectory = long_call(py, None, |progress| {
+        with_atmosphere!(&atm, |a| core_propagate(
+            a, &problem, &outputs, method, progress
+        ))
     })?;
     Ok((
         from_vec(tr.times).into_pyarray(py),

@@ -20,10 +20,10 @@ use std::f64::consts::TAU;
 
 /// A uniform axis: `len` nodes at `start + i * step`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Axis {
-    pub start: f64,
-    pub step: f64,
-    pub len: usize,
+struct Axis {
+    start: f64,
+    step: f64,
+    len: usize,
 }
 
 impl Axis {
@@ -48,7 +48,7 @@ impl Axis {
     }
 
     /// Last node.
-    pub fn end(&self) -> f64 {
+    fn end(&self) -> f64 {
         self.start + self.step * (self.len - 1) as f64
     }
 
@@ -71,7 +71,7 @@ const STEP_SNAP: f64 = 1e-6;
 
 /// A non-decreasing time axis whose repeated nodes mark discontinuities.
 #[derive(Debug, Clone, PartialEq)]
-pub struct TimeNodes {
+struct TimeNodes {
     nodes: Vec<f64>,
 }
 
@@ -113,18 +113,13 @@ impl TimeNodes {
     }
 
     /// First node.
-    pub fn start(&self) -> f64 {
+    fn start(&self) -> f64 {
         self.nodes[0]
     }
 
     /// Last node.
-    pub fn end(&self) -> f64 {
+    fn end(&self) -> f64 {
         self.nodes[self.nodes.len() - 1]
-    }
-
-    /// The nodes.
-    pub fn nodes(&self) -> &[f64] {
-        &self.nodes
     }
 
     /// Cell and fraction of `t`; at a repeated node the later cell (value after the jump).
@@ -244,21 +239,6 @@ impl GriddedField {
             ln_mean,
             rel_sigma,
         })
-    }
-
-    /// Time nodes (seconds from the field epoch).
-    pub fn time_nodes(&self) -> &TimeNodes {
-        &self.time
-    }
-
-    /// Altitude axis (m).
-    pub fn altitude_axis(&self) -> Axis {
-        self.alt
-    }
-
-    /// Field epoch, seconds since J2000.
-    pub fn epoch(&self) -> f64 {
-        self.epoch
     }
 
     /// Mean and sigma at `ut1` seconds since J2000 and geodetic (lat, lon) in rad, alt m.

@@ -6,7 +6,7 @@ mod exponential;
 mod gridded;
 
 pub use exponential::Exponential;
-pub use gridded::{Axis, GriddedField, TimeNodes};
+pub use gridded::GriddedField;
 
 use crate::error::CoreError;
 use crate::frames::EarthRotation;

@@ -4,7 +4,7 @@
 //! never divides by a component that crosses zero.
 
 use super::dop853_tableau as tab;
-use super::{check_times, Control, Outcome};
+use super::{check_times, combine, Control, Outcome, StepHooks};
 use crate::dynamics::{BatchRhs, State};
 use crate::error::{positive, CoreError};
 
@@ -63,17 +63,17 @@ fn rms<const W: usize>(x: &State<W>, scale: &State<W>) -> f64 {
     (sum / (6 * W) as f64).sqrt()
 }
 
-/// Integrates `y0` from `t0` through the increasing `outputs`; `on_output(i, y)` gets the
-/// dense-output state at `outputs[i]`, `after_step(t, y)` is called after every accepted
-/// step and may stop the run.
-pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>>(
+/// Integrates `y0` from `t0` through the increasing `outputs`; `hooks.on_output` gets the
+/// dense-output state at each output, `hooks.after_step` is called after every accepted
+/// step and may stop or hold the run (it must not change `y` or the RHS here: the next
+/// step reuses f(t, y)). `before_step` is not called: there are no planned boundaries.
+pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
     rhs: &mut R,
     t0: f64,
     y0: &State<W>,
     outputs: &[f64],
     opts: AdaptiveOptions,
-    mut on_output: impl FnMut(usize, &State<W>),
-    mut after_step: impl FnMut(f64, &State<W>) -> Control,
+    hooks: &mut H,
 ) -> Result<Outcome, CoreError> {
     positive("rtol", opts.rtol)?;
     if opts.rtol >= 1.0 {
@@ -91,7 +91,7 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>>(
     let mut t = t0;
     let mut next_out = 0;
     while next_out < outputs.len() && outputs[next_out] <= t0 {
-        on_output(next_out, &y);
+        hooks.on_output(next_out, outputs[next_out], &y, rhs)?;
         next_out += 1;
     }
     if next_out == outputs.len() {
@@ -119,12 +119,12 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>>(
         }
         // Stages 1..11 (k[0] holds f(t, y) already).
         for s in 1..12 {
-            stage(&mut tmp, &y, h, &tab::A[s][..s], &k[..s]);
+            combine(&mut tmp, &y, h, &tab::A[s][..s], &k[..s]);
             rhs.eval(t + tab::C[s] * h, &tmp, &mut k[s])?;
         }
         // 8th-order solution.
         let mut y_new = y;
-        stage(&mut y_new, &y, h, &tab::B, &k[..12]);
+        combine(&mut y_new, &y, h, &tab::B, &k[..12]);
         // Error estimate (Hairer's combination of the 5th and 3rd order estimators).
         let sc = scales(opts.rtol, &y, &y_new);
         let (mut e5, mut e3) = (zero::<W>(), zero::<W>());
@@ -158,7 +158,7 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>>(
         if next_out < outputs.len() && outputs[next_out] <= t_new {
             // Three extra stages for the dense output.
             for s in 13..16 {
-                stage(&mut tmp, &y, h, &tab::A[s][..s], &k[..s]);
+                combine(&mut tmp, &y, h, &tab::A[s][..s], &k[..s]);
                 rhs.eval(t + tab::C[s] * h, &tmp, &mut k[s])?;
             }
             let dense = DenseStep::new(&y, &y_new, h, &k);
@@ -169,15 +169,22 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>>(
                 } else {
                     dense.eval(x)
                 };
-                on_output(next_out, &yo);
+                hooks.on_output(next_out, outputs[next_out], &yo, rhs)?;
                 next_out += 1;
             }
         }
         t = t_new;
         y = y_new;
         k[0] = k[12];
-        if after_step(t, &y) == Control::Stop {
-            return Ok(Outcome::Stopped { t });
+        match hooks.after_step(t, &mut y, rhs)? {
+            Control::Continue => {}
+            Control::Stop => return Ok(Outcome::Stopped { t }),
+            Control::Hold => {
+                for (i, &to) in outputs.iter().enumerate().skip(next_out) {
+                    hooks.on_output(i, to, &y, rhs)?;
+                }
+                return Ok(Outcome::Stopped { t });
+            }
         }
         let mut fac = if err == 0.0 {
             6.0
@@ -191,21 +198,6 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>>(
         h = (h * fac).min(opts.max_step);
     }
     Ok(Outcome::Completed)
-}
-
-/// out = y + h * sum_j coef[j] k[j].
-#[inline(always)]
-fn stage<const W: usize>(out: &mut State<W>, y: &State<W>, h: f64, coef: &[f64], k: &[State<W>]) {
-    *out = *y;
-    for (j, &a) in coef.iter().enumerate() {
-        if a != 0.0 {
-            for c in 0..6 {
-                for l in 0..W {
-                    out[c][l] += h * a * k[j][c][l];
-                }
-            }
-        }
-    }
 }
 
 /// Starting step from Hairer's heuristic (as in `dop853`'s `hinit`), for 8th order.
@@ -295,6 +287,24 @@ mod tests {
     use super::*;
     use crate::constants::MU;
 
+    /// Hooks from two closures: the output observer and the step observer.
+    struct Observe<O, A>(O, A);
+    impl<R, O: FnMut(usize, &State<1>), A: FnMut()> StepHooks<1, R> for Observe<O, A> {
+        fn after_step(
+            &mut self,
+            _: f64,
+            _: &mut State<1>,
+            _: &mut R,
+        ) -> Result<Control, CoreError> {
+            (self.1)();
+            Ok(Control::Continue)
+        }
+        fn on_output(&mut self, i: usize, _: f64, y: &State<1>, _: &R) -> Result<(), CoreError> {
+            (self.0)(i, y);
+            Ok(())
+        }
+    }
+
     /// Pure two-body RHS for analytic comparison.
     struct Kepler;
     impl BatchRhs<1> for Kepler {
@@ -333,14 +343,13 @@ mod tests {
                 rtol: 1e-12,
                 ..Default::default()
             },
-            |i, y| {
-                let p = circular(a, outputs[i]);
-                worst = worst.max(((y[0][0] - p[0]).powi(2) + (y[1][0] - p[1]).powi(2)).sqrt());
-            },
-            |_, _| {
-                steps += 1;
-                Control::Continue
-            },
+            &mut Observe(
+                |i, y: &State<1>| {
+                    let p = circular(a, outputs[i]);
+                    worst = worst.max(((y[0][0] - p[0]).powi(2) + (y[1][0] - p[1]).powi(2)).sqrt());
+                },
+                || steps += 1,
+            ),
         )
         .unwrap();
         // Three days (~45 revolutions) at rtol 1e-12: dense output within 5 mm of the
@@ -367,8 +376,7 @@ mod tests {
                     rtol,
                     ..Default::default()
                 },
-                |_, y| end = *y,
-                |_, _| Control::Continue,
+                &mut Observe(|_, y: &State<1>| end = *y, || {}),
             )
             .unwrap();
             end
@@ -390,15 +398,7 @@ mod tests {
     fn rejects_bad_options() {
         let y0: State<1> = [[7e6], [0.0], [0.0], [0.0], [7.5e3], [0.0]];
         let run = |opts: AdaptiveOptions, out: &[f64]| {
-            integrate_adaptive(
-                &mut Kepler,
-                0.0,
-                &y0,
-                out,
-                opts,
-                |_, _| {},
-                |_, _| Control::Continue,
-            )
+            integrate_adaptive(&mut Kepler, 0.0, &y0, out, opts, &mut ())
         };
         assert!(run(
             AdaptiveOptions {

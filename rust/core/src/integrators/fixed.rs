@@ -1,9 +1,11 @@
-//! Fixed-step explicit Runge-Kutta: classic RK4 and the 8th-order DOP853 tableau.
+//! Fixed-step explicit Runge-Kutta (classic RK4 and the 8th-order DOP853 tableau) and the
+//! one fixed-step loop of the crate: [`drive`] over a [`StepPlan`].
 
 use super::dop853_tableau as tab;
-use super::{check_times, Control, Outcome};
+use super::{check_times, combine, Control, Outcome, StepHooks};
 use crate::dynamics::{BatchRhs, State};
 use crate::error::{positive, CoreError};
+use std::ops::Range;
 
 /// Fixed-step scheme.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,22 +28,6 @@ impl<const W: usize> Default for FixedStepper<W> {
         Self {
             k: [[[0.0; W]; 6]; 12],
             tmp: [[0.0; W]; 6],
-        }
-    }
-}
-
-/// tmp = y + h * sum_j coef[j] * k[j] over the stages whose coefficient is not zero.
-#[inline(always)]
-fn combine<const W: usize>(tmp: &mut State<W>, y: &State<W>, h: f64, coef: &[f64], k: &[State<W>]) {
-    *tmp = *y;
-    for (j, &a) in coef.iter().enumerate() {
-        if a != 0.0 {
-            let ha = h * a;
-            for c in 0..6 {
-                for l in 0..W {
-                    tmp[c][l] += ha * k[j][c][l];
-                }
-            }
         }
     }
 }
@@ -84,54 +70,214 @@ impl<const W: usize> FixedStepper<W> {
     }
 }
 
-/// Integrates from `t0` through the increasing `stops`, never with a step longer than
-/// `max_step`, and with every stop a step boundary: each interval between stops is cut
-/// into the fewest equal steps no longer than `max_step`. `on_stop(i, y)` receives the
-/// state at `stops[i]`; `after_step(t, y)` is called after every step and may stop the run.
-#[allow(clippy::too_many_arguments)]
-pub fn integrate_fixed<const W: usize, R: BatchRhs<W>>(
+/// `n` equal steps of `h` from `start`, the last ending exactly at `end`.
+#[derive(Debug, Clone, PartialEq)]
+struct Segment {
+    start: f64,
+    end: f64,
+    n: usize,
+    h: f64,
+    /// Grid index of the boundary at `start` ([`StepPlan::grid`] plans).
+    grid: Option<usize>,
+    /// The outputs that fall on `end`.
+    outputs: Range<usize>,
+}
+
+/// The step boundaries of a fixed-step run and the outputs that fall on them. Outputs are
+/// always step boundaries; each knows its contiguous range of outputs, so recording costs
+/// O(outputs) in all. Stored as segments of equal steps, so memory grows with the outputs
+/// (and, for grid plans, with the grid steps), never with the steps of an interval.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepPlan {
+    t0: f64,
+    /// Outputs at `t0`.
+    initial: Range<usize>,
+    segments: Vec<Segment>,
+    /// Grid index of the last boundary.
+    last_grid: Option<usize>,
+}
+
+impl StepPlan {
+    /// From `t0` through the `stops` (the outputs), never with a step longer than
+    /// `max_step`: each interval between stops is cut into the fewest equal steps no longer
+    /// than `max_step`. Stops running backwards from `t0` integrate backwards (e.g.
+    /// drag-coefficient debiasing over a window before the epoch).
+    pub fn equal_steps(t0: f64, stops: &[f64], max_step: f64) -> Result<Self, CoreError> {
+        positive("step", max_step)?;
+        let backward = stops.last().is_some_and(|&s| s < t0);
+        if backward {
+            let mirrored: Vec<f64> = stops.iter().map(|s| -s).collect();
+            check_times("stop times (backward)", -t0, &mirrored)?;
+        } else {
+            check_times("stop times", t0, stops)?;
+        }
+        let mut plan = Self {
+            t0,
+            initial: 0..0,
+            segments: Vec::with_capacity(stops.len()),
+            last_grid: None,
+        };
+        let mut t = t0;
+        for (i, &t1) in stops.iter().enumerate() {
+            let span = t1 - t;
+            if span != 0.0 {
+                // Relative slack so that a span of exactly k steps is not cut into k + 1.
+                let n = ((span.abs() / max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+                plan.segments.push(Segment {
+                    start: t,
+                    end: t1,
+                    n,
+                    h: span / n as f64,
+                    grid: None,
+                    outputs: i..i + 1,
+                });
+                t = t1;
+            } else {
+                plan.last_outputs().end = i + 1;
+            }
+        }
+        Ok(plan)
+    }
+
+    /// From 0 through the increasing `outputs` (s, checked here) on the uniform grid k h
+    /// (where kappa nodes fall) plus every output time, so outputs need not be multiples of
+    /// the step. Boundaries closer than 1e-9 max(h, 1) merge, keeping the grid time.
+    pub fn grid(outputs: &[f64], h: f64) -> Result<Self, CoreError> {
+        check_times("output times", 0.0, outputs)?;
+        let end = *outputs.last().expect("checked non-empty");
+        let n = ((end / h) * (1.0 - 1e-12)).ceil().max(0.0) as usize;
+        let mut points: Vec<(f64, Option<usize>)> = (0..=n)
+            .map(|k| (if k == n { end } else { k as f64 * h }, Some(k)))
+            .collect();
+        points.extend(outputs.iter().map(|&t| (t, None)));
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let tol = 1e-9 * h.max(1.0);
+        let mut times: Vec<f64> = Vec::with_capacity(points.len());
+        let mut grid: Vec<Option<usize>> = Vec::with_capacity(points.len());
+        for (t, k) in points {
+            match times.last() {
+                Some(&last) if (t - last).abs() <= tol => {
+                    let g = grid.last_mut().expect("same length");
+                    if g.is_none() {
+                        *g = k;
+                        if k.is_some() {
+                            *times.last_mut().expect("same length") = t;
+                        }
+                    }
+                }
+                _ => {
+                    times.push(t);
+                    grid.push(k);
+                }
+            }
+        }
+        let mut plan = Self {
+            t0: times[0],
+            initial: 0..0,
+            segments: (1..times.len())
+                .map(|j| Segment {
+                    start: times[j - 1],
+                    end: times[j],
+                    n: 1,
+                    h: times[j] - times[j - 1],
+                    grid: grid[j - 1],
+                    outputs: 0..0,
+                })
+                .collect(),
+            last_grid: grid[times.len() - 1],
+        };
+        // Boundary of each output: non-decreasing, so each boundary's outputs are a range.
+        for (i, &t) in outputs.iter().enumerate() {
+            let b = times.partition_point(|&x| x < t - tol).min(times.len() - 1);
+            let range = if b == 0 {
+                &mut plan.initial
+            } else {
+                &mut plan.segments[b - 1].outputs
+            };
+            if range.start == range.end {
+                *range = i..i;
+            }
+            range.end = i + 1;
+        }
+        Ok(plan)
+    }
+
+    /// The outputs on the last boundary so far.
+    fn last_outputs(&mut self) -> &mut Range<usize> {
+        match self.segments.last_mut() {
+            Some(s) => &mut s.outputs,
+            None => &mut self.initial,
+        }
+    }
+
+    /// Boundary times, their grid indices and the boundary of each output, one entry per
+    /// step boundary (for inspection in tests).
+    #[cfg(test)]
+    fn boundaries(&self) -> (Vec<f64>, Vec<Option<usize>>, Vec<usize>) {
+        let mut times = vec![self.t0];
+        let mut grid = Vec::new();
+        let mut outputs = vec![0; self.initial.len()];
+        for s in &self.segments {
+            for j in 0..s.n {
+                grid.push(if j == 0 { s.grid } else { None });
+                times.push(if j + 1 == s.n {
+                    s.end
+                } else {
+                    s.start + (j + 1) as f64 * s.h
+                });
+            }
+            outputs.extend(s.outputs.clone().map(|_| times.len() - 1));
+        }
+        grid.push(self.last_grid);
+        (times, grid, outputs)
+    }
+}
+
+/// The one fixed-step loop: integrates `y` through `plan` with `method`. Per step it calls
+/// `hooks.before_step`, takes the step, then `hooks.after_step` (which may stop or hold
+/// the run), then `hooks.on_output` for the outputs on the boundary reached. The step
+/// arithmetic (start t + j h, length h, last end exactly the interval end) is fixed here
+/// so that every caller gets bit-identical steps.
+#[inline(always)]
+pub fn drive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
     method: FixedMethod,
     rhs: &mut R,
-    t0: f64,
     y: &mut State<W>,
-    max_step: f64,
-    stops: &[f64],
-    mut on_stop: impl FnMut(usize, &State<W>),
-    mut after_step: impl FnMut(f64, &State<W>) -> Control,
+    plan: &StepPlan,
+    hooks: &mut H,
 ) -> Result<Outcome, CoreError> {
-    positive("step", max_step)?;
-    // Backward integration when the stops run backwards from t0 (e.g. drag-coefficient
-    // debiasing over a window before the epoch).
-    let backward = stops.last().is_some_and(|&s| s < t0);
-    if backward {
-        let mirrored: Vec<f64> = stops.iter().map(|s| -s).collect();
-        check_times("stop times (backward)", -t0, &mirrored)?;
-    } else {
-        check_times("stop times", t0, stops)?;
-    }
     let mut stepper = FixedStepper::<W>::default();
-    let mut t = t0;
-    for (i, &t1) in stops.iter().enumerate() {
-        let span = t1 - t;
-        if span != 0.0 {
-            // Relative slack so that a span of exactly k steps is not cut into k + 1.
-            let n = ((span.abs() / max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
-            let h = span / n as f64;
-            for j in 0..n {
-                let ts = t + j as f64 * h;
-                stepper.step(method, rhs, ts, h, y)?;
-                let te = if j + 1 == n {
-                    t1
-                } else {
-                    t + (j + 1) as f64 * h
-                };
-                if after_step(te, y) == Control::Stop {
+    for i in plan.initial.clone() {
+        hooks.on_output(i, plan.t0, y, rhs)?;
+    }
+    let mut boundary = 0;
+    for (s, seg) in plan.segments.iter().enumerate() {
+        for j in 0..seg.n {
+            let ts = seg.start + j as f64 * seg.h;
+            hooks.before_step(boundary, ts, if j == 0 { seg.grid } else { None }, rhs);
+            stepper.step(method, rhs, ts, seg.h, y)?;
+            boundary += 1;
+            let te = if j + 1 == seg.n {
+                seg.end
+            } else {
+                seg.start + (j + 1) as f64 * seg.h
+            };
+            match hooks.after_step(te, y, rhs)? {
+                Control::Continue => {}
+                Control::Stop => return Ok(Outcome::Stopped { t: te }),
+                Control::Hold => {
+                    for later in &plan.segments[s..] {
+                        for i in later.outputs.clone() {
+                            hooks.on_output(i, later.end, y, rhs)?;
+                        }
+                    }
                     return Ok(Outcome::Stopped { t: te });
                 }
             }
-            t = t1;
         }
-        on_stop(i, y);
+        for i in seg.outputs.clone() {
+            hooks.on_output(i, seg.end, y, rhs)?;
+        }
     }
     Ok(Outcome::Completed)
 }
@@ -155,19 +301,42 @@ mod tests {
         }
     }
 
+    /// Records the outputs (index, x) and the step end times.
+    #[derive(Default)]
+    struct Seen {
+        outputs: Vec<(usize, f64)>,
+        steps: Vec<f64>,
+    }
+    impl<R> StepHooks<1, R> for Seen {
+        fn after_step(
+            &mut self,
+            t: f64,
+            _: &mut State<1>,
+            _: &mut R,
+        ) -> Result<Control, CoreError> {
+            self.steps.push(t);
+            Ok(Control::Continue)
+        }
+        fn on_output(&mut self, i: usize, _: f64, y: &State<1>, _: &R) -> Result<(), CoreError> {
+            self.outputs.push((i, y[0][0]));
+            Ok(())
+        }
+    }
+
+    fn integrate(
+        method: FixedMethod,
+        y: &mut State<1>,
+        h: f64,
+        stops: &[f64],
+        hooks: &mut impl StepHooks<1, Oscillator>,
+    ) -> Result<Outcome, CoreError> {
+        let plan = StepPlan::equal_steps(0.0, stops, h)?;
+        drive(method, &mut Oscillator, y, &plan, hooks)
+    }
+
     fn error_after(method: FixedMethod, h: f64) -> f64 {
         let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
-        integrate_fixed(
-            method,
-            &mut Oscillator,
-            0.0,
-            &mut y,
-            h,
-            &[10.0],
-            |_, _| {},
-            |_, _| Control::Continue,
-        )
-        .unwrap();
+        integrate(method, &mut y, h, &[10.0], &mut ()).unwrap();
         ((y[0][0] - 10f64.cos()).powi(2) + (y[3][0] + 10f64.sin()).powi(2)).sqrt()
     }
 
@@ -208,41 +377,29 @@ mod tests {
     #[test]
     fn backward_integration_retraces_the_solution() {
         let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
-        let mut seen = Vec::new();
-        integrate_fixed(
-            FixedMethod::Rk8,
-            &mut Oscillator,
-            0.0,
-            &mut y,
-            0.1,
-            &[-1.0, -3.0],
-            |_, y| seen.push(y[0][0]),
-            |_, _| Control::Continue,
-        )
-        .unwrap();
+        let mut hooks = Seen::default();
+        integrate(FixedMethod::Rk8, &mut y, 0.1, &[-1.0, -3.0], &mut hooks).unwrap();
+        let seen: Vec<f64> = hooks.outputs.iter().map(|o| o.1).collect();
         assert!((seen[0] - 1f64.cos()).abs() < 1e-12 && (seen[1] - 3f64.cos()).abs() < 1e-12);
         assert!((y[3][0] - 3f64.sin()).abs() < 1e-12); // v(-3) = -sin(-3)
     }
 
     #[test]
     fn stops_are_step_boundaries() {
-        let mut seen = Vec::new();
         let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
-        let mut steps = Vec::new();
-        integrate_fixed(
+        let mut hooks = Seen::default();
+        integrate(
             FixedMethod::Rk8,
-            &mut Oscillator,
-            0.0,
             &mut y,
             0.4,
             &[0.0, 1.0, 1.0, 2.2],
-            |i, y| seen.push((i, y[0][0])),
-            |t, _| {
-                steps.push(t);
-                Control::Continue
-            },
+            &mut hooks,
         )
         .unwrap();
+        let Seen {
+            outputs: seen,
+            steps,
+        } = hooks;
         // 0 -> 1 in 3 steps of 1/3, 1 -> 2.2 in 3 steps of 0.4.
         assert_eq!(steps.len(), 6);
         assert_eq!(steps[2], 1.0);
@@ -256,21 +413,65 @@ mod tests {
     fn bad_times_are_rejected() {
         let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
         let run = |y: &mut State<1>, h: f64, stops: &[f64]| {
-            integrate_fixed(
-                FixedMethod::Rk4,
-                &mut Oscillator,
-                0.0,
-                y,
-                h,
-                stops,
-                |_, _| {},
-                |_, _| Control::Continue,
-            )
+            integrate(FixedMethod::Rk4, y, h, stops, &mut ())
         };
         assert!(run(&mut y, 0.0, &[1.0]).is_err());
         assert!(run(&mut y, 0.1, &[1.0, 0.5]).is_err());
         assert!(run(&mut y, 0.1, &[-1.0, -0.5]).is_err());
         assert!(run(&mut y, 0.1, &[f64::NAN]).is_err());
         assert!(run(&mut y, 0.1, &[]).is_err());
+    }
+
+    #[test]
+    fn grid_plan_merges_outputs_into_the_grid() {
+        let plan = StepPlan::grid(&[100.0, 360.0, 400.0], 180.0).unwrap();
+        let (times, grid, outputs) = plan.boundaries();
+        assert_eq!(times, vec![0.0, 100.0, 180.0, 360.0, 400.0]);
+        assert_eq!(grid, vec![Some(0), None, Some(1), Some(2), Some(3)]);
+        assert_eq!(outputs, vec![1, 3, 4]);
+        // Repeated outputs share their boundary; one on the start is recorded first.
+        let plan = StepPlan::grid(&[0.0, 0.0, 180.0, 180.0, 1000.0], 180.0).unwrap();
+        let (times, _, outputs) = plan.boundaries();
+        assert_eq!(times.len(), 7);
+        assert_eq!(outputs, vec![0, 0, 1, 1, 6]);
+    }
+
+    #[test]
+    fn hold_hands_the_state_to_every_remaining_output() {
+        struct HoldAfter(usize, Vec<(usize, f64, f64)>);
+        impl<R> StepHooks<1, R> for HoldAfter {
+            fn after_step(
+                &mut self,
+                _: f64,
+                _: &mut State<1>,
+                _: &mut R,
+            ) -> Result<Control, CoreError> {
+                self.0 -= 1;
+                Ok(if self.0 == 0 {
+                    Control::Hold
+                } else {
+                    Control::Continue
+                })
+            }
+            fn on_output(
+                &mut self,
+                i: usize,
+                t: f64,
+                y: &State<1>,
+                _: &R,
+            ) -> Result<(), CoreError> {
+                self.1.push((i, t, y[0][0]));
+                Ok(())
+            }
+        }
+        let mut y: State<1> = [[1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
+        let mut hooks = HoldAfter(4, Vec::new());
+        let out = integrate(FixedMethod::Rk4, &mut y, 0.5, &[1.0, 1.7, 3.0], &mut hooks).unwrap();
+        // Steps end at 0.5, 1.0, 1.35, 1.7: held after the step onto 1.7.
+        assert_eq!(out, Outcome::Stopped { t: 1.7 });
+        let times: Vec<f64> = hooks.1.iter().map(|o| o.1).collect();
+        assert_eq!(times, vec![1.0, 1.7, 3.0]);
+        assert_eq!(hooks.1[1].2, hooks.1[2].2);
+        assert_eq!(hooks.1[2].2, y[0][0]);
     }
 }

@@ -1,40 +1,26 @@
-//! Monte Carlo ensembles: members with their own kappa process and (optionally) sampled
-//! initial states, integrated in batches of `LANES` members stepping together
-//! (structure of arrays), batches in parallel with rayon. Memory grows with members x
-//! output times, never with steps.
+//! The Monte Carlo engine: members with their own kappa process and (optionally) sampled
+//! initial states, integrated in batches of [`LANES`] members stepping together
+//! (structure of arrays), batches in parallel with rayon, each batch run through the SIMD
+//! [`dispatch`]. Memory grows with members x output times, never with steps.
 
 use crate::constants::R_EARTH;
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
-use crate::error::{finite, positive, CoreError};
-use crate::integrators::{FixedMethod, FixedStepper};
+use crate::error::{positive, CoreError};
+use crate::frames::altitude;
+use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::{KappaLanes, KappaProcess};
-use crate::propagate::{altitude, check_state};
+use crate::problem::{check_state, Problem};
+use crate::progress::Progress;
 use crate::rng::MemberStream;
+use crate::simd::{dispatch, Kernel, LANES};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-
-/// Members per batch (SIMD-friendly lane count).
-pub const LANES: usize = 4;
-
-/// Shared progress counter and cancellation flag of a run.
-#[derive(Debug, Default)]
-pub struct Progress {
-    /// Members finished.
-    pub done: AtomicUsize,
-    /// Set to stop the run; it then returns [`CoreError::Cancelled`].
-    pub cancel: AtomicBool,
-}
 
 /// What to run.
 #[derive(Debug, Clone)]
 pub struct MonteCarloConfig {
-    /// Epoch, seconds since J2000.
-    pub epoch: f64,
-    /// Mean initial state (m, m/s).
-    pub y0: [f64; 6],
-    /// Drag parameter Cd*A/m, m^2/kg.
-    pub drag: f64,
+    /// Epoch, mean initial state, drag parameter and decay floor.
+    pub problem: Problem,
     /// Factor L with L L^T = initial covariance (row-major), or None for a fixed state.
     pub initial_factor: Option<[[f64; 6]; 6]>,
     pub kappa: KappaProcess,
@@ -42,11 +28,10 @@ pub struct MonteCarloConfig {
     pub method: FixedMethod,
     /// Largest integration step, s; the step used divides the kappa node spacing.
     pub max_step: f64,
-    /// Output times, s from the epoch: increasing, each a multiple of the step or the end.
+    /// Output times, s from the epoch: increasing (any value; each becomes a step boundary).
     pub output_times: Vec<f64>,
     pub members: usize,
     pub seed: u64,
-    pub floor_altitude: f64,
     /// Also return the density each member sees at the output times.
     pub record_density: bool,
 }
@@ -76,59 +61,6 @@ struct BatchOut {
     decay: [f64; LANES],
 }
 
-/// Step boundaries of a run: the uniform grid k h (kappa nodes fall on it) up to the last
-/// output, plus every output time, so outputs need not be multiples of the step.
-#[derive(Debug, Clone, PartialEq)]
-struct Schedule {
-    times: Vec<f64>,
-    /// The grid index k of a boundary that lies on the uniform grid.
-    grid: Vec<Option<usize>>,
-    /// Boundary index of each output.
-    outputs: Vec<usize>,
-}
-
-fn schedule(outputs: &[f64], h: f64) -> Schedule {
-    let end = *outputs.last().expect("checked non-empty");
-    let n = ((end / h) * (1.0 - 1e-12)).ceil().max(0.0) as usize;
-    let mut points: Vec<(f64, Option<usize>)> = (0..=n)
-        .map(|k| (if k == n { end } else { k as f64 * h }, Some(k)))
-        .collect();
-    points.extend(outputs.iter().map(|&t| (t, None)));
-    points.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let tol = 1e-9 * h.max(1.0);
-    let mut times: Vec<f64> = Vec::with_capacity(points.len());
-    let mut grid: Vec<Option<usize>> = Vec::with_capacity(points.len());
-    for (t, k) in points {
-        match times.last() {
-            Some(&last) if (t - last).abs() <= tol => {
-                let g = grid.last_mut().expect("same length");
-                if g.is_none() {
-                    *g = k;
-                    if k.is_some() {
-                        *times.last_mut().expect("same length") = t;
-                    }
-                }
-            }
-            _ => {
-                times.push(t);
-                grid.push(k);
-            }
-        }
-    }
-    let outputs = outputs
-        .iter()
-        .map(|&t| {
-            let j = times.partition_point(|&b| b < t - tol);
-            j.min(times.len() - 1)
-        })
-        .collect();
-    Schedule {
-        times,
-        grid,
-        outputs,
-    }
-}
-
 /// Runs the ensemble. `progress.done` counts finished members; setting `progress.cancel`
 /// stops the run at the next batch.
 pub fn monte_carlo<A: Atmosphere + ?Sized>(
@@ -136,30 +68,32 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
     cfg: &MonteCarloConfig,
     progress: &Progress,
 ) -> Result<MonteCarloOutput, CoreError> {
-    finite("epoch", cfg.epoch)?;
-    positive("drag parameter Cd*A/m", cfg.drag)?;
+    cfg.problem.validate()?;
     positive("step", cfg.max_step)?;
     cfg.kappa.check()?;
-    check_state(cfg.epoch, &cfg.y0, cfg.floor_altitude)?;
-    crate::integrators::check_times("output times", 0.0, &cfg.output_times)?;
+    let h = cfg.kappa.integration_step(cfg.max_step);
+    let plan = StepPlan::grid(&cfg.output_times, h)?;
     if cfg.members == 0 {
         return Err(CoreError::invalid("members", 0.0, "must be >= 1"));
     }
-    let h = cfg.kappa.integration_step(cfg.max_step);
-    let plan = schedule(&cfg.output_times, h);
     let nt = cfg.output_times.len();
     let batches = cfg.members.div_ceil(LANES);
 
     let results: Vec<BatchOut> = (0..batches)
         .into_par_iter()
         .map(|b| {
-            if progress.cancel.load(Ordering::Relaxed) {
-                return Err(CoreError::Cancelled);
-            }
+            progress.check()?;
             let first = b * LANES;
             let lanes = LANES.min(cfg.members - first);
-            let out = run_batch_dispatch(atmosphere, cfg, h, &plan, first, lanes)?;
-            progress.done.fetch_add(lanes, Ordering::Relaxed);
+            let out = dispatch(Batch {
+                atmosphere,
+                cfg,
+                h,
+                plan: &plan,
+                first,
+                lanes,
+            })?;
+            progress.add(lanes);
             Ok(out)
         })
         .collect::<Result<_, _>>()?;
@@ -190,178 +124,202 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
     })
 }
 
-/// Runs a batch with the widest instruction set the CPU offers (runtime dispatch keeps the
-/// wheel portable): AVX2 + FMA when available, else the baseline build.
-fn run_batch_dispatch<A: Atmosphere + ?Sized>(
-    atmosphere: &A,
-    cfg: &MonteCarloConfig,
+/// Members `first .. first + lanes` as one batch (unused lanes repeat the last member and
+/// are discarded).
+struct Batch<'a, A: ?Sized> {
+    atmosphere: &'a A,
+    cfg: &'a MonteCarloConfig,
+    /// Integration step, s.
     h: f64,
-    plan: &Schedule,
+    plan: &'a StepPlan,
     first: usize,
     lanes: usize,
-) -> Result<BatchOut, CoreError> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU supports AVX2 and FMA, checked just above.
-            return unsafe { run_batch_avx2(atmosphere, cfg, h, plan, first, lanes) };
-        }
-    }
-    run_batch(atmosphere, cfg, h, plan, first, lanes)
 }
 
-/// `run_batch` compiled for AVX2 + FMA (the step, RHS and stage arithmetic inline into it).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn run_batch_avx2<A: Atmosphere + ?Sized>(
-    atmosphere: &A,
-    cfg: &MonteCarloConfig,
-    h: f64,
-    plan: &Schedule,
-    first: usize,
-    lanes: usize,
-) -> Result<BatchOut, CoreError> {
-    run_batch(atmosphere, cfg, h, plan, first, lanes)
-}
+impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
+    type Output = Result<BatchOut, CoreError>;
 
-/// Integrates members `first .. first + lanes` as one batch (unused lanes repeat the
-/// first member and are discarded).
-#[inline(always)]
-fn run_batch<A: Atmosphere + ?Sized>(
-    atmosphere: &A,
-    cfg: &MonteCarloConfig,
-    h: f64,
-    plan: &Schedule,
-    first: usize,
-    lanes: usize,
-) -> Result<BatchOut, CoreError> {
-    let nt = plan.outputs.len();
-    let mut streams: [MemberStream; LANES] =
-        std::array::from_fn(|l| MemberStream::new(cfg.seed, (first + l.min(lanes - 1)) as u64));
-    let mut y: State<LANES> = [[0.0; LANES]; 6];
-    for l in 0..LANES {
-        let mut s = cfg.y0;
-        if let Some(f) = &cfg.initial_factor {
-            let z: [f64; 6] = std::array::from_fn(|_| streams[l].normal());
-            for (i, si) in s.iter_mut().enumerate() {
-                *si += (0..6).map(|j| f[i][j] * z[j]).sum::<f64>();
-            }
-        }
-        for c in 0..6 {
-            y[c][l] = s[c];
-        }
-    }
-    for l in 0..lanes {
-        let s: [f64; 6] = std::array::from_fn(|c| y[c][l]);
-        check_state(cfg.epoch, &s, cfg.floor_altitude).map_err(|e| {
-            CoreError::invalid(
-                format!("sampled initial state of member {}", first + l),
-                0.0,
-                format!("{e}; the initial covariance reaches below the floor"),
-            )
-        })?;
-    }
-
-    let mut dynamics = Dynamics::<A, LANES>::new(atmosphere, cfg.epoch, [cfg.drag; LANES]);
-    dynamics.perturbation = cfg.perturbation;
-    let spacing = cfg.kappa.node_spacing(h);
-    let per_node = spacing.map_or(usize::MAX, |d| ((d / h).round() as usize).max(1));
-    let mut kappa = KappaLanes::<LANES> {
-        t0: 0.0,
-        t1: spacing.unwrap_or(f64::INFINITY),
-        k0: [0.0; LANES],
-        k1: [0.0; LANES],
-        linear: cfg.kappa.is_linear(),
-    };
-    for l in 0..LANES {
-        kappa.k0[l] = cfg.kappa.first(&mut streams[l]);
-        if kappa.linear {
-            kappa.k1[l] = cfg
-                .kappa
-                .next(kappa.k0[l], spacing.unwrap_or(h), &mut streams[l]);
-        }
-    }
-    dynamics.kappa = kappa;
-
-    let mut out = BatchOut {
-        positions: vec![0.0; LANES * nt * 3],
-        velocities: vec![0.0; LANES * nt * 3],
-        densities: vec![0.0; if cfg.record_density { LANES * nt } else { 0 }],
-        clipped: [0; LANES],
-        decay: [f64::INFINITY; LANES],
-    };
-    let mut frozen: [Option<[f64; 6]>; LANES] = [None; LANES];
-    let record = |k: usize,
-                  t: f64,
-                  y: &State<LANES>,
-                  dynamics: &Dynamics<A, LANES>,
-                  frozen: &[Option<[f64; 6]>; LANES],
-                  out: &mut BatchOut|
-     -> Result<(), CoreError> {
-        for (i, _) in plan.outputs.iter().enumerate().filter(|(_, &s)| s == k) {
-            for l in 0..LANES {
-                let s: [f64; 6] = frozen[l].unwrap_or_else(|| std::array::from_fn(|c| y[c][l]));
-                let o = (l * nt + i) * 3;
-                out.positions[o..o + 3].copy_from_slice(&s[..3]);
-                out.velocities[o..o + 3].copy_from_slice(&s[3..]);
-                if cfg.record_density {
-                    out.densities[l * nt + i] = if frozen[l].is_some() {
-                        0.0
-                    } else {
-                        dynamics.density(t, y, l)?
-                    };
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let Batch {
+            atmosphere,
+            cfg,
+            h,
+            plan,
+            first,
+            lanes,
+        } = self;
+        let nt = cfg.output_times.len();
+        let y0 = cfg.problem.y0;
+        let mut streams: [MemberStream; LANES] =
+            std::array::from_fn(|l| MemberStream::new(cfg.seed, (first + l.min(lanes - 1)) as u64));
+        let mut y: State<LANES> = [[0.0; LANES]; 6];
+        for l in 0..LANES {
+            let mut s = y0;
+            if let Some(f) = &cfg.initial_factor {
+                let z: [f64; 6] = std::array::from_fn(|_| streams[l].normal());
+                for (i, si) in s.iter_mut().enumerate() {
+                    *si += (0..6).map(|j| f[i][j] * z[j]).sum::<f64>();
                 }
             }
+            for c in 0..6 {
+                y[c][l] = s[c];
+            }
         }
-        Ok(())
-    };
-    record(0, 0.0, &y, &dynamics, &frozen, &mut out)?;
+        for l in 0..lanes {
+            let s: [f64; 6] = std::array::from_fn(|c| y[c][l]);
+            check_state(cfg.problem.epoch, &s, cfg.problem.floor_altitude).map_err(|e| {
+                CoreError::invalid(
+                    format!("sampled initial state of member {}", first + l),
+                    0.0,
+                    format!("{e}; the initial covariance reaches below the floor"),
+                )
+            })?;
+        }
 
-    let mut stepper = FixedStepper::<LANES>::default();
-    for j in 0..plan.times.len() - 1 {
-        let (t, t_next) = (plan.times[j], plan.times[j + 1]);
-        if matches!(plan.grid[j], Some(k) if k > 0 && k % per_node == 0) {
-            // A new kappa node segment starts at this step.
+        let mut dynamics =
+            Dynamics::<A, LANES>::new(atmosphere, cfg.problem.epoch, [cfg.problem.drag; LANES]);
+        dynamics.perturbation = cfg.perturbation;
+        let spacing = cfg.kappa.node_spacing(h);
+        let mut kappa = KappaLanes::<LANES> {
+            t0: 0.0,
+            t1: spacing.unwrap_or(f64::INFINITY),
+            k0: [0.0; LANES],
+            k1: [0.0; LANES],
+            linear: cfg.kappa.is_linear(),
+        };
+        for l in 0..LANES {
+            kappa.k0[l] = cfg.kappa.first(&mut streams[l]);
+            if kappa.linear {
+                kappa.k1[l] = cfg
+                    .kappa
+                    .next(kappa.k0[l], spacing.unwrap_or(h), &mut streams[l]);
+            }
+        }
+        dynamics.kappa = kappa;
+
+        let mut members = Members {
+            cfg,
+            lanes,
+            nt,
+            streams,
+            spacing,
+            per_node: spacing.map_or(usize::MAX, |d| ((d / h).round() as usize).max(1)),
+            frozen: [None; LANES],
+            out: BatchOut {
+                positions: vec![0.0; LANES * nt * 3],
+                velocities: vec![0.0; LANES * nt * 3],
+                densities: vec![0.0; if cfg.record_density { LANES * nt } else { 0 }],
+                clipped: [0; LANES],
+                decay: [f64::INFINITY; LANES],
+            },
+        };
+        drive(cfg.method, &mut dynamics, &mut y, plan, &mut members)?;
+        members.out.clipped = dynamics.clipped;
+        Ok(members.out)
+    }
+}
+
+/// The members' side of a batch run: kappa nodes before steps, decay after them, the
+/// record at outputs.
+struct Members<'a> {
+    cfg: &'a MonteCarloConfig,
+    /// Lanes that hold real members.
+    lanes: usize,
+    /// Output times.
+    nt: usize,
+    streams: [MemberStream; LANES],
+    /// Kappa node spacing, s (None: no nodes after t = 0).
+    spacing: Option<f64>,
+    /// Grid steps per kappa node.
+    per_node: usize,
+    /// State of each decayed lane at its decay.
+    frozen: [Option<[f64; 6]>; LANES],
+    out: BatchOut,
+}
+
+impl<A: Atmosphere + ?Sized> StepHooks<LANES, Dynamics<'_, A, LANES>> for Members<'_> {
+    /// A new kappa node segment starts at a grid boundary that is a node.
+    #[inline(always)]
+    fn before_step(
+        &mut self,
+        _: usize,
+        t: f64,
+        grid: Option<usize>,
+        dynamics: &mut Dynamics<'_, A, LANES>,
+    ) {
+        if matches!(grid, Some(k) if k > 0 && k % self.per_node == 0) {
             let kl = &mut dynamics.kappa;
-            let d = spacing.expect("nodes exist when per_node is finite");
+            let d = self.spacing.expect("nodes exist when per_node is finite");
             kl.t0 = t;
             kl.t1 = t + d;
             for l in 0..LANES {
                 if kl.linear {
                     kl.k0[l] = kl.k1[l];
-                    kl.k1[l] = cfg.kappa.next(kl.k0[l], d, &mut streams[l]);
+                    kl.k1[l] = self.cfg.kappa.next(kl.k0[l], d, &mut self.streams[l]);
                 } else {
-                    kl.k0[l] = cfg.kappa.next(kl.k0[l], d, &mut streams[l]);
+                    kl.k0[l] = self.cfg.kappa.next(kl.k0[l], d, &mut self.streams[l]);
                 }
             }
         }
-        stepper.step(cfg.method, &mut dynamics, t, t_next - t, &mut y)?;
+    }
+
+    /// Freezes lanes that fell below the floor; holds once every member has.
+    #[inline(always)]
+    fn after_step(
+        &mut self,
+        t: f64,
+        y: &mut State<LANES>,
+        dynamics: &mut Dynamics<'_, A, LANES>,
+    ) -> Result<Control, CoreError> {
+        let floor = self.cfg.problem.floor_altitude;
         for l in 0..LANES {
             // Geodetic altitude >= |r| - Re, so only orbits dipping below Re + floor need
             // the full geodetic conversion.
             let r = (y[0][l] * y[0][l] + y[1][l] * y[1][l] + y[2][l] * y[2][l]).sqrt();
-            if frozen[l].is_none()
-                && r < R_EARTH + cfg.floor_altitude
-                && altitude(cfg.epoch + t_next, [y[0][l], y[1][l], y[2][l]]) < cfg.floor_altitude
+            if self.frozen[l].is_none()
+                && r < R_EARTH + floor
+                && altitude(self.cfg.problem.epoch + t, [y[0][l], y[1][l], y[2][l]]) < floor
             {
-                frozen[l] = Some(std::array::from_fn(|c| y[c][l]));
-                out.decay[l] = t_next;
+                self.frozen[l] = Some(std::array::from_fn(|c| y[c][l]));
+                self.out.decay[l] = t;
                 // A decayed lane keeps stepping harmlessly without drag; its outputs stay
                 // frozen at the decay state.
                 dynamics.drag[l] = 0.0;
             }
         }
-        record(j + 1, t_next, &y, &dynamics, &frozen, &mut out)?;
-        if frozen[..lanes].iter().all(Option::is_some) {
-            for jj in j + 2..plan.times.len() {
-                record(jj, plan.times[jj], &y, &dynamics, &frozen, &mut out)?;
-            }
-            break;
-        }
+        Ok(if self.frozen[..self.lanes].iter().all(Option::is_some) {
+            Control::Hold
+        } else {
+            Control::Continue
+        })
     }
-    out.clipped = dynamics.clipped;
-    Ok(out)
+
+    #[inline(always)]
+    fn on_output(
+        &mut self,
+        i: usize,
+        t: f64,
+        y: &State<LANES>,
+        dynamics: &Dynamics<'_, A, LANES>,
+    ) -> Result<(), CoreError> {
+        let nt = self.nt;
+        for l in 0..LANES {
+            let frozen = self.frozen[l];
+            let s: [f64; 6] = frozen.unwrap_or_else(|| std::array::from_fn(|c| y[c][l]));
+            let o = (l * nt + i) * 3;
+            self.out.positions[o..o + 3].copy_from_slice(&s[..3]);
+            self.out.velocities[o..o + 3].copy_from_slice(&s[3..]);
+            if self.cfg.record_density {
+                self.out.densities[l * nt + i] = if frozen.is_some() {
+                    0.0
+                } else {
+                    dynamics.density(t, y, l)?
+                };
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A factor L with L L^T = `cov` for a symmetric positive semi-definite 6x6 matrix
@@ -416,6 +374,7 @@ mod tests {
     use super::*;
     use crate::density::Exponential;
     use crate::propagate::{propagate, Method};
+    use std::sync::atomic::Ordering;
 
     const PAPER: [f64; 6] = [
         3782900.7032,
@@ -428,9 +387,12 @@ mod tests {
 
     fn config(members: usize, kappa: KappaProcess) -> MonteCarloConfig {
         MonteCarloConfig {
-            epoch: 8.4e7,
-            y0: PAPER,
-            drag: 3.0912 * 0.0015,
+            problem: Problem {
+                epoch: 8.4e7,
+                y0: PAPER,
+                drag: 3.0912 * 0.0015,
+                floor_altitude: 120e3,
+            },
             initial_factor: None,
             kappa,
             perturbation: Perturbation::Additive,
@@ -439,7 +401,6 @@ mod tests {
             output_times: vec![0.0, 3600.0, 7200.0],
             members,
             seed: 5,
-            floor_altitude: 120e3,
             record_density: true,
         }
     }
@@ -451,12 +412,10 @@ mod tests {
         let out = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
         let det = propagate(
             &atm,
-            cfg.epoch,
-            PAPER,
-            cfg.drag,
+            &cfg.problem,
             &cfg.output_times,
             Method::Rk8 { step: 180.0 },
-            120e3,
+            &Progress::default(),
         )
         .unwrap();
         for m in 0..5 {
@@ -538,12 +497,10 @@ mod tests {
         let out = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
         let det = propagate(
             &atm,
-            cfg.epoch,
-            PAPER,
-            cfg.drag,
+            &cfg.problem,
             &cfg.output_times,
             Method::Rk8 { step: 60.0 },
-            120e3,
+            &Progress::default(),
         )
         .unwrap();
         for (i, s) in det.states.iter().enumerate() {
@@ -553,10 +510,7 @@ mod tests {
                 .sqrt();
             assert!(d < 1e-3, "output {i}: {d} m");
         }
-        let plan = schedule(&[100.0, 360.0, 400.0], 180.0);
-        assert_eq!(plan.times, vec![0.0, 100.0, 180.0, 360.0, 400.0]);
-        assert_eq!(plan.grid, vec![Some(0), None, Some(1), Some(2), Some(3)]);
-        assert_eq!(plan.outputs, vec![1, 3, 4]);
+        // The step plan itself: integrators::fixed, grid_plan_merges_outputs_into_the_grid.
     }
 
     #[test]

@@ -1,0 +1,101 @@
+//! What every run starts from: epoch, initial state, drag parameter and decay floor,
+//! validated once here for `propagate`, the Monte Carlo engine and the CCSP filter alike.
+
+use crate::error::{finite, positive, CoreError};
+use crate::frames::altitude;
+
+/// Default floor altitude below which an object counts as decayed, m.
+pub const DEFAULT_FLOOR_ALTITUDE: f64 = 120e3;
+
+/// The initial-value problem shared by every run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Problem {
+    /// Epoch of t = 0, seconds since J2000 (UT1).
+    pub epoch: f64,
+    /// Initial inertial state [x, y, z, vx, vy, vz], m and m/s.
+    pub y0: [f64; 6],
+    /// Drag parameter Cd*A/m, m^2/kg.
+    pub drag: f64,
+    /// Geodetic altitude below which the object counts as decayed, m.
+    pub floor_altitude: f64,
+}
+
+impl Problem {
+    /// Checks a finite epoch, a positive drag parameter, a finite floor and an initial
+    /// state that is finite and above both the surface and the floor.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        finite("epoch", self.epoch)?;
+        positive("drag parameter Cd*A/m", self.drag)?;
+        finite("floor_altitude", self.floor_altitude)?;
+        check_state(self.epoch, &self.y0, self.floor_altitude)
+    }
+}
+
+/// Checks a state at `epoch` (s since J2000): finite, and above the surface and the floor
+/// altitude `floor` (m). Also used for the sampled initial states of Monte Carlo members.
+pub fn check_state(epoch: f64, y0: &[f64; 6], floor: f64) -> Result<(), CoreError> {
+    const NAMES: [&str; 6] = [
+        "position[0]",
+        "position[1]",
+        "position[2]",
+        "velocity[0]",
+        "velocity[1]",
+        "velocity[2]",
+    ];
+    for (name, &v) in NAMES.iter().zip(y0) {
+        finite(name, v)?;
+    }
+    let alt = altitude(epoch, [y0[0], y0[1], y0[2]]);
+    if alt < 0.0 {
+        return Err(CoreError::invalid(
+            "initial position",
+            alt,
+            "is below the Earth's surface (value is the geodetic altitude in m)",
+        ));
+    }
+    if alt < floor {
+        return Err(CoreError::invalid(
+            "initial position",
+            alt,
+            format!("is below the decay floor altitude of {floor} m (value is the geodetic altitude in m)"),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PAPER: Problem = Problem {
+        epoch: 8.4e7,
+        y0: [
+            3782900.7032,
+            -5441600.6779,
+            -1420075.1327,
+            -606.6600,
+            1539.2559,
+            -7488.3946,
+        ],
+        drag: 3.0912 * 0.0015,
+        floor_altitude: DEFAULT_FLOOR_ALTITUDE,
+    };
+
+    #[test]
+    fn each_check_names_its_input() {
+        assert!(PAPER.validate().is_ok());
+        let bad = |f: fn(&mut Problem)| {
+            let mut p = PAPER;
+            f(&mut p);
+            p.validate().unwrap_err().to_string()
+        };
+        assert!(bad(|p| p.epoch = f64::NAN).starts_with("epoch must be finite"));
+        assert!(bad(|p| p.drag = 0.0).starts_with("drag parameter Cd*A/m = 0 is invalid"));
+        assert!(bad(|p| p.floor_altitude = f64::INFINITY).starts_with("floor_altitude"));
+        assert!(bad(|p| p.y0[4] = f64::NAN).contains("velocity[1]"));
+        assert!(
+            bad(|p| p.y0 = [1e6, 0.0, 0.0, 0.0, 7e3, 0.0]).contains("below the Earth's surface")
+        );
+        assert!(bad(|p| p.floor_altitude = 450e3).contains("decay floor altitude of 450000 m"));
+    }
+}
