@@ -8,6 +8,7 @@
 //! - [`constants`], [`time`], [`frames`]: the physical and geometric base;
 //! - [`density`]: where the density comes from (analytic or a sampled field);
 //! - [`problem`]: the initial-value problem every run starts from, validated once;
+//! - [`decay`]: where an orbit crosses the decay floor within a step;
 //! - [`kappa`], [`rng`]: the stochastic density offset and its per-member streams;
 //! - [`dynamics`]: the one right-hand side every integrator, member and sigma point uses;
 //! - [`integrators`]: fixed-step RK4/RK8 through one step loop, adaptive DOP853;
@@ -22,6 +23,7 @@
 
 pub mod ccsp;
 pub mod constants;
+pub mod decay;
 pub mod density;
 pub mod dynamics;
 pub mod error;

@@ -3,11 +3,10 @@
 //! (structure of arrays), batches in parallel with rayon, each batch run through the SIMD
 //! [`dispatch`]. Memory grows with members x output times, never with steps.
 
-use crate::constants::R_EARTH;
+use crate::decay::{crossing, StepEnds};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{positive, CoreError};
-use crate::frames::altitude;
 use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::{KappaLanes, KappaProcess};
 use crate::problem::{check_state, Problem};
@@ -78,6 +77,11 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
     }
     let nt = cfg.output_times.len();
     let batches = cfg.members.div_ceil(LANES);
+    // Reserved before the run, so that a run too large for memory fails at once.
+    let n = cfg.members;
+    let mut positions = output_buffer(n, nt * 3)?;
+    let mut velocities = output_buffer(n, nt * 3)?;
+    let mut densities = output_buffer(if cfg.record_density { n } else { 0 }, nt)?;
 
     let results: Vec<BatchOut> = (0..batches)
         .into_par_iter()
@@ -98,10 +102,6 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
         })
         .collect::<Result<_, _>>()?;
 
-    let n = cfg.members;
-    let mut positions = Vec::with_capacity(n * nt * 3);
-    let mut velocities = Vec::with_capacity(n * nt * 3);
-    let mut densities = Vec::with_capacity(if cfg.record_density { n * nt } else { 0 });
     let mut clipped = Vec::with_capacity(n);
     let mut decay_times = Vec::with_capacity(n);
     for (b, r) in results.into_iter().enumerate() {
@@ -122,6 +122,22 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
         decay_times,
         step: h,
     })
+}
+
+/// An empty buffer with room for `members` x `per_member` values, or an error naming the
+/// size when the memory cannot be had (instead of aborting the process).
+fn output_buffer(members: usize, per_member: usize) -> Result<Vec<f64>, CoreError> {
+    let len = members.checked_mul(per_member);
+    let mut v = Vec::new();
+    match len.map(|len| v.try_reserve_exact(len)) {
+        Some(Ok(())) => Ok(v),
+        _ => Err(CoreError::invalid(
+            "members x output times",
+            members as f64 * per_member as f64 * 8.0,
+            "needs more memory than is available (value: bytes); use fewer members or \
+             output times",
+        )),
+    }
 }
 
 /// Members `first .. first + lanes` as one batch (unused lanes repeat the last member and
@@ -206,6 +222,7 @@ impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
             spacing,
             per_node: spacing.map_or(usize::MAX, |d| ((d / h).round() as usize).max(1)),
             frozen: [None; LANES],
+            last: (0.0, y),
             out: BatchOut {
                 positions: vec![0.0; LANES * nt * 3],
                 velocities: vec![0.0; LANES * nt * 3],
@@ -235,6 +252,8 @@ struct Members<'a> {
     per_node: usize,
     /// State of each decayed lane at its decay.
     frozen: [Option<[f64; 6]>; LANES],
+    /// The previous step end (time, states), to locate decays within a step.
+    last: (f64, State<LANES>),
     out: BatchOut,
 }
 
@@ -272,22 +291,27 @@ impl<A: Atmosphere + ?Sized> StepHooks<LANES, Dynamics<'_, A, LANES>> for Member
         y: &mut State<LANES>,
         dynamics: &mut Dynamics<'_, A, LANES>,
     ) -> Result<Control, CoreError> {
-        let floor = self.cfg.problem.floor_altitude;
+        let (floor, epoch) = (self.cfg.problem.floor_altitude, self.cfg.problem.epoch);
+        let (t0, prev) = self.last;
         for l in 0..LANES {
-            // Geodetic altitude >= |r| - Re, so only orbits dipping below Re + floor need
-            // the full geodetic conversion.
-            let r = (y[0][l] * y[0][l] + y[1][l] * y[1][l] + y[2][l] * y[2][l]).sqrt();
-            if self.frozen[l].is_none()
-                && r < R_EARTH + floor
-                && altitude(self.cfg.problem.epoch + t, [y[0][l], y[1][l], y[2][l]]) < floor
-            {
-                self.frozen[l] = Some(std::array::from_fn(|c| y[c][l]));
-                self.out.decay[l] = t;
+            if self.frozen[l].is_some() {
+                continue;
+            }
+            let step = StepEnds {
+                t0,
+                y0: std::array::from_fn(|c| prev[c][l]),
+                t1: t,
+                y1: std::array::from_fn(|c| y[c][l]),
+            };
+            if let Some(tc) = crossing(epoch, &step, floor) {
+                self.frozen[l] = Some(step.state_at(tc));
+                self.out.decay[l] = tc;
                 // A decayed lane keeps stepping harmlessly without drag; its outputs stay
                 // frozen at the decay state.
                 dynamics.drag[l] = 0.0;
             }
         }
+        self.last = (t, *y);
         Ok(if self.frozen[..self.lanes].iter().all(Option::is_some) {
             Control::Hold
         } else {
@@ -403,6 +427,36 @@ mod tests {
             seed: 5,
             record_density: true,
         }
+    }
+
+    #[test]
+    fn decay_times_are_located_within_the_step() {
+        use crate::constants::{MU, R_EARTH};
+        // From 600 km apogee down to a 90 km perigee, zero sigma: every member crosses the
+        // floor where a 1 s RK8 propagation does, to about a second, and is frozen there.
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
+        let (ra, rp) = (R_EARTH + 600e3, R_EARTH + 90e3);
+        let va = (MU * (2.0 / ra - 2.0 / (ra + rp))).sqrt();
+        let mut cfg = config(5, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        cfg.problem.y0 = [ra, 0.0, 0.0, 0.0, va, 0.0];
+        cfg.problem.epoch = 0.0;
+        let out = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
+        let reference = propagate(
+            &atm,
+            &cfg.problem,
+            &[7200.0],
+            Method::Rk8 { step: 1.0 },
+            &Progress::default(),
+        )
+        .unwrap()
+        .decayed_at
+        .unwrap();
+        for &t in &out.decay_times {
+            assert!((t - reference).abs() < 1.5, "{t} s vs {reference} s");
+        }
+        // The frozen state is at the floor: 120 km above the equator.
+        let r = (out.positions[3].powi(2) + out.positions[4].powi(2)).sqrt();
+        assert!((r - R_EARTH - 120e3).abs() < 50.0, "{} m", r - R_EARTH);
     }
 
     #[test]

@@ -1,9 +1,9 @@
 //! Deterministic propagation of one trajectory (a batch of one) to requested output times,
 //! with any integrator, stopping cleanly when the object decays below the floor altitude.
 
+use crate::decay::{crossing, StepEnds};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, State};
-use crate::frames::altitude;
 use crate::integrators::{
     drive, integrate_adaptive, AdaptiveOptions, Control, FixedMethod, Outcome, StepHooks, StepPlan,
 };
@@ -29,7 +29,8 @@ pub struct Trajectory {
     pub times: Vec<f64>,
     /// Inertial states [x, y, z, vx, vy, vz] (m, m/s) at `times`.
     pub states: Vec<[f64; 6]>,
-    /// Time of the first step end below the floor altitude, if the object decayed.
+    /// Time at which the orbit first went below the floor altitude (located within the
+    /// step to a millisecond), if the object decayed; outputs stop before it.
     pub decayed_at: Option<f64>,
     /// Number of RHS evaluations.
     pub evaluations: u64,
@@ -37,24 +38,36 @@ pub struct Trajectory {
     pub clipped: u64,
 }
 
-/// Collects the states, stops below the floor, honours cancellation.
+/// Collects the states, stops where the orbit crosses the floor (located within the
+/// step), honours cancellation.
 struct Observer<'p> {
     epoch: f64,
     floor: f64,
     progress: &'p Progress,
     states: Vec<[f64; 6]>,
+    /// The previous step end (time, state).
+    last: (f64, [f64; 6]),
+    /// Where the orbit crossed the floor.
+    decayed_at: Option<f64>,
 }
 
 impl<R> StepHooks<1, R> for Observer<'_> {
     fn after_step(&mut self, t: f64, y: &mut State<1>, _: &mut R) -> Result<Control, CoreError> {
         self.progress.check()?;
-        Ok(
-            if altitude(self.epoch + t, [y[0][0], y[1][0], y[2][0]]) < self.floor {
-                Control::Stop
-            } else {
-                Control::Continue
-            },
-        )
+        let end = y.map(|c| c[0]);
+        let step = StepEnds {
+            t0: self.last.0,
+            y0: self.last.1,
+            t1: t,
+            y1: end,
+        };
+        self.last = (t, end);
+        self.decayed_at = crossing(self.epoch, &step, self.floor);
+        Ok(if self.decayed_at.is_some() {
+            Control::Stop
+        } else {
+            Control::Continue
+        })
     }
 
     fn on_output(&mut self, _: usize, _: f64, y: &State<1>, _: &R) -> Result<(), CoreError> {
@@ -82,6 +95,8 @@ pub fn propagate<A: Atmosphere + ?Sized>(
         floor: problem.floor_altitude,
         progress,
         states: Vec::with_capacity(output_times.len()),
+        last: (0.0, problem.y0),
+        decayed_at: None,
     };
     let outcome = match method {
         Method::Rk4 { step } | Method::Rk8 { step } => {
@@ -97,11 +112,19 @@ pub fn propagate<A: Atmosphere + ?Sized>(
             integrate_adaptive(&mut dynamics, 0.0, &y, output_times, opts, &mut observer)?
         }
     };
-    let decayed_at = match outcome {
-        Outcome::Completed => None,
-        Outcome::Stopped { t } => Some(t),
-    };
-    let states = observer.states;
+    debug_assert!(matches!(outcome, Outcome::Completed) || observer.decayed_at.is_some());
+    let decayed_at = observer.decayed_at;
+    let mut states = observer.states;
+    if let Some(td) = decayed_at {
+        // The adaptive integrator hands out the outputs of a step before the step's decay
+        // check: drop those after the crossing.
+        let forward = output_times.last().is_some_and(|&t| t >= 0.0);
+        let kept = output_times[..states.len()]
+            .iter()
+            .take_while(|&&t| if forward { t < td } else { t > td })
+            .count();
+        states.truncate(kept);
+    }
     let times = output_times[..states.len()].to_vec();
     Ok(Trajectory {
         times,
@@ -261,6 +284,64 @@ mod tests {
         assert!(t < 259200.0);
         assert!(tr.states.len() < times.len());
         assert!(tr.states.iter().flatten().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn decay_is_located_within_the_step_for_every_integrator() {
+        // An ellipse from 600 km apogee (on the x axis) down to a 90 km perigee: the first
+        // perigee pass crosses the 120 km floor between step ends of the adaptive
+        // integrator. Reference: RK8 at 1 s, the first step end below the floor.
+        let atm = paper_atmosphere();
+        let (ra, rp) = (R_EARTH + 600e3, R_EARTH + 90e3);
+        let a = 0.5 * (ra + rp);
+        let va = (MU * (2.0 / ra - 1.0 / a)).sqrt();
+        let y0 = [ra, 0.0, 0.0, 0.0, va, 0.0];
+        let times = [10_000.0];
+        let at = |method| {
+            run(&atm, 0.0, y0, DRAG, &times, method, 120e3)
+                .unwrap()
+                .decayed_at
+                .expect("decays")
+        };
+        let reference = at(Method::Rk8 { step: 1.0 });
+        for method in [
+            Method::Dop853(AdaptiveOptions::default()),
+            Method::Rk8 { step: 180.0 },
+            Method::Rk4 { step: 5.0 },
+        ] {
+            let t = at(method);
+            assert!(
+                (t - reference).abs() < 1.5,
+                "{method:?}: {t} s vs {reference} s"
+            );
+        }
+        let tr = run(
+            &atm,
+            0.0,
+            y0,
+            DRAG,
+            &[600.0, 1200.0, 10_000.0],
+            Method::Dop853(AdaptiveOptions::default()),
+            120e3,
+        )
+        .unwrap();
+        // Only outputs before the crossing are returned.
+        assert!(tr.times.iter().all(|&t| t < reference), "{:?}", tr.times);
+    }
+
+    #[test]
+    fn absurd_step_counts_are_refused_before_allocating() {
+        let e = run(
+            &paper_atmosphere(),
+            0.0,
+            PAPER,
+            DRAG,
+            &[86400.0],
+            Method::Rk4 { step: 1e-6 },
+            120e3,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("steps over the span"), "{e}");
     }
 
     #[test]

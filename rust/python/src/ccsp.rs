@@ -12,6 +12,7 @@ use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::problem::Problem;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
+/// decayed_at (s, or None: when a sigma point crossed the floor; the outputs end before it),
 /// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), nt = updates + 1.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
@@ -52,6 +53,7 @@ pub fn ccsp<'py>(
     })?;
     let nt = out.times.len();
     let dict = PyDict::new(py);
+    dict.set_item("decayed_at", out.decayed_at)?;
     dict.set_item("times", Array1::from_vec(out.times).into_pyarray(py))?;
     dict.set_item(
         "means",

@@ -14,6 +14,10 @@ use rhoprop_core::kappa::KappaProcess;
 use rhoprop_core::montecarlo::{covariance_factor, monte_carlo as core_mc, MonteCarloConfig};
 use rhoprop_core::problem::Problem;
 
+/// Most worker threads a run may ask for (each costs a stack; more than cores only adds
+/// switching).
+const MAX_THREADS: usize = 1024;
+
 /// Runs a Monte Carlo ensemble; see `rhoprop.monte_carlo` for the documented API.
 /// Returns a dict of arrays: positions/velocities (n, nt, 3), densities (n, nt) or None,
 /// clipped (n,), decay_times (n,), step.
@@ -76,6 +80,12 @@ pub fn monte_carlo<'py>(
     };
     let pool = match threads {
         Some(0) => return Err(PyValueError::new_err("threads must be >= 1")),
+        Some(n) if n > MAX_THREADS => {
+            return Err(PyValueError::new_err(format!(
+                "threads = {n} is more than rhoprop starts ({MAX_THREADS}); use at most the \
+                 number of cores"
+            )))
+        }
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)

@@ -70,6 +70,22 @@ impl<const W: usize> FixedStepper<W> {
     }
 }
 
+/// Most steps one run may take: beyond it a step is far too small for the span (a plan of
+/// grid steps also holds one entry per step, so this bounds its memory to ~0.6 GB).
+pub const MAX_STEPS: usize = 10_000_000;
+
+/// An error for a run of `steps` steps, over [`MAX_STEPS`].
+fn too_many_steps(steps: f64, step: f64) -> CoreError {
+    CoreError::invalid(
+        "step",
+        step,
+        format!(
+            "gives {steps:.3e} steps over the span, more than the {MAX_STEPS} a run may take; \
+             use a larger step (or kappa node spacing)"
+        ),
+    )
+}
+
 /// `n` equal steps of `h` from `start`, the last ending exactly at `end`.
 #[derive(Debug, Clone, PartialEq)]
 struct Segment {
@@ -117,6 +133,10 @@ impl StepPlan {
             segments: Vec::with_capacity(stops.len()),
             last_grid: None,
         };
+        let total = (stops.last().map_or(0.0, |&s| (s - t0).abs()) / max_step).ceil();
+        if total + stops.len() as f64 > MAX_STEPS as f64 {
+            return Err(too_many_steps(total, max_step));
+        }
         let mut t = t0;
         for (i, &t1) in stops.iter().enumerate() {
             let span = t1 - t;
@@ -144,8 +164,13 @@ impl StepPlan {
     /// the step. Boundaries closer than 1e-9 max(h, 1) merge, keeping the grid time.
     pub fn grid(outputs: &[f64], h: f64) -> Result<Self, CoreError> {
         check_times("output times", 0.0, outputs)?;
+        positive("step", h)?;
         let end = *outputs.last().expect("checked non-empty");
-        let n = ((end / h) * (1.0 - 1e-12)).ceil().max(0.0) as usize;
+        let steps = ((end / h) * (1.0 - 1e-12)).ceil().max(0.0);
+        if steps + outputs.len() as f64 > MAX_STEPS as f64 {
+            return Err(too_many_steps(steps, h));
+        }
+        let n = steps as usize;
         let mut points: Vec<(f64, Option<usize>)> = (0..=n)
             .map(|k| (if k == n { end } else { k as f64 * h }, Some(k)))
             .collect();
@@ -200,6 +225,11 @@ impl StepPlan {
             range.end = i + 1;
         }
         Ok(plan)
+    }
+
+    /// The time the plan starts at.
+    pub fn start(&self) -> f64 {
+        self.t0
     }
 
     /// The outputs on the last boundary so far.
