@@ -71,7 +71,7 @@ def run_rhoprop(state, craft, n: int, repeat: int, ref: np.ndarray) -> dict:
 
     wall, _ = median_wall(go, repeat)
     return {
-        "name": "rhoprop (RK8 240 s, SoA batches of 4, all cores)",
+        "name": f"rhoprop (RK8 240 s, {rp._core.simd_path()}, all cores)",
         "wall_s": wall,
         "z0_error_m": err,
         "setting": "rk8 step 240 s",

@@ -8,9 +8,10 @@ use rhoprop_core::density::Exponential;
 use rhoprop_core::dynamics::{BatchRhs, Dynamics, Perturbation, State};
 use rhoprop_core::integrators::{FixedMethod, FixedStepper};
 use rhoprop_core::kappa::KappaProcess;
-use rhoprop_core::montecarlo::{monte_carlo, MonteCarloConfig};
+use rhoprop_core::montecarlo::{monte_carlo, monte_carlo_on, MonteCarloConfig};
 use rhoprop_core::problem::Problem;
 use rhoprop_core::progress::Progress;
+use rhoprop_core::simd::SimdPath;
 use std::hint::black_box;
 
 const PAPER: [f64; 6] = [
@@ -94,6 +95,23 @@ fn runs(c: &mut Criterion) {
     group.bench_function("exponential/64 members x 1 day", |b| {
         b.iter(|| monte_carlo(&atm, black_box(&mc), &Progress::default()).unwrap())
     });
+    // The same run on every instruction-set path this CPU has (one thread, so that the
+    // paths compare per core).
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for path in SimdPath::available() {
+        group.bench_function(
+            format!("exponential/64 members x 1 day/1 thread/{}", path.name()),
+            |b| {
+                b.iter(|| {
+                    one.install(|| monte_carlo_on(path, &atm, black_box(&mc), &Progress::default()))
+                        .unwrap()
+                })
+            },
+        );
+    }
     group.finish();
 
     let mut group = c.benchmark_group("ccsp");

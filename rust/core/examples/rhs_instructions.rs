@@ -14,7 +14,11 @@ use rhoprop_core::progress::Progress;
 
 fn main() {
     let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).expect("valid atmosphere");
-    let members = 64;
+    // RHOPROP_MEMBERS scales the workload (e.g. for perf record).
+    let members = std::env::var("RHOPROP_MEMBERS")
+        .ok()
+        .and_then(|m| m.parse().ok())
+        .unwrap_or(64);
     let cfg = MonteCarloConfig {
         problem: Problem {
             epoch: 8.4e7,

@@ -11,7 +11,7 @@
 //! covariance of a kappa piecewise constant over each interval with correlation
 //! 1 / (lambda2 + p) between consecutive intervals.
 
-use crate::decay::{crossing, StepEnds};
+use crate::decay::{crossing, lane_step, may_cross_lanes};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{finite, positive, CoreError};
@@ -19,7 +19,7 @@ use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::KappaLanes;
 use crate::problem::Problem;
 use crate::progress::Progress;
-use crate::simd::{dispatch, Kernel, LANES};
+use crate::simd::{dispatch_on, Kernel, SimdPath};
 use nalgebra::{Cholesky, Matrix6, SMatrix, Vector6};
 use rayon::prelude::*;
 
@@ -206,8 +206,24 @@ fn weight(k: usize, w0: f64, wi: f64) -> f64 {
 type PointEnds = (Vec<Vector6<f64>>, Option<f64>);
 
 /// Propagates the sigma points from t0 to t1, each with its kappa held, in parallel
-/// batches of `LANES`; stops a batch where a point crosses the floor.
+/// batches of the SIMD path's lane count; stops a batch where a point crosses the floor.
 fn propagate_points<A: Atmosphere + ?Sized>(
+    atmosphere: &A,
+    cfg: &CcspConfig,
+    points: &[[f64; 7]; POINTS],
+    t0: f64,
+    t1: f64,
+    progress: &Progress,
+) -> Result<PointEnds, CoreError> {
+    let path = SimdPath::detect();
+    match path.lanes() {
+        8 => propagate_points_in::<A, 8>(path, atmosphere, cfg, points, t0, t1, progress),
+        _ => propagate_points_in::<A, 4>(path, atmosphere, cfg, points, t0, t1, progress),
+    }
+}
+
+fn propagate_points_in<A: Atmosphere + ?Sized, const W: usize>(
+    path: SimdPath,
     atmosphere: &A,
     cfg: &CcspConfig,
     points: &[[f64; 7]; POINTS],
@@ -217,15 +233,18 @@ fn propagate_points<A: Atmosphere + ?Sized>(
 ) -> Result<PointEnds, CoreError> {
     let plan = StepPlan::equal_steps(t0, &[t1], cfg.max_step)?;
     let batches: Vec<PointEnds> = points
-        .par_chunks(LANES)
+        .par_chunks(W)
         .map(|chunk| {
             progress.check()?;
-            dispatch(SigmaBatch {
-                atmosphere,
-                cfg,
-                chunk,
-                plan: &plan,
-            })
+            dispatch_on(
+                path,
+                SigmaBatch::<A, W> {
+                    atmosphere,
+                    cfg,
+                    chunk,
+                    plan: &plan,
+                },
+            )
         })
         .collect::<Result<_, CoreError>>()?;
     let decayed_at = batches
@@ -236,30 +255,24 @@ fn propagate_points<A: Atmosphere + ?Sized>(
 }
 
 /// Locates the first floor crossing of the real lanes of a sigma-point batch.
-struct FloorWatch {
+struct FloorWatch<const W: usize> {
     epoch: f64,
     floor: f64,
     lanes: usize,
-    last: (f64, State<LANES>),
+    last: (f64, State<W>),
     decayed_at: Option<f64>,
 }
 
-impl<R> StepHooks<LANES, R> for FloorWatch {
+impl<R, const W: usize> StepHooks<W, R> for FloorWatch<W> {
     #[inline(always)]
-    fn after_step(
-        &mut self,
-        t: f64,
-        y: &mut State<LANES>,
-        _: &mut R,
-    ) -> Result<Control, CoreError> {
+    fn after_step(&mut self, t: f64, y: &mut State<W>, _: &mut R) -> Result<Control, CoreError> {
         let (t0, prev) = self.last;
+        let candidates = may_cross_lanes(t0, &prev, t, y, self.floor);
         for l in 0..self.lanes {
-            let step = StepEnds {
-                t0,
-                y0: std::array::from_fn(|c| prev[c][l]),
-                t1: t,
-                y1: std::array::from_fn(|c| y[c][l]),
-            };
+            if !candidates[l] {
+                continue;
+            }
+            let step = lane_step(t0, &prev, t, y, l);
             if let Some(tc) = crossing(self.epoch, &step, self.floor) {
                 self.decayed_at = Some(self.decayed_at.map_or(tc, |d: f64| d.min(tc)));
             }
@@ -273,16 +286,16 @@ impl<R> StepHooks<LANES, R> for FloorWatch {
     }
 }
 
-/// Up to `LANES` sigma points [state; kappa] stepped together through `plan` (unused lanes
+/// Up to `W` sigma points [state; kappa] stepped together through `plan` (unused lanes
 /// repeat the last point and are discarded).
-struct SigmaBatch<'a, A: ?Sized> {
+struct SigmaBatch<'a, A: ?Sized, const W: usize> {
     atmosphere: &'a A,
     cfg: &'a CcspConfig,
     chunk: &'a [[f64; 7]],
     plan: &'a StepPlan,
 }
 
-impl<A: Atmosphere + ?Sized> Kernel for SigmaBatch<'_, A> {
+impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
     type Output = Result<PointEnds, CoreError>;
 
     #[inline(always)]
@@ -294,9 +307,9 @@ impl<A: Atmosphere + ?Sized> Kernel for SigmaBatch<'_, A> {
             plan,
         } = self;
         let lanes = chunk.len();
-        let mut y: State<LANES> = [[0.0; LANES]; 6];
-        let mut kappa = KappaLanes::<LANES>::zero();
-        for l in 0..LANES {
+        let mut y: State<W> = [[0.0; W]; 6];
+        let mut kappa = KappaLanes::<W>::zero();
+        for l in 0..W {
             let pt = chunk[l.min(lanes - 1)];
             for c in 0..6 {
                 y[c][l] = pt[c];
@@ -304,8 +317,7 @@ impl<A: Atmosphere + ?Sized> Kernel for SigmaBatch<'_, A> {
             kappa.k0[l] = pt[6];
         }
         let problem = &cfg.problem;
-        let mut dynamics =
-            Dynamics::<A, LANES>::new(atmosphere, problem.epoch, [problem.drag; LANES]);
+        let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, [problem.drag; W]);
         dynamics.perturbation = cfg.perturbation;
         dynamics.kappa = kappa;
         let mut watch = FloorWatch {

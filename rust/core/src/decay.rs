@@ -7,6 +7,7 @@
 //! near the floor.
 
 use crate::constants::R_EARTH;
+use crate::dynamics::State;
 use crate::frames::altitude;
 
 /// Accuracy of a located crossing time, s.
@@ -65,10 +66,56 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Whether each lane of a batch step from `prev` (at `t0`) to `y` (at `t1`) may cross the
+/// floor: it ends below Re + floor or passes a periapsis (radial velocity from falling to
+/// rising). The cheap test every lane takes every step, on the structure-of-arrays states
+/// so that it vectorises; [`crossing`] does the rest only where it holds.
+#[inline(always)]
+pub fn may_cross_lanes<const W: usize>(
+    t0: f64,
+    prev: &State<W>,
+    t1: f64,
+    y: &State<W>,
+    floor: f64,
+) -> [bool; W] {
+    let threshold = R_EARTH + floor;
+    let forward = t1 >= t0;
+    let mut out = [false; W];
+    for l in 0..W {
+        let rv0 = prev[0][l] * prev[3][l] + prev[1][l] * prev[4][l] + prev[2][l] * prev[5][l];
+        let rv1 = y[0][l] * y[3][l] + y[1][l] * y[4][l] + y[2][l] * y[5][l];
+        let r1 = y[0][l] * y[0][l] + y[1][l] * y[1][l] + y[2][l] * y[2][l];
+        let periapsis = if forward {
+            rv0 < 0.0 && rv1 > 0.0
+        } else {
+            rv0 > 0.0 && rv1 < 0.0
+        };
+        out[l] = periapsis || r1 < threshold * threshold;
+    }
+    out
+}
+
+/// The lane `l` of a batch step as [`StepEnds`].
+#[inline(always)]
+pub fn lane_step<const W: usize>(
+    t0: f64,
+    prev: &State<W>,
+    t1: f64,
+    y: &State<W>,
+    l: usize,
+) -> StepEnds {
+    StepEnds {
+        t0,
+        y0: std::array::from_fn(|c| prev[c][l]),
+        t1,
+        y1: std::array::from_fn(|c| y[c][l]),
+    }
+}
+
 /// The first time in (t0, t1] at which the geodetic altitude falls below `floor` (m), if
 /// it does, for a step that started above the floor. `epoch` is the UT1 of t = 0 (s since
 /// J2000). Works for forward and backward steps.
-#[inline]
+#[inline(never)]
 pub fn crossing(epoch: f64, step: &StepEnds, floor: f64) -> Option<f64> {
     // The geodetic altitude is at least |r| - Re (the ellipsoid lies inside that sphere),
     // so a step whose radius stays above Re + floor cannot cross.

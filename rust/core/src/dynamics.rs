@@ -126,14 +126,30 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
         }
         // Density per lane first (the only fallible, branchy part), then the drag
         // arithmetic in a straight loop over lanes that the compiler vectorises.
+        let (mut mean, mut sigma) = ([0.0; W], [0.0; W]);
+        self.atmosphere.mean_sigma_lanes(
+            ut1, &y[0], &y[1], &y[2], &self.drag, &rot, &mut mean, &mut sigma,
+        )?;
         let mut rho = [0.0; W];
-        for l in 0..W {
-            if self.drag[l] != 0.0 {
-                let r = [y[0][l], y[1][l], y[2][l]];
-                let (mean, sigma) = self.atmosphere.mean_sigma(ut1, r, &rot)?;
-                let (value, clipped) = perturb(mean, sigma, self.kappa.at(l, t), self.perturbation);
-                self.clipped[l] += u64::from(clipped);
-                rho[l] = value;
+        let w = self.kappa.weight(t);
+        match self.perturbation {
+            Perturbation::Additive => {
+                // Straight-line so that it vectorises: clip at zero and count the clips.
+                for l in 0..W {
+                    let value = mean[l] + self.kappa.at_weight(l, w) * sigma[l];
+                    let active = self.drag[l] != 0.0;
+                    let clipped = value < 0.0 && active;
+                    rho[l] = if value < 0.0 || !active { 0.0 } else { value };
+                    self.clipped[l] += u64::from(clipped);
+                }
+            }
+            Perturbation::Lognormal => {
+                for l in 0..W {
+                    if self.drag[l] != 0.0 {
+                        let kappa = self.kappa.at_weight(l, w);
+                        rho[l] = perturb(mean[l], sigma[l], kappa, self.perturbation).0;
+                    }
+                }
             }
         }
         for l in 0..W {

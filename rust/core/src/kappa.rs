@@ -155,12 +155,24 @@ impl<const W: usize> KappaLanes<W> {
     /// kappa of lane `l` at time `t` in the segment.
     #[inline(always)]
     pub fn at(&self, l: usize, t: f64) -> f64 {
+        self.at_weight(l, self.weight(t))
+    }
+
+    /// The interpolation weight of time `t` on the segment (0 when kappa is held): the
+    /// same for every lane, so the dynamics computes it once per evaluation.
+    #[inline(always)]
+    pub fn weight(&self, t: f64) -> f64 {
         if self.linear {
-            let w = ((t - self.t0) / (self.t1 - self.t0)).clamp(0.0, 1.0);
-            self.k0[l] + (self.k1[l] - self.k0[l]) * w
+            ((t - self.t0) / (self.t1 - self.t0)).clamp(0.0, 1.0)
         } else {
-            self.k0[l]
+            0.0
         }
+    }
+
+    /// Kappa of lane `l` at interpolation weight `w` (from [`KappaLanes::weight`]).
+    #[inline(always)]
+    pub fn at_weight(&self, l: usize, w: f64) -> f64 {
+        self.k0[l] + (self.k1[l] - self.k0[l]) * w
     }
 }
 

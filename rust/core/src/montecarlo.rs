@@ -1,9 +1,10 @@
 //! The Monte Carlo engine: members with their own kappa process and (optionally) sampled
-//! initial states, integrated in batches of [`LANES`] members stepping together
+//! initial states, integrated in batches of W members (one per SIMD lane: 4, or 8 with
+//! AVX-512) stepping together
 //! (structure of arrays), batches in parallel with rayon, each batch run through the SIMD
 //! [`dispatch`]. Memory grows with members x output times, never with steps.
 
-use crate::decay::{crossing, StepEnds};
+use crate::decay::{crossing, lane_step, may_cross_lanes};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{positive, CoreError};
@@ -12,7 +13,7 @@ use crate::kappa::{KappaLanes, KappaProcess};
 use crate::problem::{check_state, Problem};
 use crate::progress::Progress;
 use crate::rng::MemberStream;
-use crate::simd::{dispatch, Kernel, LANES};
+use crate::simd::{dispatch_on, Kernel, SimdPath};
 use rayon::prelude::*;
 
 /// What to run.
@@ -52,17 +53,41 @@ pub struct MonteCarloOutput {
     pub step: f64,
 }
 
-struct BatchOut {
+struct BatchOut<const W: usize> {
     positions: Vec<f64>,
     velocities: Vec<f64>,
     densities: Vec<f64>,
-    clipped: [u64; LANES],
-    decay: [f64; LANES],
+    clipped: [u64; W],
+    decay: [f64; W],
 }
 
 /// Runs the ensemble. `progress.done` counts finished members; setting `progress.cancel`
 /// stops the run at the next batch.
 pub fn monte_carlo<A: Atmosphere + ?Sized>(
+    atmosphere: &A,
+    cfg: &MonteCarloConfig,
+    progress: &Progress,
+) -> Result<MonteCarloOutput, CoreError> {
+    monte_carlo_on(SimdPath::detect(), atmosphere, cfg, progress)
+}
+
+/// [`monte_carlo`] on a given instruction-set path (batches of [`SimdPath::lanes`]
+/// members). Every path gives bit-identical results: members draw from their own streams
+/// and lanes never mix.
+pub fn monte_carlo_on<A: Atmosphere + ?Sized>(
+    path: SimdPath,
+    atmosphere: &A,
+    cfg: &MonteCarloConfig,
+    progress: &Progress,
+) -> Result<MonteCarloOutput, CoreError> {
+    match path.lanes() {
+        8 => run::<A, 8>(path, atmosphere, cfg, progress),
+        _ => run::<A, 4>(path, atmosphere, cfg, progress),
+    }
+}
+
+fn run<A: Atmosphere + ?Sized, const W: usize>(
+    path: SimdPath,
     atmosphere: &A,
     cfg: &MonteCarloConfig,
     progress: &Progress,
@@ -76,27 +101,30 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
         return Err(CoreError::invalid("members", 0.0, "must be >= 1"));
     }
     let nt = cfg.output_times.len();
-    let batches = cfg.members.div_ceil(LANES);
+    let batches = cfg.members.div_ceil(W);
     // Reserved before the run, so that a run too large for memory fails at once.
     let n = cfg.members;
     let mut positions = output_buffer(n, nt * 3)?;
     let mut velocities = output_buffer(n, nt * 3)?;
     let mut densities = output_buffer(if cfg.record_density { n } else { 0 }, nt)?;
 
-    let results: Vec<BatchOut> = (0..batches)
+    let results: Vec<BatchOut<W>> = (0..batches)
         .into_par_iter()
         .map(|b| {
             progress.check()?;
-            let first = b * LANES;
-            let lanes = LANES.min(cfg.members - first);
-            let out = dispatch(Batch {
-                atmosphere,
-                cfg,
-                h,
-                plan: &plan,
-                first,
-                lanes,
-            })?;
+            let first = b * W;
+            let lanes = W.min(cfg.members - first);
+            let out = dispatch_on(
+                path,
+                Batch::<A, W> {
+                    atmosphere,
+                    cfg,
+                    h,
+                    plan: &plan,
+                    first,
+                    lanes,
+                },
+            )?;
             progress.add(lanes);
             Ok(out)
         })
@@ -105,7 +133,7 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
     let mut clipped = Vec::with_capacity(n);
     let mut decay_times = Vec::with_capacity(n);
     for (b, r) in results.into_iter().enumerate() {
-        let lanes = LANES.min(n - b * LANES);
+        let lanes = W.min(n - b * W);
         positions.extend_from_slice(&r.positions[..lanes * nt * 3]);
         velocities.extend_from_slice(&r.velocities[..lanes * nt * 3]);
         if cfg.record_density {
@@ -142,7 +170,7 @@ fn output_buffer(members: usize, per_member: usize) -> Result<Vec<f64>, CoreErro
 
 /// Members `first .. first + lanes` as one batch (unused lanes repeat the last member and
 /// are discarded).
-struct Batch<'a, A: ?Sized> {
+struct Batch<'a, A: ?Sized, const W: usize> {
     atmosphere: &'a A,
     cfg: &'a MonteCarloConfig,
     /// Integration step, s.
@@ -152,8 +180,8 @@ struct Batch<'a, A: ?Sized> {
     lanes: usize,
 }
 
-impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
-    type Output = Result<BatchOut, CoreError>;
+impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
+    type Output = Result<BatchOut<W>, CoreError>;
 
     #[inline(always)]
     fn run(self) -> Self::Output {
@@ -167,10 +195,10 @@ impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
         } = self;
         let nt = cfg.output_times.len();
         let y0 = cfg.problem.y0;
-        let mut streams: [MemberStream; LANES] =
+        let mut streams: [MemberStream; W] =
             std::array::from_fn(|l| MemberStream::new(cfg.seed, (first + l.min(lanes - 1)) as u64));
-        let mut y: State<LANES> = [[0.0; LANES]; 6];
-        for l in 0..LANES {
+        let mut y: State<W> = [[0.0; W]; 6];
+        for l in 0..W {
             let mut s = y0;
             if let Some(f) = &cfg.initial_factor {
                 let z: [f64; 6] = std::array::from_fn(|_| streams[l].normal());
@@ -194,17 +222,17 @@ impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
         }
 
         let mut dynamics =
-            Dynamics::<A, LANES>::new(atmosphere, cfg.problem.epoch, [cfg.problem.drag; LANES]);
+            Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, [cfg.problem.drag; W]);
         dynamics.perturbation = cfg.perturbation;
         let spacing = cfg.kappa.node_spacing(h);
-        let mut kappa = KappaLanes::<LANES> {
+        let mut kappa = KappaLanes::<W> {
             t0: 0.0,
             t1: spacing.unwrap_or(f64::INFINITY),
-            k0: [0.0; LANES],
-            k1: [0.0; LANES],
+            k0: [0.0; W],
+            k1: [0.0; W],
             linear: cfg.kappa.is_linear(),
         };
-        for l in 0..LANES {
+        for l in 0..W {
             kappa.k0[l] = cfg.kappa.first(&mut streams[l]);
             if kappa.linear {
                 kappa.k1[l] = cfg
@@ -221,14 +249,14 @@ impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
             streams,
             spacing,
             per_node: spacing.map_or(usize::MAX, |d| ((d / h).round() as usize).max(1)),
-            frozen: [None; LANES],
+            frozen: [None; W],
             last: (0.0, y),
             out: BatchOut {
-                positions: vec![0.0; LANES * nt * 3],
-                velocities: vec![0.0; LANES * nt * 3],
-                densities: vec![0.0; if cfg.record_density { LANES * nt } else { 0 }],
-                clipped: [0; LANES],
-                decay: [f64::INFINITY; LANES],
+                positions: vec![0.0; W * nt * 3],
+                velocities: vec![0.0; W * nt * 3],
+                densities: vec![0.0; if cfg.record_density { W * nt } else { 0 }],
+                clipped: [0; W],
+                decay: [f64::INFINITY; W],
             },
         };
         drive(cfg.method, &mut dynamics, &mut y, plan, &mut members)?;
@@ -239,25 +267,25 @@ impl<A: Atmosphere + ?Sized> Kernel for Batch<'_, A> {
 
 /// The members' side of a batch run: kappa nodes before steps, decay after them, the
 /// record at outputs.
-struct Members<'a> {
+struct Members<'a, const W: usize> {
     cfg: &'a MonteCarloConfig,
     /// Lanes that hold real members.
     lanes: usize,
     /// Output times.
     nt: usize,
-    streams: [MemberStream; LANES],
+    streams: [MemberStream; W],
     /// Kappa node spacing, s (None: no nodes after t = 0).
     spacing: Option<f64>,
     /// Grid steps per kappa node.
     per_node: usize,
     /// State of each decayed lane at its decay.
-    frozen: [Option<[f64; 6]>; LANES],
+    frozen: [Option<[f64; 6]>; W],
     /// The previous step end (time, states), to locate decays within a step.
-    last: (f64, State<LANES>),
-    out: BatchOut,
+    last: (f64, State<W>),
+    out: BatchOut<W>,
 }
 
-impl<A: Atmosphere + ?Sized> StepHooks<LANES, Dynamics<'_, A, LANES>> for Members<'_> {
+impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> for Members<'_, W> {
     /// A new kappa node segment starts at a grid boundary that is a node.
     #[inline(always)]
     fn before_step(
@@ -265,14 +293,14 @@ impl<A: Atmosphere + ?Sized> StepHooks<LANES, Dynamics<'_, A, LANES>> for Member
         _: usize,
         t: f64,
         grid: Option<usize>,
-        dynamics: &mut Dynamics<'_, A, LANES>,
+        dynamics: &mut Dynamics<'_, A, W>,
     ) {
         if matches!(grid, Some(k) if k > 0 && k % self.per_node == 0) {
             let kl = &mut dynamics.kappa;
             let d = self.spacing.expect("nodes exist when per_node is finite");
             kl.t0 = t;
             kl.t1 = t + d;
-            for l in 0..LANES {
+            for l in 0..W {
                 if kl.linear {
                     kl.k0[l] = kl.k1[l];
                     kl.k1[l] = self.cfg.kappa.next(kl.k0[l], d, &mut self.streams[l]);
@@ -288,21 +316,17 @@ impl<A: Atmosphere + ?Sized> StepHooks<LANES, Dynamics<'_, A, LANES>> for Member
     fn after_step(
         &mut self,
         t: f64,
-        y: &mut State<LANES>,
-        dynamics: &mut Dynamics<'_, A, LANES>,
+        y: &mut State<W>,
+        dynamics: &mut Dynamics<'_, A, W>,
     ) -> Result<Control, CoreError> {
         let (floor, epoch) = (self.cfg.problem.floor_altitude, self.cfg.problem.epoch);
         let (t0, prev) = self.last;
-        for l in 0..LANES {
-            if self.frozen[l].is_some() {
+        let candidates = may_cross_lanes(t0, &prev, t, y, floor);
+        for l in 0..W {
+            if !candidates[l] || self.frozen[l].is_some() {
                 continue;
             }
-            let step = StepEnds {
-                t0,
-                y0: std::array::from_fn(|c| prev[c][l]),
-                t1: t,
-                y1: std::array::from_fn(|c| y[c][l]),
-            };
+            let step = lane_step(t0, &prev, t, y, l);
             if let Some(tc) = crossing(epoch, &step, floor) {
                 self.frozen[l] = Some(step.state_at(tc));
                 self.out.decay[l] = tc;
@@ -324,11 +348,11 @@ impl<A: Atmosphere + ?Sized> StepHooks<LANES, Dynamics<'_, A, LANES>> for Member
         &mut self,
         i: usize,
         t: f64,
-        y: &State<LANES>,
-        dynamics: &Dynamics<'_, A, LANES>,
+        y: &State<W>,
+        dynamics: &Dynamics<'_, A, W>,
     ) -> Result<(), CoreError> {
         let nt = self.nt;
-        for l in 0..LANES {
+        for l in 0..W {
             let frozen = self.frozen[l];
             let s: [f64; 6] = frozen.unwrap_or_else(|| std::array::from_fn(|c| y[c][l]));
             let o = (l * nt + i) * 3;
@@ -426,6 +450,22 @@ mod tests {
             members,
             seed: 5,
             record_density: true,
+        }
+    }
+
+    #[test]
+    fn every_simd_path_gives_the_same_bits() {
+        // 8-lane AVX-512, 4-lane AVX2 and portable batches: same members, same numbers,
+        // including a batch only partly filled (11 members) and decays.
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.3).unwrap();
+        let mut cfg = config(11, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        cfg.output_times = vec![0.0, 1000.0, 7200.0];
+        let runs: Vec<_> = SimdPath::available()
+            .into_iter()
+            .map(|p| monte_carlo_on(p, &atm, &cfg, &Progress::default()).unwrap())
+            .collect();
+        for r in &runs[1..] {
+            assert_eq!(r, &runs[0]);
         }
     }
 

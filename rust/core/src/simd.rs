@@ -1,19 +1,23 @@
 //! SIMD lane width and runtime dispatch. Batch code is written once, generic over the lane
-//! count `W` with plain lane loops; [`dispatch`] compiles it a second time for AVX2 + FMA
-//! and picks that copy when the CPU has it, so the wheel stays portable. A wider path
-//! (e.g. 8 lanes on AVX-512) only adds a variant and a target-feature wrapper here.
+//! count `W` with plain lane loops; [`dispatch_on`] compiles it once more per instruction
+//! set (AVX-512F with 8 lanes, AVX2 + FMA with 4) and runs the copy the CPU supports, so
+//! the wheel stays portable and the 8-lane kernels run (and are tested) on any machine.
 //!
 //! Results are bit-identical on every path: Rust never contracts a * b + c into an FMA on
-//! its own, so the instruction set changes speed only.
+//! its own and lanes never mix, so the instruction set changes speed only. The
+//! environment variable `RHOPROP_SIMD` (`avx512`, `avx2`, `portable`) picks a slower path
+//! than the best one, for benchmarks and tests; a path the CPU lacks is ignored.
 
 use std::sync::OnceLock;
 
-/// Members (or sigma points) per batch, one per SIMD lane.
+/// Members (or sigma points) per batch on the AVX2 and portable paths.
 pub const LANES: usize = 4;
 
 /// The instruction set batch kernels run with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SimdPath {
+    /// x86-64 with AVX-512F (8 f64 lanes), AVX2 and FMA.
+    Avx512,
     /// x86-64 with AVX2 and FMA.
     Avx2Fma,
     /// The baseline build of the target.
@@ -21,27 +25,66 @@ pub enum SimdPath {
 }
 
 impl SimdPath {
-    /// The path of this CPU, detected once and cached.
+    /// The path batch kernels take: the best the CPU offers, or the slower one
+    /// `RHOPROP_SIMD` asks for. Detected once and cached.
     pub fn detect() -> Self {
         static PATH: OnceLock<SimdPath> = OnceLock::new();
         *PATH.get_or_init(|| {
-            #[cfg(target_arch = "x86_64")]
-            {
-                if std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma")
-                {
-                    return SimdPath::Avx2Fma;
-                }
+            let best = Self::best();
+            match std::env::var("RHOPROP_SIMD").as_deref() {
+                Ok("portable") => SimdPath::Portable,
+                Ok("avx2") if best != SimdPath::Portable => SimdPath::Avx2Fma,
+                _ => best,
             }
-            SimdPath::Portable
         })
+    }
+
+    /// The widest path this CPU supports.
+    pub fn best() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") && has!("fma") {
+                return if has!("avx512f") {
+                    SimdPath::Avx512
+                } else {
+                    SimdPath::Avx2Fma
+                };
+            }
+        }
+        SimdPath::Portable
+    }
+
+    /// Every path this CPU can run, widest first.
+    pub fn available() -> Vec<Self> {
+        [SimdPath::Avx512, SimdPath::Avx2Fma, SimdPath::Portable]
+            .into_iter()
+            .filter(|&p| p.rank() <= Self::best().rank())
+            .collect()
+    }
+
+    fn rank(self) -> u8 {
+        match self {
+            SimdPath::Avx512 => 2,
+            SimdPath::Avx2Fma => 1,
+            SimdPath::Portable => 0,
+        }
+    }
+
+    /// Members per batch on this path.
+    pub fn lanes(self) -> usize {
+        match self {
+            SimdPath::Avx512 => 8,
+            _ => LANES,
+        }
     }
 
     /// Short name for logs and benchmarks.
     pub fn name(self) -> &'static str {
         match self {
-            SimdPath::Avx2Fma => "avx2+fma",
-            SimdPath::Portable => "portable",
+            SimdPath::Avx512 => "avx512f (8 lanes)",
+            SimdPath::Avx2Fma => "avx2+fma (4 lanes)",
+            SimdPath::Portable => "portable (4 lanes)",
         }
     }
 }
@@ -54,16 +97,33 @@ pub trait Kernel {
     fn run(self) -> Self::Output;
 }
 
-/// Runs `kernel` with the widest instruction set the CPU offers.
+/// Runs `kernel` on the path [`SimdPath::detect`] chose.
 #[inline]
 pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
+    dispatch_on(SimdPath::detect(), kernel)
+}
+
+/// Runs `kernel` compiled for `path`, which must be one of [`SimdPath::available`]
+/// (others run the portable copy).
+#[inline]
+pub fn dispatch_on<K: Kernel>(path: SimdPath, kernel: K) -> K::Output {
     #[cfg(target_arch = "x86_64")]
     {
-        if SimdPath::detect() == SimdPath::Avx2Fma {
-            // SAFETY: the CPU supports AVX2 and FMA (detected above).
-            return unsafe { run_avx2_fma(kernel) };
+        if path.rank() <= SimdPath::best().rank() {
+            match path {
+                // SAFETY: the CPU supports each path's features (checked just above).
+                SimdPath::Avx512 => return unsafe { run_avx512(kernel) },
+                SimdPath::Avx2Fma => return unsafe { run_avx2_fma(kernel) },
+                SimdPath::Portable => {}
+            }
         }
     }
+    kernel.run()
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn run_avx512<K: Kernel>(kernel: K) -> K::Output {
     kernel.run()
 }
 
@@ -87,9 +147,11 @@ mod tests {
     }
 
     #[test]
-    fn dispatch_matches_the_portable_path() {
+    fn every_path_matches_the_portable_one() {
         let k = || Sum([0.1, 0.2, 0.3, 0.4]);
-        assert_eq!(dispatch(k()).to_bits(), k().run().to_bits());
-        assert!(["avx2+fma", "portable"].contains(&SimdPath::detect().name()));
+        for path in SimdPath::available() {
+            assert_eq!(dispatch_on(path, k()).to_bits(), k().run().to_bits());
+        }
+        assert!(SimdPath::available().contains(&SimdPath::detect()));
     }
 }

@@ -23,6 +23,32 @@ pub trait Atmosphere: Sync {
         rot: &EarthRotation,
     ) -> Result<(f64, f64), CoreError>;
 
+    /// Mean and sigma for every lane of a batch at once (positions `x`, `y`, `z` per lane,
+    /// m), written to `mean` and `sigma`. Lanes whose `active` entry is 0 (drag off, e.g.
+    /// a decayed member) may be skipped and keep what they held. The default asks
+    /// [`Atmosphere::mean_sigma`] lane by lane; analytic sources override it with
+    /// straight-line lane arithmetic that the compiler vectorises.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn mean_sigma_lanes<const W: usize>(
+        &self,
+        ut1: f64,
+        x: &[f64; W],
+        y: &[f64; W],
+        z: &[f64; W],
+        active: &[f64; W],
+        rot: &EarthRotation,
+        mean: &mut [f64; W],
+        sigma: &mut [f64; W],
+    ) -> Result<(), CoreError> {
+        for l in 0..W {
+            if active[l] != 0.0 {
+                (mean[l], sigma[l]) = self.mean_sigma(ut1, [x[l], y[l], z[l]], rot)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Whether `mean_sigma` reads the Earth rotation; when false the caller may skip
     /// computing GMST (an analytic atmosphere of |r| alone).
     fn uses_earth_rotation(&self) -> bool {
