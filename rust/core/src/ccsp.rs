@@ -116,9 +116,8 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
         }
     }
     if (p0 - p0.transpose()).abs().max() > 1e-12 * p0.abs().max() {
-        return Err(CoreError::invalid(
+        return Err(CoreError::rejected(
             "initial covariance",
-            0.0,
             "must be symmetric",
         ));
     }

@@ -16,6 +16,9 @@ pub enum CoreError {
         value: f64,
         reason: String,
     },
+    /// An input that is wrong as a whole (no single value to show).
+    #[error("{name} is invalid: {reason}")]
+    Rejected { name: String, reason: String },
     /// A name that is not one of the known choices.
     #[error("unknown {what} {name:?}; expected one of {}", .expected.join(", "))]
     UnknownName {
@@ -63,6 +66,14 @@ impl CoreError {
         CoreError::Invalid {
             name: name.into(),
             value,
+            reason: reason.into(),
+        }
+    }
+
+    /// Error for an input that is wrong as a whole, with no one value to quote.
+    pub fn rejected(name: impl Into<String>, reason: impl Into<String>) -> Self {
+        CoreError::Rejected {
+            name: name.into(),
             reason: reason.into(),
         }
     }

@@ -213,9 +213,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
         for l in 0..lanes {
             let s: [f64; 6] = std::array::from_fn(|c| y[c][l]);
             check_state(cfg.problem.epoch, &s, cfg.problem.floor_altitude).map_err(|e| {
-                CoreError::invalid(
+                CoreError::rejected(
                     format!("sampled initial state of member {}", first + l),
-                    0.0,
                     format!("{e}; the initial covariance reaches below the floor"),
                 )
             })?;

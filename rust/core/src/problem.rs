@@ -48,16 +48,16 @@ pub fn check_state(epoch: f64, y0: &[f64; 6], floor: f64) -> Result<(), CoreErro
     let alt = altitude(epoch, [y0[0], y0[1], y0[2]]);
     if alt < 0.0 {
         return Err(CoreError::invalid(
-            "initial position",
+            "initial geodetic altitude (m)",
             alt,
-            "is below the Earth's surface (value is the geodetic altitude in m)",
+            "the position is below the Earth's surface",
         ));
     }
     if alt < floor {
         return Err(CoreError::invalid(
-            "initial position",
+            "initial geodetic altitude (m)",
             alt,
-            format!("is below the decay floor altitude of {floor} m (value is the geodetic altitude in m)"),
+            format!("the position is below the decay floor altitude of {floor} m"),
         ));
     }
     Ok(())
