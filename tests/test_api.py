@@ -43,8 +43,9 @@ def test_epoch_forms(epoch):
 
 
 def test_seconds_since_j2000():
-    assert rp.seconds_since_j2000("2000-01-01T12:00:00") == 0.0
-    assert rp.seconds_since_j2000("2000-01-02T12:00:00.5") == 86400.5
+    # J2000 is 2000-01-01T12:00 TT, 64.184 s before 12:00 UTC (rhoprop.time).
+    assert rp.seconds_since_j2000("2000-01-01T12:00:00") == pytest.approx(64.184, abs=1e-9)
+    assert rp.seconds_since_j2000("2000-01-02T12:00:00.5") == pytest.approx(86464.684, abs=1e-9)
 
 
 def test_timedelta_duration(paper_state, paper_craft, benchmark_atmosphere):
@@ -95,7 +96,10 @@ def test_decay_is_reported_not_raised(paper_state, paper_craft):
         ({"output_step": 0.0}, ValueError, "output_step must be > 0"),
         ({"epoch": "yesterday"}, ValueError, "not an ISO-8601 UTC time"),
         ({"epoch": 12.0}, TypeError, "epoch must be an ISO string"),
-        ({"density": "msis"}, TypeError, "density must be a rhoprop density model"),
+        ({"model": "msis"}, TypeError, "model must be a rhoprop density model"),
+        ({"method": "rk8", "step": 86400.0}, ValueError, "step = 86400 s is too large"),
+        ({"method": "rk4", "step": 1e-6}, ValueError, "more than the 10,000,000"),
+        ({"output_step": 1e-6}, ValueError, "more than the 10,000,000 a run may have"),
     ],
 )
 def test_bad_input_raises_clearly(kwargs, error, message):
@@ -105,7 +109,7 @@ def test_bad_input_raises_clearly(kwargs, error, message):
         velocity=rp.scenarios.PAPER_VELOCITY,
     )
     craft = dict(cd=3.0912, area_to_mass=0.0015)
-    call = dict(density=rp.scenarios.benchmark_exponential(), duration=3600.0)
+    call = dict(model=rp.scenarios.benchmark_exponential(), duration=3600.0)
     options = {}
     for key, value in kwargs.items():
         for target in (state, craft, call):
@@ -118,7 +122,7 @@ def test_bad_input_raises_clearly(kwargs, error, message):
         rp.propagate(
             rp.OrbitState(**state),
             rp.Spacecraft(**craft),
-            call["density"],
+            call["model"],
             call["duration"],
             **options,
         )
@@ -136,3 +140,30 @@ def test_bad_exponential_parameters():
         rp.density.Exponential(1e-12, 400e3, 58e3, rel_sigma=-0.1)
     with pytest.raises(ValueError, match="rho0 must be > 0"):
         rp.density.Exponential(0.0, 400e3, 58e3)
+
+
+def test_model_is_the_argument_name_and_density_a_deprecated_alias(
+    paper_state, paper_craft, benchmark_atmosphere
+):
+    a = rp.propagate(paper_state, paper_craft, model=benchmark_atmosphere, duration=600.0)
+    with pytest.warns(DeprecationWarning, match="density=...\\) is deprecated"):
+        b = rp.propagate(paper_state, paper_craft, density=benchmark_atmosphere, duration=600.0)
+    np.testing.assert_array_equal(a.positions, b.positions)
+    with pytest.raises(TypeError, match="both model and density"), pytest.warns(DeprecationWarning):
+        rp.propagate(
+            paper_state, paper_craft, benchmark_atmosphere, 600.0, density=benchmark_atmosphere
+        )
+    with pytest.raises(TypeError, match="missing required argument: 'model'"):
+        rp.propagate(paper_state, paper_craft, duration=600.0)
+    for call in (rp.monte_carlo, rp.ccsp):
+        with pytest.raises(TypeError, match="model must be a rhoprop density model"):
+            call(paper_state, paper_craft, "msis", 600.0)
+
+
+@pytest.mark.parametrize("method", ["rk8", "rk4"])
+def test_fixed_step_defaults_meet_one_metre(paper_state, paper_craft, benchmark_atmosphere, method):
+    # The per-method default step (RK8 180 s, RK4 5 s) ends 3 days within 1 m of the
+    # adaptive DOP853 at rtol 1e-12 (measured 0.06 m and 0.12 m).
+    tr = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 259200.0, method=method)
+    ref = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 259200.0, rtol=1e-12)
+    assert np.linalg.norm(tr.positions[-1] - ref.positions[-1]) < 1.0

@@ -153,6 +153,14 @@ def test_public_names_survive_submodule_imports():
         assert getattr(rp, name) is not None, name
 
 
+def test_core_exceptions_pickle_as_themselves():
+    # Errors raised on Dask workers arrive as the same classes, so `except` catches them.
+    for cls in (rp.RhopropError, rp.DensityFieldError, rp.IntegrationError):
+        back = pickle.loads(pickle.dumps(cls("lookup outside")))
+        assert type(back) is cls and back.args == ("lookup outside",)
+        assert cls.__module__ == "rhoprop._core"
+
+
 def test_kappa_kinds_are_the_cores():
     assert set(rp.kappa.KINDS) == set(_core.KAPPA_KINDS)
     for kind, cls in rp.kappa.KINDS.items():

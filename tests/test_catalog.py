@@ -141,12 +141,93 @@ def test_common_epochs_and_decay(local_result):
     assert r.epochs[-1] == np.datetime64(END, "ns")
     assert r.epochs[0] >= max(o.state.epoch for o in r.objects)
     assert r.mean.shape == (6, len(r.epochs), 6) and r.valid.all() and np.isnat(r.decay_epoch).all()
-    # A very dense atmosphere brings the low objects down inside the window.
+    assert list(r.status) == ["propagated"] * 6 and list(r.reason) == [""] * 6
+    # A very dense atmosphere brings the low objects down inside the window: status
+    # "decayed" with the epoch; outputs after it are invalid and NaN (they used to hold
+    # the last valid state).
     dense = rp.density.Exponential(3e-9, 400e3, 58.515e3, rel_sigma=0.2)
     d = catalog.propagate_catalog(catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False)
     assert (~np.isnat(d.decay_epoch)).any()
     k = int(np.flatnonzero(~np.isnat(d.decay_epoch))[0])
-    assert not d.valid[k, -1] and np.isfinite(d.mean).all()
+    assert not d.valid[k, -1] and np.isfinite(d.mean[d.valid]).all()
+    assert np.isnan(d.mean[~d.valid]).all() and np.isnan(d.covariance[~d.valid]).all()
+    assert d.status[k] == "decayed"
+    assert str(d.decay_epoch[k].astype("datetime64[ms]")) in d.reason[k]
+    np.testing.assert_array_equal(d.status == "decayed", ~np.isnat(d.decay_epoch))
+
+
+def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so():
+    # At 1e-8 kg/m^3 object 90004's covariance stops being positive definite before its
+    # mean orbit decays: outputs end there, status "shortened" with the epoch.
+    dense = rp.density.Exponential(1e-8, 400e3, 58.515e3, rel_sigma=0.2)
+    d = catalog.propagate_catalog(catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False)
+    k = [o.norad_id for o in d.objects].index(90004)
+    assert d.status[k] == "shortened" and np.isnat(d.decay_epoch[k])
+    assert "lost positive definiteness at 2002-09-08T" in d.reason[k]
+    n_valid = d.valid[k].sum()
+    assert 0 < n_valid < len(d.epochs) and d.valid[k, :n_valid].all()
+    for cov in d.covariance[k, :n_valid]:
+        assert np.linalg.eigvalsh(cov).min() > 0
+    assert set(d.status) <= {"propagated", "decayed", "shortened"}
+
+
+def narrow_field():
+    """A sampled field covering 250-480 km only: the upper objects leave it."""
+
+    def fn(t, lat, lon, alt):
+        mean = 3.725e-12 * np.exp(-(alt - 400e3) / 58.515e3)
+        return mean, 0.2 * mean
+
+    model = rp.density.FromFunction(fn, name="exp")
+    return model.field("2002-09-06T12:00", END, altitude_range=(250e3, 480e3))
+
+
+def test_errors_are_raised_chained_or_recorded_never_swallowed(tmp_path):
+    cat = catalog.load(SAMPLE)
+    field = narrow_field()
+    # Default: the first failing object raises its own error type, named and chained.
+    with pytest.raises(rp.DensityFieldError, match=r"object 9000\d \(SYNTH-\d") as info:
+        catalog.propagate_catalog(cat, field, END, output_step=1800.0, progress=False)
+    assert isinstance(info.value.__cause__, rp.DensityFieldError)
+    # errors="record": every object is kept, with its status and reason.
+    r = catalog.propagate_catalog(
+        cat, field, END, output_step=1800.0, progress=False, errors="record"
+    )
+    failed = r.status == "failed"
+    assert failed.any() and (r.status[~failed] == "propagated").all()
+    assert all(
+        x.startswith("DensityFieldError: density field does not cover") for x in r.reason[failed]
+    )
+    assert not r.valid[failed].any() and np.isnan(r.mean[failed]).all()
+    assert r.valid[~failed].all()
+    # The summary keeps every object with its status; OEM files only where there is data.
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(io.write_summary(r, tmp_path / "s.parquet")).to_pydict()
+    assert table["status"] == list(r.status) and len(table["reason"]) == 6
+    assert len(io.write_oem(r, tmp_path / "oem")) == int((~failed).sum())
+    with pytest.raises(ValueError, match="errors must be 'raise' or 'record'"):
+        catalog.propagate_catalog(cat, field, END, errors="ignore")
+
+
+def test_monte_carlo_catalog_goes_through_the_public_wrapper():
+    cat = catalog.load(SAMPLE)
+    model = rp.scenarios.benchmark_exponential(0.2)
+    r = catalog.propagate_catalog(
+        cat, model, END, method="monte_carlo", n=16, seed=3, output_step=1800.0, progress=False
+    )
+    obj = cat[2]
+    mc = rp.monte_carlo(
+        obj.state,
+        rp.Spacecraft(1.0, obj.drag_parameter),
+        model,
+        output_times=rp.time.to_seconds(r.epochs, obj.state.epoch),
+        n=16,
+        seed=5,
+        progress=False,
+    )
+    np.testing.assert_array_equal(r.covariance[2], mc.moments().covariance)
+    assert (r.status == "propagated").all()
 
 
 def test_oem_round_trip_with_an_independent_reader(tmp_path, local_result):
@@ -190,6 +271,29 @@ def test_dask_cluster_equals_local(local_result):
         )
     np.testing.assert_array_equal(remote.mean, local_result.mean)
     np.testing.assert_array_equal(remote.covariance, local_result.covariance)
+    np.testing.assert_array_equal(remote.status, local_result.status)
+
+
+def test_dask_raises_the_workers_own_exception():
+    # Not a bare RuntimeError: the task's DensityFieldError, the object named, chained.
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+        pytest.raises(rp.DensityFieldError, match=r"object 9000\d") as info,
+    ):
+        catalog.propagate_catalog(
+            catalog.load(SAMPLE),
+            narrow_field(),
+            END,
+            output_step=1800.0,
+            client=client,
+            chunk_size=2,
+            progress=False,
+        )
+    assert info.value.__cause__ is not None
 
 
 def test_cli_catalog(tmp_path, capsys):
@@ -200,6 +304,31 @@ def test_cli_catalog(tmp_path, capsys):
     assert len(list((tmp_path / "oem").glob("*.oem"))) == 6
     assert (tmp_path / "summary.parquet").exists()
     assert "objects/s" in capsys.readouterr().out
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["complete"] and manifest["rhoprop_version"] == rp.__version__
+    assert manifest["command"].startswith("rhoprop catalog ")
+    assert sorted(manifest["files"]) == sorted(
+        ["summary.parquet", *(f"oem/{o.norad_id}.oem" for o in catalog.load(SAMPLE))]
+    )
+    # The same folder again: refused (it holds that run's files), unless --overwrite.
+    args = ["catalog", str(SAMPLE), "--end", END, "--out", str(tmp_path), "--model", "exponential"]
+    assert main(args) == 1
+    assert "holds the files of an earlier run" in capsys.readouterr().err
+    assert main([*args, "--overwrite"]) == 0
+
+
+def test_cli_catalog_duplicate_ids(tmp_path, capsys):
+    # The same element set twice: an error before any work, or suffixed OEM names.
+    text = SAMPLE.read_text()
+    twice = tmp_path / "twice.tle"
+    twice.write_text(text + text)
+    out = tmp_path / "out"
+    args = ["catalog", str(twice), "--end", END, "--out", str(out), "--model", "exponential"]
+    assert main(args) == 1
+    assert "occur more than once" in capsys.readouterr().err and not out.exists()
+    assert main([*args, "--duplicates", "suffix"]) == 0
+    names = sorted(p.name for p in (out / "oem").glob("*.oem"))
+    assert len(names) == 12 and "90001_2.oem" in names
 
 
 def test_dask_survives_a_worker_dying_mid_run(local_result):

@@ -34,6 +34,18 @@ def test_paper_quick_prints_methods_that_agree(capsys, tmp_path):
     assert (tmp_path / "method_comparison.png").stat().st_size > 10_000
     assert (tmp_path / "ccsp_vs_monte_carlo.png").stat().st_size > 10_000
     assert len(summary["ccsp_vs_monte_carlo"]) == 3
+    # Every file went through a temporary name and is listed in the manifest.
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["complete"] and sorted(manifest["files"]) == [
+        "ccsp_vs_monte_carlo.png",
+        "ensembles.png",
+        "method_comparison.png",
+        "summary.json",
+        "summary.md",
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [*manifest["files"], "manifest.json"]
+    )
 
 
 def test_console_script_module_entry():

@@ -189,11 +189,12 @@ def test_clipping_and_lognormal(setup):
 
 def test_decayed_members_are_reported(setup):
     # At 1e-9 kg/m^3 the mean orbit decays after 2.64 days; with a 50 % density bias the
-    # denser members decay within 2.5 days and are reported, the others are not.
+    # denser members decay within 2.5 days and are reported, the others are not. (Until
+    # issue 13 a decayed member stayed frozen at its decay state and a decaying mean orbit
+    # was an error; now the member is NaN after its decay and the run completes, see
+    # tests/test_decay.py.)
     state, craft = setup
     dense = rp.density.Exponential(1e-9, 400e3, 58.515e3, rel_sigma=0.5)
-    with pytest.raises(ValueError, match="mean orbit decays"):
-        rp.monte_carlo(state, craft, dense, DAY3, n=8, progress=False)
     r = rp.monte_carlo(
         state,
         craft,
@@ -204,12 +205,46 @@ def test_decayed_members_are_reported(setup):
         progress=False,
         output_step=1800.0,
     )
-    assert np.isfinite(r.positions).all()
     assert 0 < r.decayed.sum() < 64
     assert np.all(r.decay_times[r.decayed] < 2.5 * 86400.0)
-    # A decayed member's outputs stay at its decay state.
+    assert np.isfinite(r.positions[~r.decayed]).all()
     m = np.flatnonzero(r.decayed)[0]
-    np.testing.assert_array_equal(r.positions[m, -1], r.positions[m, -2])
+    assert np.isnan(r.positions[m, -1]).all()
+
+
+@pytest.mark.parametrize(("method", "step"), [("rk8", 180.0), ("rk4", 5.0)])
+def test_step_default_per_method(setup, method, step):
+    # step=None is the method's default (RK4 used to get RK8's 180 s and ended 4,343 km
+    # off): < 1 m after 3 days against the adaptive DOP853 at rtol 1e-12.
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.0)
+    r = rp.monte_carlo(
+        state, craft, model, DAY3, n=2, output_step=None, method=method, progress=False
+    )
+    assert r.step == step
+    reference = rp.propagate(state, craft, model, DAY3, rtol=1e-12).positions[-1]
+    assert np.linalg.norm(r.positions[0, -1] - reference) < 1.0
+    assert np.linalg.norm(r.mean_orbit.positions[-1] - reference) < 1.0
+
+
+def test_output_times_equal_the_output_grid(setup):
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    grid = rp.monte_carlo(state, craft, model, 7200.0, n=8, output_step=1800.0, progress=False)
+    explicit = rp.monte_carlo(
+        state,
+        craft,
+        model,
+        output_times=[0.0, 1800.0, 3600.0, 5400.0, 7200.0],
+        n=8,
+        progress=False,
+    )
+    np.testing.assert_array_equal(explicit.positions, grid.positions)
+    np.testing.assert_array_equal(explicit.times, grid.times)
+    # Calls that report progress through a callable get the members done.
+    seen = []
+    rp.monte_carlo(state, craft, model, 7200.0, n=8, progress=seen.append)
+    assert all(0 <= k <= 8 for k in seen)
 
 
 @pytest.mark.parametrize(
@@ -222,6 +257,17 @@ def test_decayed_members_are_reported(setup):
         ({"perturbation": "multiplicative"}, "unknown perturbation"),
         ({"seed": -1}, "seed must be a non-negative integer"),
         ({"method": "dop853"}, "a Monte Carlo uses 'rk8' or 'rk4'"),
+        ({"initial_covariance": np.diag([1.0, np.nan, 1, 1, 1, 1])}, r"\[1\]\[1\] must be finite"),
+        ({"threads": 10**6}, "threads = 1000000 is more than"),
+        ({"step": 86400.0}, r"step = 86400 s is too large for this orbit: its period is 5\d\d\d s"),
+        ({"step": 1e-6}, "more than the 10,000,000 a run may take"),
+        ({"kappa": rp.kappa.White(1e-6)}, r"node spacing of White\(step=1e-06\)"),
+        ({"output_step": 1e-6}, "more than the 10,000,000 a run may have"),
+        ({"n": 10**9}, r"would need about 201 GiB, over the limit of 8 GiB"),
+        ({"n": 10**4, "max_memory": 1e6}, r"about 0.0\d+ GiB, over the limit"),
+        ({"output_times": [0.0, 3600.0]}, "disagrees with the last of output_times"),
+        ({"output_times": [0.0, 7200.0], "output_step": 60.0}, "not both"),
+        ({"output_times": [3600.0, 0.0]}, "must increase strictly"),
     ],
 )
 def test_bad_input(setup, kwargs, match):

@@ -16,7 +16,14 @@ from . import density, frames
 from ._version import __version__
 from .ensemble import EnsembleResult, GaussianMixture, debias_drag_coefficient
 from .ensemble import ensemble as ensemble  # the function; the package stays importable
-from .errors import DensityFieldError, IntegrationError, RhopropError, ScenarioError
+from .errors import (
+    DecayError,
+    DensityFieldError,
+    IntegrationError,
+    OutsideRecordError,
+    RhopropError,
+    ScenarioError,
+)
 from .propagation import (
     CcspResult,
     MonteCarloResult,
@@ -60,12 +67,14 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "CcspResult",
+    "DecayError",
     "DensityFieldError",
     "EnsembleResult",
     "GaussianMixture",
     "IntegrationError",
     "MonteCarloResult",
     "OrbitState",
+    "OutsideRecordError",
     "RhopropError",
     "ScenarioError",
     "SpaceWeather",

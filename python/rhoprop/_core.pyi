@@ -14,6 +14,7 @@ __all__ = [
     "DEFAULT_FLOOR_ALTITUDE",
     "J2",
     "KAPPA_KINDS",
+    "MAX_STEPS",
     "MU",
     "OMEGA_EARTH",
     "R_EARTH",
@@ -45,6 +46,7 @@ WGS84_F: float
 OMEGA_EARTH: float
 SECONDS_PER_DAY: float
 DEFAULT_FLOOR_ALTITUDE: float
+MAX_STEPS: int
 # Names of the kappa processes: the first item of monte_carlo's kappa spec.
 KAPPA_KINDS: tuple[str, ...]
 

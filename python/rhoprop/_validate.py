@@ -28,11 +28,20 @@ def positive(name: str, value: object) -> float:
 
 
 def seconds(name: str, value: object) -> float:
-    """A duration in seconds from a number, ``datetime.timedelta`` or ``timedelta64``."""
+    """A finite duration in seconds from a number, ``datetime.timedelta`` or
+    ``timedelta64`` (NaT is a ValueError naming ``name``)."""
     if isinstance(value, _dt.timedelta):
         return value.total_seconds()
     if isinstance(value, np.timedelta64):
-        return float(value / np.timedelta64(1, "ns")) * 1e-9
+        if np.isnat(value):
+            raise ValueError(f"{name} is NaT (not a time)")
+        unit = np.datetime_data(value.dtype)[0]
+        if unit in ("Y", "M"):
+            raise ValueError(f"{name} in years or months is ambiguous; give seconds or days")
+        if unit in ("W", "D", "h", "m", "s"):
+            # In whole seconds: a coarse unit converted to ns could overflow.
+            return real(name, float(value.astype("timedelta64[s]").astype(np.int64)))
+        return real(name, float(value / np.timedelta64(1, "ns")) * 1e-9)
     return real(name, value)
 
 

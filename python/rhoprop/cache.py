@@ -1,10 +1,47 @@
 """The user cache directory, shared by the space-weather download and the sampled
-density fields."""
+density fields, and the entries stored in it.
+
+An entry is a ``.npz`` file of named arrays plus a sha256 checksum of their contents. It
+is written under a unique temporary name (process id, thread id and random bytes) in the
+same directory and renamed into place, so readers never see half a file and concurrent
+writers never collide. Misuse never loses a computed value:
+
+* a corrupt entry (truncated, not an npz, wrong checksum) gives a :class:`CacheWarning`
+  and is treated as missing, so the caller recomputes and overwrites it;
+* an unreadable or unwritable cache (read-only, replaced by a file, disk full) gives a
+  :class:`CacheWarning` and the caller keeps the value in memory; a directory deleted
+  meanwhile is made again;
+* the directory is kept under a size cap, ``$RHOPROP_CACHE_MAX_BYTES`` (default
+  2 GB = 2e9 bytes; 0 disables writing), by deleting the least recently used entries
+  (a hit refreshes an entry's modification time). An entry larger than the cap is not
+  written.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import os
+import secrets
+import threading
+import warnings
+import zipfile
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import CacheWarning
+
+#: Environment variable of the size cap of each cache directory, bytes.
+MAX_BYTES_ENV = "RHOPROP_CACHE_MAX_BYTES"
+#: Default size cap, bytes (2 GB).
+DEFAULT_MAX_BYTES = 2_000_000_000
+#: Name of the checksum array inside an entry.
+CHECKSUM = "checksum"
+
+_LOCKS: dict[str, threading.Lock] = {}
+_LOCKS_GUARD = threading.Lock()
 
 
 def cache_dir(override: str | os.PathLike[str] | None = None) -> Path:
@@ -17,3 +54,126 @@ def cache_dir(override: str | os.PathLike[str] | None = None) -> Path:
     if os.environ.get("XDG_CACHE_HOME"):
         return Path(os.environ["XDG_CACHE_HOME"]).expanduser() / "rhoprop"
     return Path.home() / ".cache" / "rhoprop"
+
+
+def max_bytes() -> int:
+    """The size cap of a cache directory, bytes: ``$RHOPROP_CACHE_MAX_BYTES`` (a number
+    >= 0, e.g. ``5e8``) or :data:`DEFAULT_MAX_BYTES`. ValueError naming the variable if it
+    is not a number >= 0."""
+    text = os.environ.get(MAX_BYTES_ENV, "").strip()
+    if not text:
+        return DEFAULT_MAX_BYTES
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value >= 0 or value == float("inf"):
+        raise ValueError(f"{MAX_BYTES_ENV} must be a number of bytes >= 0, got {text!r}")
+    return int(value)
+
+
+def checksum(arrays: Mapping[str, np.ndarray]) -> str:
+    """sha256 (hex) of named arrays: names, dtypes, shapes and bytes, in name order."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
+        digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
+def entry_lock(path: Path) -> threading.Lock:
+    """A lock per entry path, so that threads of one process needing the same entry
+    compute it once (the others then read it)."""
+    key = str(path)
+    with _LOCKS_GUARD:
+        lock = _LOCKS.get(key)
+        if lock is None:
+            lock = _LOCKS[key] = threading.Lock()
+        return lock
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, CacheWarning, stacklevel=3)
+
+
+def load_entry(path: Path) -> dict[str, np.ndarray] | None:
+    """The arrays of the entry at ``path`` (checksum verified and removed), or None if
+    there is none. A corrupt or unreadable entry gives a :class:`CacheWarning` and None,
+    so the caller recomputes the value and overwrites the entry."""
+    try:
+        # Our own handle: numpy leaves it open when the zip is truncated.
+        with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as saved:
+            arrays = {name: saved[name] for name in saved.files}
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except (OSError, ValueError, EOFError, KeyError, TypeError, zipfile.BadZipFile) as err:
+        # (TypeError: a plain .npy, not an archive.)
+        _warn(f"cache entry {path} is unreadable ({err}); recomputing it")
+        return None
+    stored = arrays.pop(CHECKSUM, None)
+    if stored is None or str(stored) != checksum(arrays):
+        _warn(f"cache entry {path} is corrupt (checksum mismatch); recomputing it")
+        return None
+    try:
+        os.utime(path)  # a hit makes the entry the most recently used
+    except OSError:
+        pass
+    return arrays
+
+
+def store_entry(path: Path, arrays: Mapping[str, Any]) -> bool:
+    """Writes ``arrays`` with their checksum to ``path`` atomically and evicts the least
+    recently used entries of its directory beyond :func:`max_bytes`. Returns whether the
+    entry was written; an OSError (unwritable or vanished directory, full disk) gives a
+    :class:`CacheWarning` instead of an exception."""
+    data: dict[str, Any] = {name: np.asarray(a) for name, a in arrays.items()}
+    data[CHECKSUM] = np.array(checksum(data))
+    cap = max_bytes()
+    size = sum(a.nbytes for a in data.values())
+    if size > cap:
+        return False  # documented: an entry larger than the cap is not written
+    temporary: Path | None = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        temporary = path.with_name(
+            f".{path.name}.{os.getpid()}.{threading.get_ident()}.{secrets.token_hex(8)}.tmp"
+        )
+        with open(temporary, "xb") as out:
+            np.savez(out, **data)
+        os.replace(temporary, path)
+        temporary = None
+        _evict(path.parent, cap, keep=path)
+    except OSError as err:
+        _warn(f"could not write cache entry {path} ({err}); the value is kept in memory only")
+        return False
+    finally:
+        if temporary is not None:
+            try:
+                temporary.unlink(missing_ok=True)
+            except OSError:
+                pass
+    return True
+
+
+def _evict(directory: Path, cap: int, keep: Path) -> None:
+    """Deletes the least recently used ``*.npz`` entries of ``directory`` until their
+    total size is at most ``cap`` (never ``keep``, the entry just written)."""
+    entries = []
+    for path in directory.glob("*.npz"):
+        try:
+            stat = path.stat()
+        except OSError:
+            continue  # removed meanwhile by another process
+        entries.append((stat.st_mtime_ns, stat.st_size, path))
+    total = sum(size for _, size, _ in entries)
+    for _, size, path in sorted(entries, key=lambda e: e[0]):
+        if total <= cap:
+            break
+        if path == keep:
+            continue
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:
+            continue
+        total -= size

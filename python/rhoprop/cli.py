@@ -16,7 +16,13 @@ from .catalog.job import MODEL_NAMES
 def _paper(args: argparse.Namespace) -> int:
     from .studies.report import run_paper
 
-    run_paper(args.out, quick=args.quick, members=args.members)
+    run_paper(
+        args.out,
+        quick=args.quick,
+        members=args.members,
+        overwrite=args.overwrite,
+        command=args.command_line,
+    )
     return 0
 
 
@@ -33,6 +39,9 @@ def _catalog(args: argparse.Namespace) -> int:
         output_step=args.output_step,
         scheduler=args.scheduler,
         skip_bad=args.skip_bad,
+        overwrite=args.overwrite,
+        duplicates=args.duplicates,
+        command=args.command_line,
     )
     return 0
 
@@ -40,7 +49,18 @@ def _catalog(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from .studies.scenario_file import run_scenario_file
 
-    return run_scenario_file(args.scenario, out=args.out)
+    return run_scenario_file(
+        args.scenario, out=args.out, overwrite=args.overwrite, command=args.command_line
+    )
+
+
+def _overwrite(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="clear the output folder first if it holds an earlier run's files "
+        "(without it such a folder is refused; a folder of other files always is)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -80,6 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
         default="rhoprop-paper",
         help="directory for figures and summaries (default ./rhoprop-paper)",
     )
+    _overwrite(paper)
     paper.set_defaults(run=_paper)
     run = sub.add_parser(
         "run",
@@ -88,7 +109,13 @@ def build_parser() -> argparse.ArgumentParser:
         "spacecraft, models, method, duration, outputs). See examples/scenario.toml.",
     )
     run.add_argument("scenario", help="path of the TOML scenario file")
-    run.add_argument("--out", default=None, help="output directory (overrides the file's)")
+    run.add_argument(
+        "--out",
+        default=None,
+        help="output directory (overrides the file's output.directory, which is relative "
+        "to the scenario file and must stay inside its folder)",
+    )
+    _overwrite(run)
     run.set_defaults(run=_run)
     cat = sub.add_parser(
         "catalog",
@@ -116,8 +143,17 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument(
         "--skip-bad",
         action="store_true",
-        help="skip malformed element sets (reported) instead of failing",
+        help="skip malformed element sets and record objects whose propagation fails "
+        "(status 'failed' in the summary; all reported on stderr) instead of stopping",
     )
+    cat.add_argument(
+        "--duplicates",
+        choices=("error", "suffix"),
+        default="error",
+        help="NORAD ids occurring more than once: an error (default) or OEM files named "
+        "<id>_2.oem, <id>_3.oem, ...",
+    )
+    _overwrite(cat)
     cat.set_defaults(run=_catalog)
     return parser
 
@@ -125,7 +161,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rhoprop`` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    args = parser.parse_args(words)
+    args.command_line = " ".join(["rhoprop", *words])
     if not getattr(args, "run", None):
         parser.print_help()
         return 2

@@ -8,11 +8,14 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .time import seconds_since_j2000, to_seconds
+from .time import to_datetime64_array, ut1_seconds
 
 
 def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
-    a = np.asarray(value, dtype=float)
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f"{name} must be numbers of shape (3,) or (n, 3): {err}") from None
     single = a.ndim == 1
     a2 = np.atleast_2d(a)
     if a2.ndim != 2 or a2.shape[1] != 3:
@@ -23,27 +26,31 @@ def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
 
 
 def _ut1(epochs: Any, n: int) -> np.ndarray:
-    """UT1 seconds since J2000 of one epoch (repeated n times) or of n epochs."""
-    if np.ndim(epochs) == 0:
-        return np.full(n, seconds_since_j2000(epochs))
-    arr = np.asarray(epochs).astype("datetime64[ns]")
-    if len(arr) != n:
-        raise ValueError(f"got {len(arr)} epochs for {n} positions")
-    return to_seconds(arr)
+    """The core's Earth-rotation time (UT1 = UTC seconds since 2000-01-01T12:00, see
+    :func:`rhoprop.time.ut1_seconds`) of one epoch (repeated n times) or of n epochs."""
+    values = to_datetime64_array(epochs, "epochs")
+    if values.ndim == 0:
+        return np.full(n, ut1_seconds(values[()]))
+    if values.ndim != 1 or len(values) != n:
+        raise ValueError(f"got {values.size} epochs for {n} positions")
+    out: np.ndarray = ut1_seconds(values)
+    return out
 
 
 def gmst(epochs: Any) -> np.ndarray | float:
-    """Greenwich mean sidereal time (IAU-82), rad in [0, 2 pi), at UTC epochs (UT1 = UTC)."""
-    if np.ndim(epochs) == 0:
-        return float(_core.gmst(_ut1(epochs, 1))[0])
-    return _core.gmst(_ut1(epochs, len(epochs)))
+    """Greenwich mean sidereal time (IAU-82), rad in [0, 2 pi), at UTC epochs (UT1 = UTC):
+    one epoch gives a float, several an array."""
+    values = to_datetime64_array(epochs, "epochs")
+    if values.ndim == 0:
+        return float(_core.gmst(_ut1(values, 1))[0])
+    return _core.gmst(_ut1(values.ravel(), values.size)).reshape(values.shape)
 
 
 def inertial_to_fixed(epochs: Any, positions: Any) -> np.ndarray:
     """Inertial positions (3,) or (n, 3), m -> Earth-fixed, rotated about z by GMST at
     ``epochs`` (one epoch or n)."""
     p, single = _rows("positions", positions)
-    out = _core.inertial_to_fixed(_ut1(epochs, len(p)), p)
+    out = _finite("Earth-fixed positions", _core.inertial_to_fixed(_ut1(epochs, len(p)), p))
     return out[0] if single else out
 
 
@@ -53,16 +60,44 @@ def fixed_to_inertial(epochs: Any, positions_fixed: Any) -> np.ndarray:
     p, single = _rows("positions_fixed", positions_fixed)
     theta = _core.gmst(_ut1(epochs, len(p)))
     c, s = np.cos(theta), np.sin(theta)
-    out = np.stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1], p[:, 2]], axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):  # reported by _finite
+        out = np.stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1], p[:, 2]], axis=1)
+    out = _finite("inertial positions", out)
     return out[0] if single else out
+
+
+#: Radii (m) between which geodetic coordinates are computed: Heikkinen's closed form is
+#: singular within e^2 a = 42.7 km of the centre and its squares overflow far out.
+GEODETIC_RADII = (50e3, 1e15)
 
 
 def geodetic(positions_fixed: Any) -> np.ndarray:
     """Earth-fixed positions (3,) or (n, 3), m -> geodetic WGS-84 [lat deg, lon deg,
-    alt m], closed form (Heikkinen), sub-millimetre."""
+    alt m], closed form (Heikkinen), sub-millimetre. Positions within 50 km of the centre
+    or beyond 1e15 m are a ValueError (no closed-form answer there)."""
     p, single = _rows("positions_fixed", positions_fixed)
-    out = _core.geodetic(p)
+    with np.errstate(over="ignore"):  # an infinite radius is refused below
+        radius = np.linalg.norm(p, axis=1)
+    low, high = GEODETIC_RADII
+    bad = np.flatnonzero((radius < low) | (radius > high))
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(
+            f"positions_fixed[{i}] is {radius[i]:.4g} m from the Earth's centre: geodetic "
+            f"coordinates are computed between {low:g} and {high:g} m"
+        )
+    out = _finite("geodetic coordinates", _core.geodetic(p))
     return out[0] if single else out
+
+
+def _finite(what: str, out: np.ndarray) -> np.ndarray:
+    """``out`` if finite, else a ValueError naming the first bad row (inputs so large
+    that the arithmetic overflows)."""
+    bad = ~np.isfinite(out)
+    if bad.any():
+        row = int(np.argwhere(bad)[0][0]) if out.ndim > 1 else 0
+        raise ValueError(f"{what} overflow at row {row}: the inputs are too large")
+    return out
 
 
 def geodetic_to_fixed(lat: Any, lon: Any, alt: Any) -> np.ndarray:
@@ -71,7 +106,10 @@ def geodetic_to_fixed(lat: Any, lon: Any, alt: Any) -> np.ndarray:
     lla = np.stack([la.ravel(), lo.ravel(), al.ravel()], axis=1)
     if not np.isfinite(lla).all():
         raise ValueError("lat, lon and alt must be finite")
-    return _core.geodetic_to_fixed(lla).reshape((*la.shape, 3))
+    if (np.abs(lla[:, 0]) > 90.0).any():
+        raise ValueError(f"lat must lie in [-90, 90] deg, got {lla[np.abs(lla[:, 0]) > 90, 0][0]}")
+    out = _finite("Earth-fixed positions", _core.geodetic_to_fixed(lla))
+    return out.reshape((*la.shape, 3))
 
 
 def rtn_basis(position: Any, velocity: Any) -> np.ndarray:

@@ -19,9 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from ..constants import SECONDS_PER_DAY
 from ..propagation import OrbitState
-from ..time import J2000, add_seconds
+from ..time import from_jd
 
 #: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
 SGP4_RHO0 = 0.15696615
@@ -69,8 +68,8 @@ def _object_from_satrec(sat: Any, name: str, where: str, drag: float | None) -> 
     err, r, v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
     if err:
         raise ValueError(f"{where}: SGP4 error {err} at the epoch: {SGP4_ERRORS.get(err, '')}")
-    days = (sat.jdsatepoch - 2451545.0) + sat.jdsatepochF
-    epoch = add_seconds(J2000, days * SECONDS_PER_DAY)
+    # A TLE epoch counts 86400-s days on the UTC calendar (no leap seconds).
+    epoch = from_jd(sat.jdsatepoch, sat.jdsatepochF, scale="utc")
     bstar = float(sat.bstar)
     if drag is None:
         if not bstar > 0:
@@ -181,7 +180,18 @@ def load(
     if errors not in ("raise", "skip"):
         raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
     p = Path(path)
-    text = p.read_text()
+    raw = p.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        if errors == "raise":
+            line = raw[: err.start].count(b"\n") + 1
+            raise ValueError(
+                f"{p.name} line {line}: byte {raw[err.start]:#04x} is not UTF-8 text"
+            ) from err
+        # Element sets are ASCII: a stray byte becomes U+FFFD, so that a damaged data
+        # line fails its own checks (and is skipped) while the rest loads.
+        text = raw.decode("utf-8", errors="replace")
     head = text.lstrip()[:200]
     is_omm = head.startswith(("[", "{", "<")) or "NORAD_CAT_ID" in head or "OBJECT_NAME" in head
     entries = _parse_omm(text, p.name) if is_omm else _parse_tle(text, p.name)

@@ -1,36 +1,47 @@
 """Catalog runs: CCSP or Monte Carlo over many objects from their own epochs to common
-output epochs, locally (objects on threads) or on a Dask cluster, with decay prediction."""
+output epochs, locally (objects on threads) or on a Dask cluster, with decay prediction.
+Every object ends with a status and a reason; errors are raised (or, on request,
+recorded per object), never swallowed."""
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import os
+import re
+import threading
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .. import _core, _validate
+from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density import DensityModel, SampledModel, altitude_band, as_atmosphere
+from ..density import DensityModel, SampledModel, altitude_band
 from ..errors import RhopropError
 from ..progress import ProgressBar
 from ..propagation import (
+    DEFAULT_INITIAL_COVARIANCE,
     Spacecraft,
     ccsp,
+    monte_carlo,
     propagate,
-    sample_moments,
 )
 from ..propagation.kappa import GaussMarkov, KappaProcess
+from ..propagation.propagate import FIELD_MARGIN
 from ..time import (
     EpochLike,
     add_seconds,
     offsets_to_epochs,
     seconds_between,
-    seconds_since_j2000,
     to_datetime64,
     to_seconds,
 )
 from .elements import CatalogObject
+
+#: Status of an object in a :class:`CatalogResult`.
+STATUSES = ("propagated", "decayed", "shortened", "failed")
+#: What ``errors`` of :func:`propagate_catalog` accepts.
+ERRORS = ("raise", "record")
 
 
 @dataclass(frozen=True)
@@ -40,13 +51,21 @@ class CatalogResult:
     Attributes:
         objects: the input objects, in order.
         epochs: common output epochs, datetime64[ns] (nt,).
-        mean: mean states (objects, nt, 6), m and m/s (TEME/inertial).
-        covariance: covariances (objects, nt, 6, 6), SI.
-        valid: False where the object had decayed before that output (its state is then
-            the last valid one).
+        mean: mean states (objects, nt, 6), m and m/s (TEME/inertial); NaN where not valid.
+        covariance: covariances (objects, nt, 6, 6), SI; NaN where not valid.
+        valid: whether the object has statistics at each output (objects, nt): False
+            after its decay, after a CCSP stopped near decay, and everywhere for a failed
+            object.
         decay_epoch: predicted decay epoch of the mean orbit, or NaT.
         decay_fraction: Monte Carlo only: fraction of members decayed by the end (else 0).
         method: "ccsp" or "monte_carlo".
+        status: per object (objects,): ``"propagated"`` (every output valid),
+            ``"decayed"`` (the mean orbit came down at ``decay_epoch``), ``"shortened"``
+            (the CCSP stopped early: a sigma point came down, or its covariance lost
+            positive definiteness near decay), ``"failed"`` (only with
+            ``errors="record"``).
+        reason: per object, what happened in words ("" when propagated): the decay epoch,
+            where the CCSP stopped, or the error (type and message) of a failed object.
     """
 
     objects: list[CatalogObject]
@@ -57,18 +76,26 @@ class CatalogResult:
     decay_epoch: np.ndarray
     decay_fraction: np.ndarray
     method: str
+    status: np.ndarray
+    reason: np.ndarray
 
 
-def _shipped_model(model: Any, objects: list[CatalogObject], end: np.datetime64) -> Any:
+def _shipped_model(
+    model: Any, objects: list[CatalogObject], end: np.datetime64, floor: float
+) -> Any:
     """The atmosphere for all objects, as an object that pickles itself (``__reduce__``)
-    to travel to Dask workers: a sampled model becomes one field covering every object's
-    altitude band from the earliest epoch to the end; other models travel as they are."""
+    to travel to Dask workers: a sampled model becomes one field from the earliest epoch
+    to the end, covering every object's altitude band and reaching down to
+    ``FIELD_MARGIN`` below the floor (and as much above the highest band), so that an
+    object that comes down is reported as decayed rather than leaving the field; other
+    models travel as they are."""
     if isinstance(model, SampledModel):
         lows, highs = zip(
             *(altitude_band(o.state.position, o.state.velocity) for o in objects), strict=True
         )
         start = min(o.state.epoch for o in objects)
-        return model.field(start, end, altitude_range=(max(min(lows), 0.0), max(highs)))
+        bottom = max(min(min(lows), floor - FIELD_MARGIN), 0.0)
+        return model.field(start, end, altitude_range=(bottom, max(highs) + FIELD_MARGIN))
     if not callable(getattr(model, "atmosphere", None)):
         raise TypeError(
             f"model must be a density model or DensityField, got {type(model).__name__}"
@@ -76,106 +103,188 @@ def _shipped_model(model: Any, objects: list[CatalogObject], end: np.datetime64)
     return model
 
 
+def _object_error(err: Exception, obj: CatalogObject) -> Exception:
+    """``err`` again (same type) with the object named in front, or ``err`` itself when
+    its type takes no plain message."""
+    try:
+        return type(err)(f"object {obj.norad_id} ({obj.name}, {obj.source}): {err}")
+    except Exception:  # an exception type with a different constructor
+        return err
+
+
 def _run_object(
-    obj: CatalogObject, model: Any, epochs: np.ndarray, index: int, cfg: dict[str, Any]
+    obj: CatalogObject,
+    model: Any,
+    epochs: np.ndarray,
+    index: int,
+    cfg: dict[str, Any],
+    stop: threading.Event | None = None,
 ) -> dict[str, Any]:
-    """Propagates one object to the common epochs; returns arrays for the result."""
+    """Propagates one object to the common epochs; returns arrays for the result. With
+    ``cfg["errors"] == "record"`` an error becomes status "failed"; else it is raised
+    with the object named and chained to the cause. ``stop`` (local runs) ends the
+    object's Monte Carlo early after Ctrl-C in the caller."""
+    if stop is not None and stop.is_set():
+        raise KeyboardInterrupt("catalog run interrupted")
+    try:
+        return _propagate_object(obj, model, epochs, index, cfg, stop)
+    except Exception as err:
+        if cfg["errors"] == "raise":
+            named = _object_error(err, obj)
+            if named is err:
+                raise
+            raise named from err
+        nt = len(epochs)
+        return {
+            "mean": np.full((nt, 6), np.nan),
+            "cov": np.full((nt, 6, 6), np.nan),
+            "valid": np.zeros(nt, dtype=bool),
+            "decay": None,
+            "fraction": 0.0,
+            "status": "failed",
+            "reason": f"{type(err).__name__}: {err}",
+        }
+
+
+def _propagate_object(
+    obj: CatalogObject,
+    model: Any,
+    epochs: np.ndarray,
+    index: int,
+    cfg: dict[str, Any],
+    stop: threading.Event | None,
+) -> dict[str, Any]:
     craft = Spacecraft(1.0, obj.drag_parameter)
     offsets = to_seconds(epochs, obj.state.epoch)
     nt = len(epochs)
-    end = float(offsets[-1])
-    mean = propagate(
-        obj.state,
-        craft,
-        model,
-        end,
-        method="rk8",
-        floor_altitude=cfg["floor_altitude"],
-        output_step=None,
-    )
-    decay = mean.decayed_at
-    usable = offsets <= (decay if decay is not None else np.inf)
-    out_mean = np.zeros((nt, 6))
-    out_cov = np.zeros((nt, 6, 6))
+    out_mean = np.full((nt, 6), np.nan)
+    out_cov = np.full((nt, 6, 6), np.nan)
     fraction = 0.0
-    k = int(np.count_nonzero(usable))
-    if k:
-        if cfg["method"] == "ccsp":
-            # Close to re-entry the linearised covariance can stop being positive definite:
-            # then the outputs from there on are reported invalid (shrink until it holds).
-            while k:
-                times = _update_times(offsets[:k], cfg["update_interval"])
-                try:
-                    r = ccsp(
-                        obj.state,
-                        craft,
-                        model,
-                        float(times[-1]),
-                        update_times=times,
-                        floor_altitude=cfg["floor_altitude"],
-                    )
-                    break
-                except RhopropError:
-                    k = k - 1 if k < 8 else (3 * k) // 4
-            if k:
-                pick = np.searchsorted(r.times, offsets[:k])
-                out_mean[:k], out_cov[:k] = r.mean[pick], r.covariance[pick]
-        else:
-            out_mean[:k], out_cov[:k], fraction = _mc_moments(
-                obj, model, craft, offsets[:k], cfg, index
-            )
-    if k < nt:
-        out_mean[k:] = (
-            out_mean[k - 1] if k else np.concatenate([obj.state.position, obj.state.velocity])
+    status, reason = "propagated", ""
+    if cfg["method"] == "ccsp":
+        mean = propagate(
+            obj.state,
+            craft,
+            model,
+            float(offsets[-1]),
+            method="rk8",
+            floor_altitude=cfg["floor_altitude"],
         )
-        out_cov[k:] = out_cov[k - 1] if k else 0.0
-    valid = np.arange(nt) < k
+        decay = mean.decayed_at
+        k = int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
+        if k:
+            means, covs, stopped = _ccsp_outputs(obj, craft, model, offsets[:k], cfg)
+            done = len(means)
+            out_mean[:done], out_cov[:done] = means, covs
+            if stopped:
+                status, reason = "shortened", stopped
+    else:
 
+        def check(_done: int) -> None:
+            # Called by the core about every 50 ms: ends the run once the caller stops.
+            if stop is not None and stop.is_set():
+                raise KeyboardInterrupt("catalog run interrupted")
+
+        mc = monte_carlo(
+            obj.state,
+            craft,
+            model,
+            output_times=offsets,
+            n=cfg["n"],
+            kappa=cfg["kappa"],
+            seed=cfg["seed"] + index,
+            output_step=None,
+            progress=check,
+            floor_altitude=cfg["floor_altitude"],
+        )
+        decay = mc.mean_orbit.decayed_at
+        m = mc.moments()
+        out_mean[:], out_cov[:] = m.mean, m.covariance
+        fraction = float(np.mean(mc.decayed))
+    valid = np.isfinite(out_cov).all(axis=(1, 2)) & np.isfinite(out_mean).all(axis=1)
+    out_mean[~valid], out_cov[~valid] = np.nan, np.nan
+    if decay is not None:
+        at = add_seconds(obj.state.epoch, decay)
+        # Decay is the headline; an earlier stop of the CCSP stays in the reason.
+        reason = f"the mean orbit decays at {_iso(at)}" + (f"; {reason}" if reason else "")
+        status = "decayed"
     return {
         "mean": out_mean,
         "cov": out_cov,
         "valid": valid,
         "decay": decay,
         "fraction": fraction,
+        "status": status,
+        "reason": reason,
     }
 
 
-def _mc_moments(
+def _iso(t: np.datetime64) -> str:
+    return str(t.astype("datetime64[ms]")) + "Z"
+
+
+#: The core's message when a CCSP covariance stops being positive definite at an update.
+_LOST_DEFINITENESS = re.compile(r"CCSP covariance at t = ([-+0-9.eE]+) s")
+
+
+def _ccsp_outputs(
     obj: CatalogObject,
-    model: Any,
     craft: Spacecraft,
+    model: Any,
     offsets: np.ndarray,
     cfg: dict[str, Any],
-    index: int,
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """Sample mean and covariance of a Monte Carlo at the given offsets (s), and the
-    fraction of members that decayed."""
-    atmosphere = as_atmosphere(model, obj.state, float(offsets[-1]))
-    out = _core.monte_carlo(
-        atmosphere,
-        seconds_since_j2000(obj.state.epoch),
-        obj.state.state,
-        craft.drag_parameter,
-        np.asarray(offsets, dtype=float),
-        cfg["kappa"]._spec(),
-        "additive",
-        "rk8",
-        180.0,
-        int(cfg["n"]),
-        int(cfg["seed"] + index),
-        None,
-        cfg["floor_altitude"],
-        False,
-        None,
-        None,
-    )
-    states = np.concatenate([out["positions"], out["velocities"]], axis=2)  # (n, nt, 6)
-    mean, cov = sample_moments(states)
-    return mean, cov, float(np.mean(np.isfinite(out["decay_times"])))
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """CCSP means (k, 6) and covariances (k, 6, 6) at the first k of ``offsets`` (s from
+    the object's epoch) it reached, and "" or why it stopped before the last. Only a
+    covariance that stops being positive definite (near decay) or a sigma point that
+    comes down shortens the outputs; every other error is raised."""
+    state = obj.state
+
+    def run(k: int) -> Any:
+        if offsets[k - 1] <= 0:  # every output at the object's own epoch
+            return None
+        return ccsp(
+            state,
+            craft,
+            model,
+            update_times=_update_times(offsets[:k], cfg["update_interval"]),
+            floor_altitude=cfg["floor_altitude"],
+        )
+
+    k, why = len(offsets), ""
+    try:
+        r = run(k)
+    except RhopropError as err:
+        found = _LOST_DEFINITENESS.search(str(err))
+        if found is None or "positive definite" not in str(err):
+            raise
+        t_bad = float(found.group(1))
+        k = int(np.count_nonzero(offsets < t_bad))
+        why = (
+            f"the CCSP covariance lost positive definiteness at "
+            f"{_iso(add_seconds(state.epoch, t_bad))} (near decay); later outputs invalid"
+        )
+        if k == 0:
+            return np.empty((0, 6)), np.empty((0, 6, 6)), why
+        try:
+            r = run(k)
+        except RhopropError as again:
+            raise again from err
+    if r is None:
+        means = np.broadcast_to(state.state, (k, 6))
+        return means, np.broadcast_to(DEFAULT_INITIAL_COVARIANCE, (k, 6, 6)), why
+    reached = int(np.count_nonzero(offsets[:k] <= r.times[-1] * (1 + 1e-12)))
+    if r.decayed_at is not None and reached < len(offsets):
+        why = (
+            f"the CCSP stopped when a sigma point came down at "
+            f"{_iso(add_seconds(state.epoch, r.decayed_at))}; later outputs invalid"
+        )
+    pick = np.searchsorted(r.times, offsets[:reached] * (1 - 1e-12))
+    return r.mean[pick], r.covariance[pick], why
 
 
 def _update_times(offsets: np.ndarray, interval: float) -> np.ndarray:
-    """CCSP update times: every ``interval`` s, plus every output offset."""
+    """CCSP update times: every ``interval`` s, plus every output offset (> 0)."""
     grid = np.arange(interval, offsets[-1], interval)
     times = np.unique(np.concatenate([grid, offsets[offsets > 0]]))
     return times if len(times) else np.array([offsets[-1]])
@@ -189,6 +298,18 @@ def _run_chunk(
     return [(i, _run_object(o, model, epochs, i, cfg)) for i, o in chunk]
 
 
+def _lost_with_a_worker(err: BaseException) -> bool:
+    """Whether a Dask future failed because the cluster lost its work (a dying worker, a
+    cancelled future, a closed connection) rather than because the task raised."""
+    if isinstance(err, (cf.CancelledError, OSError, TimeoutError)):
+        return True
+    try:
+        from distributed.scheduler import KilledWorker
+    except ImportError:  # pragma: no cover - a client implies distributed
+        return False
+    return isinstance(err, KilledWorker)
+
+
 def _run_on_dask(
     client: Any,
     model: Any,
@@ -200,9 +321,11 @@ def _run_on_dask(
     """Runs the chunks on a Dask cluster. The atmosphere is scattered to every worker once
     (broadcast); tasks retry twice; a chunk whose task is lost with a dying worker (or
     whose scattered atmosphere went with it) is submitted again, up to three rounds, so no
-    object is lost and none is counted twice (results are keyed by object index)."""
+    object is lost and none is counted twice (results are keyed by object index). An
+    exception the task itself raised is raised here at once, with its own type."""
     results: dict[int, dict[str, Any]] = {}
     pending = list(range(len(chunks)))
+    last: BaseException | None = None
     for _ in range(3):
         shared = client.scatter(model, broadcast=True)
         futures = {
@@ -210,18 +333,28 @@ def _run_on_dask(
             for c in pending
         }
         failed = []
-        for c, fut in futures.items():
-            try:
-                for i, r in fut.result():
-                    results[i] = r
-            except Exception:
-                failed.append(c)
-        if bar is not None:
-            bar(len(results))
+        try:
+            for c, fut in futures.items():
+                try:
+                    for i, r in fut.result():
+                        results[i] = r
+                except Exception as err:
+                    if not _lost_with_a_worker(err):
+                        raise  # the worker's own exception, type and traceback intact
+                    failed.append(c)
+                    last = err
+                if bar is not None:
+                    bar(len(results))
+        except BaseException:
+            client.cancel(list(futures.values()))
+            raise
         if not failed:
             return results
         pending = failed
-    raise RuntimeError(f"{len(pending)} catalog chunks failed on the cluster three times")
+    assert last is not None
+    if hasattr(last, "add_note"):
+        last.add_note(f"{len(pending)} catalog chunks were lost on the cluster three times")
+    raise last
 
 
 def common_epochs(objects: list[CatalogObject], end: np.datetime64, step: float) -> np.ndarray:
@@ -232,6 +365,35 @@ def common_epochs(objects: list[CatalogObject], end: np.datetime64, step: float)
     k = int(np.floor(span / step * (1 + 1e-12)))
     offsets = -step * np.arange(k, -1, -1)
     return offsets_to_epochs(end, offsets)
+
+
+def _run_local(
+    objs: list[CatalogObject],
+    shipped: Any,
+    epochs: np.ndarray,
+    cfg: dict[str, Any],
+    bar: ProgressBar | None,
+) -> dict[int, dict[str, Any]]:
+    """Objects on threads (the core releases the GIL), each also parallel over its own
+    sigma points or members. Ctrl-C (or an error) cancels the objects not started and
+    stops running Monte Carlos at once; a running CCSP finishes its object first."""
+    stop = threading.Event()
+    pool = cf.ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
+    results: dict[int, dict[str, Any]] = {}
+    try:
+        futures = [
+            pool.submit(_run_object, o, shipped, epochs, i, cfg, stop) for i, o in enumerate(objs)
+        ]
+        for i, fut in enumerate(futures):
+            results[i] = fut.result()
+            if bar is not None:
+                bar(i + 1)
+    except BaseException:
+        stop.set()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    return results
 
 
 def propagate_catalog(
@@ -249,28 +411,50 @@ def propagate_catalog(
     client: Any = None,
     chunk_size: int = 50,
     progress: bool = True,
+    errors: str = "raise",
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
     Args:
         objects: a :class:`Catalog` or list of :class:`CatalogObject`.
-        model: density model (sampled once into a field covering all objects) or a
-            :class:`~rhoprop.density.DensityField` / ``Exponential``.
+        model: density model (sampled once into a field covering all objects, down to
+            50 km below the floor) or a :class:`~rhoprop.density.DensityField` /
+            ``Exponential``.
         end: common end epoch, after every object's epoch.
         method: ``"ccsp"`` (default; ``update_interval`` s) or ``"monte_carlo"`` (``n``
-            members, ``kappa`` process, object i seeded with ``seed + i``).
+            members, ``kappa`` process, object i seeded with ``seed + i``; statistics over
+            the members still flying at each output).
         output_step: spacing of the common output epochs, s, counted back from ``end``.
         client: a ``dask.distributed.Client``: objects are split into chunks of
             ``chunk_size``, the atmosphere is sent once and replicated to every worker
             (recomputed if a worker dies), failed tasks are retried twice; results equal
             the local run.
         progress: show a progress bar (objects done) on a terminal for runs over a second.
+        errors: ``"raise"`` (default): the first object that fails raises its error (same
+            type, the object named, chained to the cause); ``"record"``: it gets status
+            "failed" with the error as reason and no valid output, and the run goes on.
+
+    Returns:
+        :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
+        the run with KeyboardInterrupt.
     """
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
     if method not in ("ccsp", "monte_carlo"):
         raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
+    if errors not in ERRORS:
+        raise ValueError(f"errors must be 'raise' or 'record', got {errors!r}")
+    bad = [o for o in objs if not isinstance(o, CatalogObject)]
+    if bad:
+        raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    process = kappa or GaussMarkov()
+    if not isinstance(process, KappaProcess):
+        raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
+        raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     end64 = to_datetime64(end, "end")
     late = [o for o in objs if o.state.epoch >= end64]
     if late:
@@ -279,38 +463,29 @@ def propagate_catalog(
             f"({late[0].state.epoch})"
         )
     step = _validate.positive("output_step", output_step)
+    floor = _validate.real("floor_altitude", floor_altitude)
     cfg = {
         "method": method,
         "n": int(n),
-        "kappa": kappa or GaussMarkov(),
+        "kappa": process,
         "seed": int(seed),
         "update_interval": _validate.positive("update_interval", update_interval),
-        "floor_altitude": _validate.real("floor_altitude", floor_altitude),
+        "floor_altitude": floor,
+        "errors": errors,
     }
     epochs = common_epochs(objs, end64, step)
-    shipped = _shipped_model(model, objs, end64)
-    indexed = list(enumerate(objs))
-    chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
-    results: dict[int, dict[str, Any]] = {}
+    shipped = _shipped_model(model, objs, end64, floor)
     bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
-    if client is None:
-        # Objects run concurrently on threads (the core releases the GIL), each also
-        # parallel over its own sigma points or members.
-        from concurrent.futures import ThreadPoolExecutor
-
-        workers = os.cpu_count() or 1
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            runs = pool.map(
-                lambda item: _run_object(item[1], shipped, epochs, item[0], cfg), indexed
-            )
-            for i, r in enumerate(runs):
-                results[i] = r
-                if bar is not None:
-                    bar(i + 1)
-    else:
-        results.update(_run_on_dask(client, shipped, chunks, epochs, cfg, bar))
-    if bar is not None:
-        bar.close()
+    try:
+        if client is None:
+            results = _run_local(objs, shipped, epochs, cfg, bar)
+        else:
+            indexed = list(enumerate(objs))
+            chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
+            results = _run_on_dask(client, shipped, chunks, epochs, cfg, bar)
+    finally:
+        if bar is not None:
+            bar.close()
     order = [results[i] for i in range(len(objs))]
     decay = np.array(
         [
@@ -330,4 +505,6 @@ def propagate_catalog(
         decay_epoch=decay,
         decay_fraction=np.array([r["fraction"] for r in order]),
         method=method,
+        status=np.array([r["status"] for r in order], dtype=object),
+        reason=np.array([r["reason"] for r in order], dtype=object),
     )

@@ -8,20 +8,17 @@ from typing import Any
 import numpy as np
 
 from ..constants import MU, R_EARTH, R_POLE
+from ..time import to_datetime64_array
 
 
 def broadcast_inputs(
     times: Any, lat: Any, lon: Any, alt: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Broadcasts and checks ``mean_std`` inputs: datetime64[ns] times, finite latitude
-    in [-90, 90] deg, finite longitude (deg) and altitude (m)."""
-    t = np.asarray(times)
-    if not np.issubdtype(t.dtype, np.datetime64):
-        try:
-            t = t.astype("datetime64[ns]")
-        except (TypeError, ValueError) as err:
-            raise TypeError("times must be UTC datetime64 values or ISO strings") from err
-    t = t.astype("datetime64[ns]")
+    """Broadcasts and checks ``mean_std`` inputs: UTC times (datetime64, ISO strings,
+    datetimes or an astropy Time; see :func:`rhoprop.time.to_datetime64_array`) as
+    datetime64[ns], finite latitude in [-90, 90] deg, finite longitude (deg) and altitude
+    (m)."""
+    t = to_datetime64_array(times, "times")
     arrays = []
     for name, value in (("lat", lat), ("lon", lon), ("alt", alt)):
         a = np.asarray(value, dtype=float)
@@ -32,8 +29,6 @@ def broadcast_inputs(
     la, lo, al = arrays
     if (np.abs(la) > 90.0).any():
         raise ValueError(f"lat must lie in [-90, 90] deg; got {la[np.abs(la) > 90].flat[0]}")
-    if np.isnat(t).any():
-        raise ValueError("times contain NaT")
     t, la, lo, al = np.broadcast_arrays(t, la, lo, al)
     return t, la, lo, al
 

@@ -58,8 +58,17 @@ class Exponential:
         _, la, lo, al = broadcast_inputs(times, lat, lon, alt)
         lla = np.stack([la.ravel(), lo.ravel(), al.ravel()], axis=1)
         r = np.linalg.norm(_core.geodetic_to_fixed(lla), axis=1).reshape(la.shape)
-        mean = self.rho0 * np.exp(-(r - R_EARTH - self.h0) / self.scale_height)
-        return mean, self.rel_sigma * mean
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # checked below
+            mean = self.rho0 * np.exp(-(r - R_EARTH - self.h0) / self.scale_height)
+            std = self.rel_sigma * mean
+        bad = ~(np.isfinite(mean) & np.isfinite(std))
+        if bad.any():
+            h = float(np.broadcast_to(r - R_EARTH, bad.shape)[bad].flat[0])
+            raise ValueError(
+                f"{self!r} overflows at spherical altitude {h:g} m (density or its sigma "
+                "beyond the float range)"
+            )
+        return mean, std
 
     def atmosphere(self, state: Any, duration: float) -> Any:
         """The analytic core atmosphere (valid at every time and place)."""

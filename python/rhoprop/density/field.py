@@ -5,7 +5,10 @@ latitude, longitude) grid. ln-density is smooth, so a coarse grid suffices; the 
 may repeat a node where the model's drivers jump (3-hourly ap, daily F10.7), so the field
 represents those steps exactly instead of smearing them over a cell. Sampled fields are
 cached on disk, keyed by the model's own description (version, drivers, uncertainty), the
-window and the resolution, so a rerun is instant.
+window and the resolution, so a rerun is instant. The cache stores a checksum with each
+entry, recomputes a corrupt one, keeps the field in memory when the cache cannot be
+written (both with a :class:`~rhoprop.errors.CacheWarning`) and stays under a size cap
+(``$RHOPROP_CACHE_MAX_BYTES``, default 2 GB; see :mod:`rhoprop.cache`).
 """
 
 from __future__ import annotations
@@ -13,22 +16,22 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-import os
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
-from .. import _core, _validate, frames
-from ..cache import cache_dir
+from .. import _core, _validate
+from ..cache import cache_dir, entry_lock, load_entry, store_entry
 from ..time import (
     EpochLike,
     add_seconds,
+    core_times,
     offsets_to_epochs,
     seconds_between,
-    seconds_since_j2000,
     to_datetime64,
     to_seconds,
+    ut1_seconds,
 )
 from ._inputs import broadcast_inputs
 
@@ -62,6 +65,16 @@ class FieldResolution:
             step = getattr(self, name)
             if abs(span / step - round(span / step)) > 1e-9:
                 raise ValueError(f"resolution.{name} = {step} deg must divide {span:g} deg")
+
+
+def resolution_arg(value: Any, name: str = "resolution") -> FieldResolution | None:
+    """``value`` checked as a model's ``resolution`` keyword: a :class:`FieldResolution`
+    or None (the default resolution)."""
+    if value is not None and not isinstance(value, FieldResolution):
+        raise TypeError(
+            f"{name} must be a rhoprop.density.FieldResolution or None, got {type(value).__name__}"
+        )
+    return value
 
 
 @dataclass(frozen=True)
@@ -120,7 +133,7 @@ class DensityField:
         lnm = np.ascontiguousarray(ln_mean, dtype=float)
         rs = np.ascontiguousarray(rel_sigma, dtype=float)
         core = _core.GriddedAtmosphere(
-            seconds_since_j2000(e),
+            ut1_seconds(e),
             t,
             (float(alt[0]), float(alt[1] - alt[0]), len(alt)),
             (float(lat[0]), float(lat[1] - lat[0]), len(lat)),
@@ -161,8 +174,16 @@ class DensityField:
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
         shape = la.shape
         fixed = _core.geodetic_to_fixed(np.stack([la.ravel(), lo.ravel(), al.ravel()], axis=1))
-        ut1 = to_seconds(t.ravel())
-        inertial = frames.fixed_to_inertial(t.ravel(), fixed).reshape(-1, 3)
+        # The core's time as a run from the field epoch sees it (elapsed SI seconds on the
+        # field's axis), and the same angle for the rotation, so the lookup is exact also
+        # across a leap second.
+        ut1 = core_times(t.ravel(), self.epoch)
+        theta = _core.gmst(ut1)
+        c, s = np.cos(theta), np.sin(theta)
+        inertial = np.stack(
+            [c * fixed[:, 0] - s * fixed[:, 1], s * fixed[:, 0] + c * fixed[:, 1], fixed[:, 2]],
+            axis=1,
+        )
         mean, sigma = self.core.mean_sigma(ut1, inertial)
         return mean.reshape(shape), sigma.reshape(shape)
 
@@ -235,7 +256,7 @@ def sample_field(
     arrays (nt, nalt, nlat, nlon), ``_breaks(start, end)`` -> epochs where its drivers
     jump, and ``cache_key(start, end)`` -> a JSON-able description (or None: no caching).
     """
-    res = resolution or FieldResolution()
+    res = resolution_arg(resolution) or FieldResolution()
     t0, t1 = to_datetime64(start, "start"), to_datetime64(end, "end")
     span = seconds_between(t0, t1)
     if not span > 0:
@@ -246,31 +267,48 @@ def sample_field(
     nodes, left = time_nodes(span, res.time, offsets)
 
     key = model.cache_key(t0, t1) if cache else None
-    path = None
-    if key is not None:
-        blob = json.dumps(
-            {
-                "model": key,
-                "start": str(t0),
-                "end": str(t1),
-                "alt": [alt[0], alt[-1]],
-                "res": asdict(res),
-                "format": 1,
-            },
-            sort_keys=True,
-            default=str,
-        ).encode()
-        path = cache_dir() / "fields" / (hashlib.sha256(blob).hexdigest()[:32] + ".npz")
-        if path.exists():
-            with np.load(path) as saved:
-                return DensityField.from_arrays(
-                    t0, nodes, alt, lat, lon, saved["ln_mean"], saved["rel_sigma"]
-                )
-
-    ln_mean, rel_sigma = model._grid_values(offsets_to_epochs(t0, nodes), left, alt, lat, lon)
-    if path is not None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, ln_mean=ln_mean, rel_sigma=rel_sigma)
-        os.replace(tmp, path)
+    if key is None:
+        ln_mean, rel_sigma = model._grid_values(offsets_to_epochs(t0, nodes), left, alt, lat, lon)
+        return DensityField.from_arrays(t0, nodes, alt, lat, lon, ln_mean, rel_sigma)
+    blob = json.dumps(
+        {
+            "model": key,
+            "start": str(t0),
+            "end": str(t1),
+            "alt": [alt[0], alt[-1]],
+            "res": asdict(res),
+            "format": FIELD_FORMAT,
+        },
+        sort_keys=True,
+        default=str,
+    )
+    path = cache_dir() / "fields" / (hashlib.sha256(blob.encode()).hexdigest()[:32] + ".npz")
+    shape = (len(nodes), len(alt), len(lat), len(lon))
+    # One thread computes a field the others of this process wait for and then read.
+    with entry_lock(path):
+        saved = load_entry(path)
+        if saved is not None and _entry_matches(saved, blob, shape):
+            ln_mean, rel_sigma = saved["ln_mean"], saved["rel_sigma"]
+        else:
+            ln_mean, rel_sigma = model._grid_values(
+                offsets_to_epochs(t0, nodes), left, alt, lat, lon
+            )
+            store_entry(path, {"ln_mean": ln_mean, "rel_sigma": rel_sigma, "key": np.array(blob)})
     return DensityField.from_arrays(t0, nodes, alt, lat, lon, ln_mean, rel_sigma)
+
+
+#: Version of the cached field format (2: with checksum and key); part of the key, so
+#: entries of another format are misses, never corrupt.
+FIELD_FORMAT = 2
+
+
+def _entry_matches(saved: dict[str, np.ndarray], blob: str, shape: tuple[int, ...]) -> bool:
+    """Whether a (checksum-verified) entry holds this key's field."""
+    try:
+        return (
+            str(saved["key"]) == blob
+            and saved["ln_mean"].shape == shape
+            and saved["rel_sigma"].shape == shape
+        )
+    except KeyError:
+        return False

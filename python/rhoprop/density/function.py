@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ._inputs import broadcast_inputs
+from .field import FieldResolution, resolution_arg
 from .model import SampledModel
 
 
@@ -29,6 +30,9 @@ class FromFunction(SampledModel):
         cache_key: a string identifying the function's values (e.g. "my-net v3,
             weights sha256 ..."); it enables the on-disk field cache, so it must change
             whenever the function's output changes. None (default): no caching.
+        resolution: grid spacing of the field the propagators sample the function into
+            (:class:`~rhoprop.density.FieldResolution`; None: its defaults). A function
+            with sharp features may need a finer grid.
 
     Example:
         >>> import numpy as np
@@ -47,6 +51,7 @@ class FromFunction(SampledModel):
         *,
         name: str | None = None,
         cache_key: str | None = None,
+        resolution: FieldResolution | None = None,
     ) -> None:
         if not callable(fn):
             raise TypeError(f"fn must be callable, got {type(fn).__name__}")
@@ -57,6 +62,7 @@ class FromFunction(SampledModel):
         self.fn = fn
         self.name = name if name is not None else getattr(fn, "__name__", type(fn).__name__)
         self._key = cache_key
+        self.resolution = resolution_arg(resolution)
 
     def __repr__(self) -> str:
         return f"FromFunction(name={self.name!r})"

@@ -6,7 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from ..time import to_seconds
+from ..errors import DensityFieldError
+from ..time import to_datetime64, to_datetime64_array, to_seconds
 from .field import DensityField, FieldResolution, sample_field
 from .model import SampledModel
 
@@ -26,8 +27,8 @@ class Gridded(SampledModel):
     """
 
     def __init__(self, times: Any, alt: Any, lat: Any, lon: Any, mean: Any, std: Any) -> None:
-        epochs = np.asarray(times).astype("datetime64[ns]")
-        if epochs.ndim != 1 or len(epochs) < 2 or np.isnat(epochs).any():
+        epochs = to_datetime64_array(times, "times")
+        if epochs.ndim != 1 or len(epochs) < 2:
             raise ValueError("times must be a 1-D array of at least 2 valid UTC epochs")
         m = np.asarray(mean, dtype=float)
         s = np.asarray(std, dtype=float)
@@ -77,13 +78,14 @@ class Gridded(SampledModel):
         resolution: FieldResolution | None = None,
         cache: bool = False,
     ) -> DensityField:
-        """The native grid when no ``resolution`` is given (it must cover [start, end]);
-        otherwise resampled at ``resolution`` over ``altitude_range``."""
+        """The native grid when no ``resolution`` is given (it must cover [start, end],
+        else ``DensityFieldError``); otherwise resampled at ``resolution`` over
+        ``altitude_range``."""
         if resolution is None:
             f = self._field
-            s, e = np.datetime64(start, "ns"), np.datetime64(end, "ns")
+            s, e = to_datetime64(start, "start"), to_datetime64(end, "end")
             if s < f.start or e > f.end:
-                raise ValueError(f"the grid covers {f.start} to {f.end}, not {s} to {e}")
+                raise DensityFieldError(f"the grid covers {f.start} to {f.end}, not {s} to {e}")
             return f
         if altitude_range is None:
             raise ValueError("altitude_range is needed to resample at a resolution")

@@ -59,7 +59,9 @@ class SampledModel(abc.ABC):
     on-disk field cache).
     """
 
-    #: Grid resolution used by :meth:`atmosphere` (None: the default resolution).
+    #: Grid resolution of :meth:`field` (when none is passed) and :meth:`atmosphere`;
+    #: the models set it from their ``resolution`` keyword (None: the defaults of
+    #: :class:`~rhoprop.density.FieldResolution`).
     resolution: FieldResolution | None = None
 
     @abc.abstractmethod

@@ -17,6 +17,7 @@ import numpy as np
 from .. import _validate
 from ..spaceweather import Drivers, SpaceWeather
 from ._inputs import broadcast_inputs
+from .field import FieldResolution, resolution_arg
 from .model import SampledModel
 
 #: ap values of the 28 Kp levels 0, 0+, 1-, ..., 9 (Bartels' Kp -> ap table).
@@ -140,6 +141,9 @@ class Msis(SampledModel):
         space_weather: the :class:`~rhoprop.SpaceWeather` record giving the drivers
             (default: the bundled CelesTrak record).
         uncertainty: :class:`DriverUncertainty` (default) or :class:`RelativeSigma`.
+        resolution: grid spacing of the field the propagators sample the model into
+            (:class:`~rhoprop.density.FieldResolution`; None: its defaults, 1 h, 25 km,
+            6 deg latitude, 15 deg longitude).
 
     Example:
         >>> import numpy as np, rhoprop as rp
@@ -152,6 +156,8 @@ class Msis(SampledModel):
         version: str = "2.1",
         space_weather: SpaceWeather | None = None,
         uncertainty: DriverUncertainty | RelativeSigma | None = None,
+        *,
+        resolution: FieldResolution | None = None,
     ) -> None:
         key = str(version)
         if key not in _VERSIONS:
@@ -163,6 +169,7 @@ class Msis(SampledModel):
         self.uncertainty = DriverUncertainty() if uncertainty is None else uncertainty
         if not isinstance(self.uncertainty, (DriverUncertainty, RelativeSigma)):
             raise TypeError("uncertainty must be a DriverUncertainty or RelativeSigma")
+        self.resolution = resolution_arg(resolution)
 
     def __repr__(self) -> str:
         name = "00" if self.version == "0" else self.version

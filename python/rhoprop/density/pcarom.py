@@ -22,7 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import OutsideRecordError
+from ..time import to_datetime64_array
 from ._inputs import broadcast_inputs
+from .field import FieldResolution, resolution_arg
 from .model import SampledModel
 
 #: ln(10): density = 10^x = exp(LN10 x).
@@ -83,11 +86,14 @@ class PcaRom(SampledModel):
         samples: number of coefficient samples of the "sampling" method (>= 2).
         seed: seed of ``numpy.random.default_rng`` for the "sampling" method (None: fresh
             entropy each call, which disables the field cache).
+        resolution: grid spacing of the field the propagators sample the model into
+            (:class:`~rhoprop.density.FieldResolution`; None: its defaults).
 
     Raises:
         ValueError: for arrays of the wrong shape, non-finite values, axes that are not
             increasing (or an LST axis that is not uniform over 24 h), negative ``coeff_std``;
-            from :meth:`mean_std`, for points outside the latitude, altitude or epoch range.
+            from :meth:`mean_std`, :class:`~rhoprop.OutsideRecordError` (a ValueError)
+            for points outside the latitude, altitude or epoch range.
     """
 
     def __init__(
@@ -104,6 +110,7 @@ class PcaRom(SampledModel):
         method: str = "analytic",
         samples: int = 1000,
         seed: int | None = 0,
+        resolution: FieldResolution | None = None,
     ) -> None:
         self.lst = _axis("lst", lst)
         self.lat = _axis("lat", lat)
@@ -130,17 +137,9 @@ class PcaRom(SampledModel):
         self.modes = _array("modes", u, u.shape, "(nlst, nlat, nalt, r)")
         rank = u.shape[3]
 
-        e = np.asarray(epochs)
-        if e.dtype.kind not in "MUSO":
-            raise TypeError(f"epochs must be UTC datetime64 values or ISO strings, got {e.dtype}")
-        try:
-            e = e.astype("datetime64[ns]")
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"epochs must be UTC datetime64 values or ISO strings: {err}") from err
+        e = to_datetime64_array(epochs, "epochs")
         if e.ndim != 1 or len(e) < 1:
             raise ValueError(f"epochs must be a 1-D array of at least 1 epoch, got shape {e.shape}")
-        if np.isnat(e).any():
-            raise ValueError("epochs contain NaT")
         if (np.diff(e.astype(np.int64)) <= 0).any():
             raise ValueError("epochs must be strictly increasing")
         e.flags.writeable = False
@@ -163,6 +162,7 @@ class PcaRom(SampledModel):
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
             raise TypeError(f"seed must be an integer or None, got {type(seed).__name__}")
         self.seed = None if seed is None else int(seed)
+        self.resolution = resolution_arg(resolution)
 
         self._mean_flat = self.mean_log10.reshape(-1)
         self._modes_flat = self.modes.reshape(-1, rank)
@@ -268,14 +268,14 @@ class PcaRom(SampledModel):
         ):
             out = (values < axis[0]) | (values > axis[-1])
             if out.any():
-                raise ValueError(
+                raise OutsideRecordError(
                     f"{name} = {values[out][0]:g} {unit} is outside the ROM's {name} range "
                     f"[{axis[0]:g}, {axis[-1]:g}] {unit}"
                 )
         out = (t_ns < self._ns[0]) | (t_ns > self._ns[-1])
         if out.any():
             bad = np.datetime64(int(t_ns[out][0]), "ns")
-            raise ValueError(
+            raise OutsideRecordError(
                 f"time {bad} is outside the ROM's epoch range [{self.epochs[0]}, {self.epochs[-1]}]"
             )
 

@@ -18,6 +18,7 @@ from ..propagation import (
     ccsp,
     monte_carlo,
 )
+from ..propagation.propagate import check_model
 from .debias import debias_drag_coefficient
 from .mixture import GaussianMixture
 
@@ -33,9 +34,12 @@ class EnsembleResult:
         cd: drag coefficient used per model (the reference keeps Cd_ref).
         results: per model, the MonteCarloResult or CcspResult.
         times: output times, s from the epoch (nt,).
-        reference_positions, reference_velocities: the reference mean orbit (nt, 3).
+        reference_positions, reference_velocities: the reference mean orbit (nt, 3):
+            the reference model's mean orbit (Monte Carlo: its ``reference_positions``,
+            the mean orbit until it decays, then the survivors' mean) or CCSP mean.
         component_means: per time and model, the mean position offset from the reference
-            mean orbit in its RTN frame (nt, k, 3), m.
+            mean orbit in its RTN frame (nt, k, 3), m, over the members still flying
+            (Monte Carlo); NaN where a model has no statistics (decayed).
         component_covariances: the matching covariances (nt, k, 3, 3), m^2.
         weights: mixture weights (k,), summing to 1.
     """
@@ -52,7 +56,22 @@ class EnsembleResult:
     weights: np.ndarray
 
     def mixture(self, time_index: int = -1) -> GaussianMixture:
-        """The 3-D position mixture (RTN of the reference mean orbit, m) at an output."""
+        """The 3-D position mixture (RTN of the reference mean orbit, m) at an output.
+        A model without statistics then (all its members, or its CCSP, came down) is a
+        ValueError naming it."""
+        means = self.component_means[time_index]
+        covs = self.component_covariances[time_index]
+        missing = [
+            name
+            for i, name in enumerate(self.names)
+            if not (np.isfinite(means[i]).all() and np.isfinite(covs[i]).all())
+        ]
+        if missing:
+            raise ValueError(
+                f"no statistics at t = {self.times[time_index]:g} s for {missing}: the object "
+                "decayed in those models (fewer than two members left, or the CCSP stopped) "
+                "or the reference orbit did"
+            )
         return GaussianMixture(
             self.weights,
             self.component_means[time_index],
@@ -129,6 +148,11 @@ def ensemble(
         raise ValueError("models must name at least one density model")
     if reference not in models:
         raise ValueError(f"reference {reference!r} is not one of the models {list(models)}")
+    for name, model in models.items():
+        try:
+            check_model(model)
+        except TypeError as err:
+            raise TypeError(f"models[{name!r}]: {err}") from err
     names = list(models)
     w = np.ones(len(names)) if weights is None else np.asarray(weights, dtype=float)
     if w.shape != (len(names),) or not np.isfinite(w).all() or (w < 0).any() or w.sum() <= 0:
@@ -148,21 +172,43 @@ def ensemble(
     for name in names:
         craft = Spacecraft(cd[name], spacecraft.area_to_mass)
         results[name] = run(state, craft, models[name], duration, **method_options)
-    ref = results[reference]
-    if isinstance(ref, MonteCarloResult):
-        ref_p, ref_v = ref.mean_orbit.positions, ref.mean_orbit.velocities
-    else:
-        ref_p, ref_v = ref.mean[:, :3], ref.mean[:, 3:]
-    parts = [results[name].moments().position_in_frame(ref_p, ref_v) for name in names]
+    # A CCSP that stopped at decay has fewer outputs: every component is laid on the
+    # longest output grid, NaN where its model has no statistics.
+    times = max((r.times for r in results.values()), key=len)
+    ref_p, ref_v = _reference_orbit(results[reference], len(times))
+    parts = [_component(results[name], ref_p, ref_v) for name in names]
     return EnsembleResult(
         names=names,
         reference=reference,
         cd=cd,
         results=results,
-        times=ref.times,
+        times=times,
         reference_positions=ref_p,
         reference_velocities=ref_v,
         component_means=np.stack([p[0] for p in parts], axis=1),
         component_covariances=np.stack([p[1] for p in parts], axis=1),
         weights=w / w.sum(),
     )
+
+
+def _reference_orbit(result: MonteCarloResult | CcspResult, nt: int) -> tuple[Any, Any]:
+    """The reference model's mean orbit on ``nt`` outputs, (nt, 3) x 2, NaN past its end."""
+    if isinstance(result, MonteCarloResult):
+        p, v = result.reference_positions, result.reference_velocities
+    else:
+        p, v = result.mean[:, :3], result.mean[:, 3:]
+    ref_p, ref_v = np.full((nt, 3), np.nan), np.full((nt, 3), np.nan)
+    ref_p[: len(p)], ref_v[: len(v)] = p, v
+    return ref_p, ref_v
+
+
+def _component(
+    result: MonteCarloResult | CcspResult, ref_p: np.ndarray, ref_v: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A model's position mean (nt, 3) and covariance (nt, 3, 3) in the reference RTN
+    frame, NaN past the model's last output."""
+    nt = len(ref_p)
+    k = len(result.times)
+    means, covs = np.full((nt, 3), np.nan), np.full((nt, 3, 3), np.nan)
+    means[:k], covs[:k] = result.moments().position_in_frame(ref_p[:k], ref_v[:k])
+    return means, covs

@@ -7,7 +7,7 @@ import numpy as np
 from .. import _core, _validate, frames
 from ..density import DensityModel, SampledModel, altitude_band, as_atmosphere
 from ..propagation import OrbitState, Spacecraft
-from ..time import add_seconds, offsets_to_epochs, seconds_since_j2000
+from ..time import add_seconds, offsets_to_epochs, ut1_seconds
 
 #: Cadence of the density samples along the backward orbit, s.
 DEBIAS_CADENCE = 60.0
@@ -33,7 +33,7 @@ def backward_orbit(
     times[-1] = -window
     t, states, _decayed, _, _ = _core.propagate(
         atmosphere,
-        seconds_since_j2000(state.epoch),
+        ut1_seconds(state.epoch),
         state.state,
         spacecraft.drag_parameter,
         times,

@@ -6,7 +6,14 @@
 from . import kappa
 from .ccsp import DEFAULT_INITIAL_COVARIANCE, ccsp
 from .montecarlo import monte_carlo
-from .propagate import DEFAULT_RTOL, DEFAULT_STEP, METHODS, output_grid, propagate
+from .propagate import (
+    DEFAULT_MAX_MEMORY,
+    DEFAULT_RTOL,
+    DEFAULT_STEP,
+    METHODS,
+    output_grid,
+    propagate,
+)
 from .results import (
     CcspResult,
     MonteCarloResult,
@@ -19,6 +26,7 @@ from .state import OrbitState, Spacecraft
 
 __all__ = [
     "DEFAULT_INITIAL_COVARIANCE",
+    "DEFAULT_MAX_MEMORY",
     "DEFAULT_RTOL",
     "DEFAULT_STEP",
     "METHODS",

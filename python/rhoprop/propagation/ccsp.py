@@ -9,26 +9,39 @@ import numpy as np
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import DensityModel, as_atmosphere
-from ..time import seconds_since_j2000
+from ..density.model import DensityModel
+from ..time import ut1_seconds
+from .propagate import (
+    DEFAULT_MAX_MEMORY,
+    check_memory,
+    check_model,
+    check_steps,
+    explicit_times,
+    fixed_step,
+    run_in_field,
+    span_of,
+)
 from .results import CcspResult, StateMoments
 from .state import OrbitState, Spacecraft
 
 #: The paper's near-zero initial covariance: 1 mm and 1 um/s (1 sigma) on each axis.
 DEFAULT_INITIAL_COVARIANCE = np.diag([1e-6, 1e-6, 1e-6, 1e-12, 1e-12, 1e-12])
+#: Memory of one CCSP output (mean, covariance, cross-covariance, RTN covariance and the
+#: along-track sigma as float64), bytes.
+OUTPUT_BYTES = 8 * (6 + 36 + 6 + 9 + 1)
 
 
 def ccsp(
     state: OrbitState,
     spacecraft: Spacecraft,
     model: DensityModel,
-    duration: Any,
+    duration: Any = None,
     *,
     update_interval: float = 3600.0,
     initial_covariance: Any = None,
     scaling: tuple[float, float] = (3.0, 3.0),
     perturbation: str = "additive",
-    step: float = 180.0,
+    step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     update_times: Any = None,
 ) -> CcspResult:
@@ -46,51 +59,72 @@ def ccsp(
     along-track spread is sqrt(2 dt / D) times that of a Monte Carlo with correlation time
     D, i.e. 1.52x GaussMarkov(18 min) at 60-min updates and 0.44x at 5-min updates.
 
+    Decay: when a sigma point goes below ``floor_altitude`` the filter stops cleanly; the
+    outputs end at the last update completed before it and ``decayed_at`` gives the time.
+
     Args:
         state, spacecraft: initial mean state and drag properties.
         model: density model with uncertainty (sampled into a field once).
-        duration: span, s.
+        duration: span, s, or a ``timedelta``; may be left out when ``update_times`` is
+            given, and must then equal the last update time if given too.
         update_interval: s (default 60 min, the paper's tuning).
         initial_covariance: 6x6 state covariance (default: the paper's near-zero
             diag(eps^2) with eps = 1 mm and 1 um/s).
         scaling: (lambda1 + n, lambda2 + p), default (3, 3).
         perturbation: ``"additive"`` or ``"lognormal"``.
-        step: largest RK8 step, s.
+        step: largest RK8 step, s (None: 180 s, the RK8 default; at most 1/20 of the
+            orbital period).
         floor_altitude: decay floor, m.
         update_times: explicit update times, s from the epoch (increasing, > 0; the last
             is the end), instead of ``update_interval`` (used to align objects on common
             output epochs).
+
+    Returns:
+        :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
     """
     if not isinstance(state, OrbitState):
         raise TypeError(f"state must be an OrbitState, got {type(state).__name__}")
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a Spacecraft, got {type(spacecraft).__name__}")
-    span = _validate.positive("duration", _validate.seconds("duration", duration))
-    dt = _validate.positive("update_interval", update_interval)
-    l1 = _validate.positive("scaling[0]", scaling[0])
-    l2 = _validate.positive("scaling[1]", scaling[1])
-    p0 = DEFAULT_INITIAL_COVARIANCE if initial_covariance is None else initial_covariance
-    p0 = np.ascontiguousarray(p0, dtype=float)
-    if p0.shape != (6, 6):
-        raise ValueError(f"initial_covariance must have shape (6, 6), got {p0.shape}")
+    check_model(model)
     if update_times is None:
+        span = span_of(duration, None, "update_times")
+        dt = _validate.positive("update_interval", update_interval)
+        check_steps(span, dt, "update_interval")
         n = int(np.ceil(span / dt * (1 - 1e-12)))
         times = np.minimum(np.arange(1, n + 1) * dt, span)
     else:
-        times = np.asarray(update_times, dtype=float)
-    atmosphere = as_atmosphere(model, state, float(times[-1]))
-    out = _core.ccsp(
-        atmosphere,
-        seconds_since_j2000(state.epoch),
-        state.state,
-        spacecraft.drag_parameter,
-        p0,
-        times,
-        (l1, l2),
-        perturbation,
-        _validate.positive("step", step),
-        _validate.real("floor_altitude", floor_altitude),
-    )
+        times = explicit_times("update_times", update_times, allow_zero=False)
+        span = span_of(duration, times, "update_times")
+    h = fixed_step("rk8", step, state)
+    check_steps(span, h, "step")
+    check_memory((len(times) + 1) * OUTPUT_BYTES, DEFAULT_MAX_MEMORY, "the CCSP outputs")
+    l1 = _validate.positive("scaling[0]", scaling[0])
+    l2 = _validate.positive("scaling[1]", scaling[1])
+    p0 = DEFAULT_INITIAL_COVARIANCE if initial_covariance is None else initial_covariance
+    p0 = np.array(p0, dtype=float)
+    if p0.shape != (6, 6):
+        raise ValueError(f"initial_covariance must have shape (6, 6), got {p0.shape}")
+    floor = _validate.real("floor_altitude", floor_altitude)
+    epoch = ut1_seconds(state.epoch)
+
+    def run(atmosphere: Any) -> dict[str, Any]:
+        return _core.ccsp(
+            atmosphere,
+            epoch,
+            state.state,
+            spacecraft.drag_parameter,
+            p0,
+            times,
+            (l1, l2),
+            perturbation,
+            h,
+            floor,
+        )
+
+    out = run_in_field(model, state, span, floor, run)
+    # The binding reports decay as "decayed_at" (None when the filter ran to the end).
+    decayed = out.get("decayed_at")
     moments = StateMoments(state.epoch, out["times"], out["means"], out["covariances"])
     rtn = moments.rtn_covariance
     return CcspResult(
@@ -101,4 +135,5 @@ def ccsp(
         rtn_covariance=rtn,
         along_track_std=np.sqrt(rtn[:, 1, 1]),
         cross_covariance=out["cross"],
+        decayed_at=None if decayed is None else float(decayed),
     )

@@ -28,6 +28,12 @@ class KappaProcess:
         as 3 D T^3 (eps a_D)^2 (DESIGN.md section 4); infinite for :class:`Constant`."""
         raise TypeError(f"{type(self).__name__} is not a kappa process")  # pragma: no cover
 
+    def node_spacing(self) -> float | None:
+        """Spacing of the process's own nodes, s, which the integration step must divide;
+        None when the nodes follow the integration step (GaussMarkov) or there are none
+        (Constant)."""
+        return None
+
 
 @dataclass(frozen=True)
 class White(KappaProcess):
@@ -40,6 +46,9 @@ class White(KappaProcess):
 
     def __post_init__(self) -> None:
         _validate.positive("step", self.step)
+
+    def node_spacing(self) -> float:
+        return float(self.step)
 
     def correlation_time(self) -> float:
         return float(self.step)
@@ -55,6 +64,9 @@ class Interpolated(KappaProcess):
 
     def __post_init__(self) -> None:
         _validate.positive("interval", self.interval)
+
+    def node_spacing(self) -> float:
+        return float(self.interval)
 
     def correlation_time(self) -> float:
         # The integral of kappa over a long span is the trapezoid sum of i.i.d. nodes, whose
@@ -104,6 +116,9 @@ class PiecewiseConstant(KappaProcess):
         rho = _validate.real("correlation", self.correlation)
         if not -1 < rho < 1:
             raise ValueError(f"correlation must lie in (-1, 1), got {rho}")
+
+    def node_spacing(self) -> float:
+        return float(self.interval)
 
     def correlation_time(self) -> float:
         return self.interval * (1 + self.correlation) / (1 - self.correlation)

@@ -2,39 +2,69 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import DensityModel, as_atmosphere
+from ..density.model import DensityModel
 from ..progress import ProgressBar
-from ..time import seconds_since_j2000
+from ..time import ut1_seconds
 from .kappa import GaussMarkov, KappaProcess
-from .propagate import output_grid
-from .results import MonteCarloResult, trajectory_from_core
+from .propagate import (
+    DEFAULT_MAX_MEMORY,
+    check_memory,
+    check_model,
+    check_steps,
+    explicit_times,
+    fixed_step,
+    output_grid,
+    run_in_field,
+    span_of,
+)
+from .results import MonteCarloResult, Trajectory, sample_moments, trajectory_from_core
 from .state import OrbitState, Spacecraft
+
+#: Methods of :func:`monte_carlo` (fixed step: kappa nodes fall on step boundaries).
+METHODS = ("rk8", "rk4")
+#: Most worker threads per CPU core a run may ask for.
+MAX_THREADS_PER_CPU = 4
+
+
+def max_threads() -> int:
+    """The most worker threads a run may use: 4 per CPU core."""
+    return MAX_THREADS_PER_CPU * (os.cpu_count() or 1)
+
+
+def result_bytes(n: int, nt: int, record_density: bool) -> int:
+    """Memory of a Monte Carlo's member arrays, bytes: positions, velocities and RTN
+    errors (9 float64 per member and output) plus the densities (1 more) if recorded."""
+    return n * nt * 8 * (9 + int(record_density))
 
 
 def monte_carlo(
     state: OrbitState,
     spacecraft: Spacecraft,
     model: DensityModel,
-    duration: Any,
+    duration: Any = None,
     *,
     n: int = 1000,
     kappa: KappaProcess | None = None,
     seed: int = 0,
     output_step: float | None = 3600.0,
+    output_times: Any = None,
     initial_covariance: Any = None,
     perturbation: str = "additive",
     record_density: bool = False,
-    progress: bool = True,
+    progress: bool | Callable[[int], object] = True,
     method: str = "rk8",
-    step: float = 180.0,
+    step: float | None = None,
     threads: int | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    max_memory: float = DEFAULT_MAX_MEMORY,
 ) -> MonteCarloResult:
     """Propagates ``n`` members, each with its own density perturbation kappa(t).
 
@@ -43,32 +73,47 @@ def monte_carlo(
         spacecraft: :class:`~rhoprop.Spacecraft`.
         model: a density model with uncertainty (e.g. ``rp.density.Msis()``); its mean and
             sigma are sampled into a field once and interpolated by the core.
-        duration: span, s (> 0) or a ``timedelta``.
+        duration: span, s (> 0) or a ``timedelta``; may be left out when ``output_times``
+            is given (then it must equal the last of them).
         n: number of members (>= 2).
         kappa: the kappa process (default ``GaussMarkov(1080)``, 18 min half-life).
         seed: seed of the members' random streams (same seed, same numbers, whatever the
             thread count).
         output_step: output spacing, s (a multiple of the integration step); None gives
             the start and end only. The end is always an output.
+        output_times: explicit output times instead of ``output_step``, s from the epoch
+            (increasing, >= 0, on the integration step grid; the last is the end).
         initial_covariance: optional 6x6 covariance of the initial state (m^2, m^2/s,
-            m^2/s^2), symmetric positive semi-definite; members then start from samples.
+            m^2/s^2), symmetric positive semi-definite, finite; members then start from
+            samples.
         perturbation: ``"additive"`` (rho = mean + kappa sigma, clipped at 0 and counted)
             or ``"lognormal"``.
         record_density: also return the density each member sees at the output times.
-        progress: show a progress bar on a terminal for runs longer than a second.
+        progress: True shows a progress bar on a terminal for runs longer than a second;
+            or a callable, called with the number of members done about every 50 ms (an
+            exception it raises stops the run and is raised).
         method: ``"rk8"`` (default) or ``"rk4"`` fixed step.
-        step: largest integration step, s; the step used divides the kappa node spacing
-            (e.g. 10 s for ``White(10)``).
-        threads: worker threads (default: all cores).
-        floor_altitude: decay floor, m (decayed members stop there and are reported).
+        step: largest integration step, s (None: the method's default, RK8 180 s, RK4 5 s;
+            at most 1/20 of the orbital period); the step used divides the kappa node
+            spacing (e.g. 10 s for ``White(10)``).
+        threads: worker threads (default: all cores; at most 4 per core).
+        floor_altitude: decay floor, m.
+        max_memory: limit on the result's memory, bytes (default 8 GiB): a run whose
+            member arrays (n x outputs x 9 float64, 10 with densities) would exceed it is
+            refused before it starts, with the estimate in the message.
 
     Returns:
-        :class:`MonteCarloResult`. Ctrl-C stops the run with KeyboardInterrupt.
+        :class:`MonteCarloResult`. Decayed members are NaN from their decay time on and
+        statistics use the survivors (:attr:`MonteCarloResult.survivors`). If the mean
+        orbit itself decays the run still completes: ``rtn_errors`` are relative to the
+        mean orbit until its decay and to the survivors' mean state after it. Ctrl-C stops
+        the run with KeyboardInterrupt.
     """
     if not isinstance(state, OrbitState):
         raise TypeError(f"state must be an OrbitState, got {type(state).__name__}")
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a Spacecraft, got {type(spacecraft).__name__}")
+    check_model(model)
     kappa = GaussMarkov() if kappa is None else kappa
     if not isinstance(kappa, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
@@ -76,74 +121,135 @@ def monte_carlo(
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    if threads is not None and (not isinstance(threads, (int, np.integer)) or threads < 1):
-        raise ValueError(f"threads must be a positive integer, got {threads!r}")
-    span = _validate.positive("duration", _validate.seconds("duration", duration))
-    step = _validate.positive("step", step)
+    if threads is not None:
+        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+            raise ValueError(f"threads must be a positive integer, got {threads!r}")
+        if threads > max_threads():
+            raise ValueError(
+                f"threads = {threads} is more than {max_threads()} "
+                f"({MAX_THREADS_PER_CPU} per CPU core of this machine)"
+            )
+        threads = int(threads)
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; a Monte Carlo uses 'rk8' or 'rk4'")
+    h = fixed_step(method, step, state)
+    if output_times is None:
+        span = span_of(duration, None, "output_times")
+        times = output_grid(span, output_step)
+    else:
+        if output_step not in (None, 3600.0):
+            raise ValueError("give output_step or output_times, not both")
+        times = explicit_times("output_times", output_times, allow_zero=True)
+        span = span_of(duration, times, "output_times")
+    nodes = kappa.node_spacing()
+    check_steps(span, h, "step")
+    if nodes is not None:
+        check_steps(span, nodes, f"the node spacing of {kappa!r}")
+    limit = _validate.positive("max_memory", max_memory)
+    check_memory(
+        result_bytes(int(n), len(times), record_density),
+        limit,
+        f"{n} members x {len(times)} outputs",
+    )
     floor = _validate.real("floor_altitude", floor_altitude)
     cov = None
     if initial_covariance is not None:
-        cov = np.ascontiguousarray(initial_covariance, dtype=float)
+        cov = np.array(initial_covariance, dtype=float)
         if cov.shape != (6, 6):
             raise ValueError(f"initial_covariance must have shape (6, 6), got {cov.shape}")
-    times = output_grid(span, output_step)
-    epoch = seconds_since_j2000(state.epoch)
-    atmosphere = as_atmosphere(model, state, span)
-    bar = ProgressBar(int(n), "Monte Carlo") if progress else None
-    try:
-        out = _core.monte_carlo(
+        if not np.isfinite(cov).all():
+            i, j = np.argwhere(~np.isfinite(cov))[0]
+            raise ValueError(f"initial_covariance[{i}][{j}] must be finite, got {cov[i, j]}")
+    epoch = ut1_seconds(state.epoch)
+
+    def run(atmosphere: Any) -> tuple[dict[str, Any], Trajectory]:
+        bar = ProgressBar(int(n), "Monte Carlo") if progress is True else None
+        callback = bar if bar is not None else (progress if callable(progress) else None)
+        try:
+            out = _core.monte_carlo(
+                atmosphere,
+                epoch,
+                state.state,
+                spacecraft.drag_parameter,
+                times,
+                kappa._spec(),
+                perturbation,
+                method,
+                h,
+                int(n),
+                int(seed),
+                cov,
+                floor,
+                bool(record_density),
+                threads,
+                callback,
+            )
+        finally:
+            if bar is not None:
+                bar.close()
+        # The mean orbit: same integrator, step and field, kappa = 0.
+        mean = _core.propagate(
             atmosphere,
             epoch,
             state.state,
             spacecraft.drag_parameter,
             times,
-            kappa._spec(),
-            perturbation,
             method,
-            step,
-            int(n),
-            int(seed),
-            cov,
-            floor,
-            bool(record_density),
-            threads,
-            bar,
-        )
-    finally:
-        if bar is not None:
-            bar.close()
-    h = float(out["step"])
-    mean = trajectory_from_core(
-        state.epoch,
-        _core.propagate(
-            atmosphere,
-            epoch,
-            state.state,
-            spacecraft.drag_parameter,
-            times,
-            method,
-            h,
+            float(out["step"]),
             None,
             floor,
-        ),
-    )
-    t, decayed_at = mean.times, mean.decayed_at
-    if len(t) < len(times):
-        raise ValueError(
-            f"the mean orbit decays below the floor at {decayed_at} s; shorten the duration"
         )
-    rtn = frames.to_rtn(out["positions"], mean.positions, mean.velocities)
+        return out, trajectory_from_core(state.epoch, mean)
+
+    out, mean = run_in_field(model, state, span, floor, run)
+    decay = np.asarray(out["decay_times"], dtype=float)
+    alive = times[None, :] < decay[:, None]
+    positions, velocities = out["positions"], out["velocities"]
+    # A decayed member's frozen state would bias every statistic: NaN from its decay on.
+    positions[~alive] = np.nan
+    velocities[~alive] = np.nan
+    densities = out["densities"]
+    if densities is not None:
+        densities[~alive] = np.nan
+    ref_p, ref_v = _reference(mean, positions, velocities, alive)
     return MonteCarloResult(
         epoch=state.epoch,
         times=times,
-        positions=out["positions"],
-        velocities=out["velocities"],
+        positions=positions,
+        velocities=velocities,
         mean_orbit=mean,
-        rtn_errors=rtn,
+        rtn_errors=_rtn(positions, ref_p, ref_v),
         clipped=out["clipped"],
-        decay_times=out["decay_times"],
-        densities=out["densities"],
+        decay_times=decay,
+        densities=densities,
         kappa=kappa,
         seed=int(seed),
-        step=h,
+        step=float(out["step"]),
+        reference_positions=ref_p,
+        reference_velocities=ref_v,
     )
+
+
+def _reference(
+    mean: Trajectory, positions: np.ndarray, velocities: np.ndarray, alive: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reference orbit of the RTN errors (nt, 3) x 2: the mean orbit while it flies,
+    then the survivors' mean state (NaN once none survives)."""
+    k = len(mean.times)
+    ref_p, ref_v = np.empty((positions.shape[1], 3)), np.empty((positions.shape[1], 3))
+    ref_p[:k], ref_v[:k] = mean.positions, mean.velocities
+    if k < len(ref_p):
+        states = np.concatenate([positions[:, k:], velocities[:, k:]], axis=2)
+        survivors, _ = sample_moments(states, alive[:, k:])
+        ref_p[k:], ref_v[k:] = survivors[:, :3], survivors[:, 3:]
+    return ref_p, ref_v
+
+
+def _rtn(positions: np.ndarray, ref_p: np.ndarray, ref_v: np.ndarray) -> np.ndarray:
+    """Members' positions minus the reference in its RTN frame (n, nt, 3); NaN where the
+    member or the reference is."""
+    ok = np.isfinite(ref_p).all(axis=1) & np.isfinite(ref_v).all(axis=1)
+    rtn = np.full(positions.shape, np.nan)
+    if ok.any():
+        rtn[:, ok] = frames.to_rtn(positions[:, ok], ref_p[ok], ref_v[ok])
+    return rtn

@@ -1,34 +1,63 @@
-"""Deterministic propagation of one orbit at the mean density."""
+"""Deterministic propagation of one orbit at the mean density, and the checks every
+propagator makes before it calls the core: the model argument, per-method step defaults,
+a step fit for the orbit, step and output counts and memory bounded against the span, and
+a sampled field widened once when an object comes down through its lower edge."""
 
 from __future__ import annotations
 
-from typing import Any
+import math
+import warnings
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 
 from .. import _core, _validate
-from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import DensityModel, as_atmosphere
-from ..time import seconds_since_j2000
+from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
+from ..density import altitude_band
+from ..density.model import CoreAtmosphere, DensityModel, SampledModel, as_atmosphere
+from ..errors import DensityFieldError
+from ..time import add_seconds, ut1_seconds
 from .results import Trajectory, trajectory_from_core
 from .state import OrbitState, Spacecraft
 
+T = TypeVar("T")
+
 #: Methods of :func:`propagate` and their default step (s) or tolerance.
 METHODS = ("dop853", "rk8", "rk4")
-#: Default largest step of the fixed-step methods, s. RK8 at 180 s ends 3 days of the
-#: paper's orbit well within 1 m of a tight reference; 180 s divides the 18-min and
-#: 180-min kappa intervals. RK4 needs 5 s for the same accuracy.
+#: Default largest step of the fixed-step methods, s, for propagate, Monte Carlo and CCSP
+#: alike (``step=None``). RK8 at 180 s ends 3 days of the paper's orbit well within 1 m of
+#: a tight reference; 180 s divides the 18-min and 180-min kappa intervals. RK4 needs 5 s
+#: for the same accuracy.
 DEFAULT_STEP = {"rk8": 180.0, "rk4": 5.0}
 #: Default relative tolerance of the adaptive DOP853 (per step, on |r| and |v|).
 DEFAULT_RTOL = 1e-10
+#: A fixed step may be at most this fraction of the orbital period: beyond it a run is
+#: meaningless (RK8 at 86400 s ends 3.6e9 m off), so it is refused rather than run.
+MAX_STEP_FRACTION = 1.0 / 20.0
+#: Most integration steps (or output/update times) one run may take: the core's own limit,
+#: checked here before anything is allocated.
+MAX_STEPS = _core.MAX_STEPS
+#: Default limit on the memory of a run's results, bytes (8 GiB).
+DEFAULT_MAX_MEMORY = 8 * 2**30
+#: How far below the floor altitude a widened density field reaches, m: sigma points and
+#: members that decay inside a step dip below the floor before the decay is located.
+FIELD_MARGIN = 50e3
 
 
 def output_grid(duration: float, output_step: float | None) -> np.ndarray:
-    """Output times 0, step, 2 step, ... and always ``duration`` itself, s."""
+    """Output times 0, step, 2 step, ... and always ``duration`` itself, s. More than
+    :data:`MAX_STEPS` outputs is a ValueError (checked before the grid is allocated)."""
     if output_step is None:
         return np.array([0.0, duration])
     step = _validate.positive("output_step", output_step)
-    n = int(np.floor(duration / step * (1 + 1e-12)))
+    count = duration / step
+    if count > MAX_STEPS:
+        raise ValueError(
+            f"output_step = {step:g} s gives {count:.3g} outputs over {duration:g} s, more "
+            f"than the {MAX_STEPS:,} a run may have; use a larger output_step"
+        )
+    n = int(np.floor(count * (1 + 1e-12)))
     grid = np.arange(n + 1, dtype=float) * step
     if duration - grid[-1] > 1e-9 * max(duration, 1.0):
         grid = np.append(grid, duration)
@@ -37,36 +66,195 @@ def output_grid(duration: float, output_step: float | None) -> np.ndarray:
     return grid
 
 
+def explicit_times(name: str, values: Any, *, allow_zero: bool) -> np.ndarray:
+    """``values`` as a 1-D float array of finite, strictly increasing times, s (>= 0 when
+    ``allow_zero``, else > 0), at most :data:`MAX_STEPS` of them."""
+    try:
+        times = np.array(values, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f"{name} must be numbers (s from the epoch), got {values!r}") from err
+    if times.ndim != 1 or len(times) == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D sequence of times, s")
+    if len(times) > MAX_STEPS:
+        raise ValueError(f"{name} has {len(times):,} times, more than {MAX_STEPS:,}")
+    if not np.isfinite(times).all():
+        raise ValueError(f"{name} must be finite, got {times[~np.isfinite(times)][0]}")
+    low = times[0] < 0 if allow_zero else times[0] <= 0
+    if low or (np.diff(times) <= 0).any():
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must increase strictly from {bound}, got {times[:4]}...")
+    if times[-1] <= 0:
+        raise ValueError(f"{name} must end after the epoch (last time > 0)")
+    return times
+
+
+def span_of(duration: Any, times: np.ndarray | None, name: str) -> float:
+    """The run's span, s: ``duration``, or the last of explicit ``times`` (``name``);
+    both given must agree (to 1 ns)."""
+    if times is None:
+        if duration is None:
+            raise TypeError("duration is required (a span in s or a timedelta)")
+        return _validate.positive("duration", _validate.seconds("duration", duration))
+    end = float(times[-1])
+    if duration is not None:
+        span = _validate.positive("duration", _validate.seconds("duration", duration))
+        if abs(span - end) > 1e-9:
+            raise ValueError(
+                f"duration = {span:g} s disagrees with the last of {name} ({end:g} s); "
+                f"give one of them (duration may be left out when {name} is given)"
+            )
+    return end
+
+
+def check_model(model: Any) -> None:
+    """TypeError unless ``model`` is a density model (or a core atmosphere)."""
+    if isinstance(model, CoreAtmosphere) or callable(getattr(model, "atmosphere", None)):
+        return
+    raise TypeError(
+        "model must be a rhoprop density model (e.g. rhoprop.density.Exponential), "
+        f"got {type(model).__name__}"
+    )
+
+
+def orbital_period(state: OrbitState) -> float:
+    """Osculating two-body period of ``state``, s (inf for an unbound orbit)."""
+    r = float(np.linalg.norm(state.position))
+    v2 = float(state.velocity @ state.velocity)
+    inverse_a = 2.0 / r - v2 / MU
+    if inverse_a <= 0:
+        return math.inf
+    return 2.0 * math.pi * math.sqrt(inverse_a**-3 / MU)
+
+
+def fixed_step(method: str, step: float | None, state: OrbitState) -> float:
+    """The step of a fixed-step ``method`` (``"rk8"``/``"rk4"``): ``step`` or the
+    method's default; a step over :data:`MAX_STEP_FRACTION` of the orbital period is a
+    ValueError naming both."""
+    h = DEFAULT_STEP[method] if step is None else _validate.positive("step", step)
+    period = orbital_period(state)
+    if h > MAX_STEP_FRACTION * period:
+        raise ValueError(
+            f"step = {h:g} s is too large for this orbit: its period is {period:.0f} s and "
+            f"a fixed step may be at most 1/{round(1 / MAX_STEP_FRACTION)} of it "
+            f"({MAX_STEP_FRACTION * period:.0f} s); the {method} default is "
+            f"{DEFAULT_STEP[method]:g} s"
+        )
+    return h
+
+
+def check_steps(span: float, spacing: float, name: str) -> None:
+    """ValueError if ``span`` s cut at ``spacing`` s (the argument ``name``) needs more
+    than :data:`MAX_STEPS` steps."""
+    count = span / spacing
+    if count > MAX_STEPS:
+        raise ValueError(
+            f"{name} = {spacing:g} s gives {count:.3g} steps over {span:g} s, more than the "
+            f"{MAX_STEPS:,} a run may take; use a larger {name}"
+        )
+
+
+def check_memory(estimate: float, limit: float, what: str) -> None:
+    """ValueError if the ``estimate`` (bytes) of a run's results exceeds ``limit``."""
+    if estimate > limit:
+        raise ValueError(
+            f"{what} would need about {estimate / 2**30:.3g} GiB, over the limit of "
+            f"{limit / 2**30:.3g} GiB (max_memory); use fewer members or outputs, or raise "
+            "max_memory"
+        )
+
+
+def _wider_atmosphere(
+    model: Any, state: OrbitState, span: float, floor: float, first: Any, err: Exception
+) -> Any:
+    """A sampled model's field re-sampled from :data:`FIELD_MARGIN` below the floor
+    altitude, and as much higher at the top, when ``err`` says the run left the first
+    field in altitude and a wider field can help; else None. Near decay the spread of
+    members or sigma points grows radially both ways, hence the symmetric widening."""
+    if not isinstance(model, SampledModel) or "altitude" not in str(err):
+        return None
+    low, high = altitude_band(state.position, state.velocity)
+    bottom = max(floor - FIELD_MARGIN, 0.0)
+    if low <= bottom:
+        return None
+    end = add_seconds(state.epoch, span, round_up=True)
+    band = (bottom, high + (low - bottom))
+    wider = model.field(state.epoch, end, altitude_range=band).core
+    return None if wider is first else wider
+
+
+def run_in_field(
+    model: Any, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
+) -> T:
+    """``run(atmosphere)`` with the core atmosphere of ``model`` for ``span`` s from
+    ``state``. A sampled field covers the orbit's altitude band from 50 km below perigee
+    to 25 km above apogee; an object (or member, or sigma point) that comes down leaves
+    it and raises DensityFieldError, and then the run is repeated once with the band
+    widened down to :data:`FIELD_MARGIN` below the floor (and up by as much), so that
+    decay is reported, not an error. A second failure raises, chained to the first."""
+    check_model(model)
+    atmosphere = as_atmosphere(model, state, span)
+    try:
+        return run(atmosphere)
+    except DensityFieldError as err:
+        wider = _wider_atmosphere(model, state, span, floor, atmosphere, err)
+        if wider is None:
+            raise
+        try:
+            return run(wider)
+        except DensityFieldError as again:
+            raise again from err
+
+
+def model_argument(model: Any, density: Any, function: str) -> Any:
+    """The model of a call that may still use the deprecated keyword ``density``."""
+    if density is None:
+        if model is None:
+            raise TypeError(f"{function}() missing required argument: 'model'")
+        return model
+    warnings.warn(
+        f"{function}(density=...) is deprecated; the argument is called model",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    if model is not None:
+        raise TypeError(f"{function}() got both model and density; give model only")
+    return density
+
+
 def propagate(
     state: OrbitState,
     spacecraft: Spacecraft,
-    density: DensityModel,
-    duration: Any,
+    model: DensityModel | None = None,
+    duration: Any = None,
     *,
     output_step: float | None = None,
     method: str = "dop853",
     rtol: float | None = None,
     step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    density: DensityModel | None = None,
 ) -> Trajectory:
     """Propagates one orbit with two-body + J2 + drag at the mean density.
 
     Args:
         state: initial :class:`OrbitState`.
         spacecraft: :class:`Spacecraft` (Cd and A/m, m^2/kg).
-        density: a density model, e.g. :class:`rhoprop.density.Exponential`.
+        model: a density model, e.g. :class:`rhoprop.density.Exponential` (the same name
+            as in :func:`monte_carlo` and :func:`ccsp`; ``density=`` is a deprecated alias).
         duration: propagation span, s (> 0), or a ``timedelta``.
         output_step: spacing of the outputs, s; None gives the start and end only. The end
             is always an output.
         method: ``"dop853"`` (adaptive, dense output; default), ``"rk8"`` (fixed-step
             8th-order Dormand-Prince) or ``"rk4"`` (fixed-step classic RK4).
         rtol: relative tolerance of ``"dop853"`` (default 1e-10).
-        step: largest step of ``"rk8"`` / ``"rk4"``, s (defaults 180 s / 5 s); for
-            ``"dop853"`` an optional largest step.
+        step: step of ``"rk8"`` / ``"rk4"``, s (None: the method's default, 180 s / 5 s,
+            :data:`DEFAULT_STEP`; at most 1/20 of the orbital period); for ``"dop853"`` an
+            optional largest step.
         floor_altitude: geodetic altitude below which the object counts as decayed, m.
 
     Returns:
-        :class:`Trajectory` at the output times (shorter if the object decayed).
+        :class:`Trajectory` at the output times (shorter if the object decayed; its
+        ``decayed_at`` then says when). Ctrl-C stops the run with KeyboardInterrupt.
 
     Example:
         >>> import rhoprop as rp
@@ -77,34 +265,40 @@ def propagate(
         >>> tr.positions.shape
         (2, 3)
     """
+    model = model_argument(model, density, "propagate")
     if not isinstance(state, OrbitState):
         raise TypeError(f"state must be an OrbitState, got {type(state).__name__}")
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a Spacecraft, got {type(spacecraft).__name__}")
+    check_model(model)
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    span = _validate.positive("duration", _validate.seconds("duration", duration))
+    span = span_of(duration, None, "")
     if rtol is not None:
         rtol = _validate.positive("rtol", rtol)
         if method != "dop853":
             raise ValueError(f"rtol applies to method 'dop853' only, not {method!r}")
-    if step is not None:
+    if method in DEFAULT_STEP:
+        step = fixed_step(method, step, state)
+        check_steps(span, step, "step")
+    elif step is not None:
         step = _validate.positive("step", step)
-    elif method in DEFAULT_STEP:
-        step = DEFAULT_STEP[method]
     floor = _validate.real("floor_altitude", floor_altitude)
     times = output_grid(span, output_step)
-    epoch = seconds_since_j2000(state.epoch)
-    atmosphere = as_atmosphere(density, state, span)
-    out = _core.propagate(
-        atmosphere,
-        epoch,
-        state.state,
-        spacecraft.drag_parameter,
-        times,
-        method,
-        step,
-        DEFAULT_RTOL if rtol is None and method == "dop853" else rtol,
-        floor,
-    )
-    return trajectory_from_core(state.epoch, out)
+    epoch = ut1_seconds(state.epoch)
+    tol = DEFAULT_RTOL if rtol is None and method == "dop853" else rtol
+
+    def run(atmosphere: Any) -> tuple[Any, ...]:
+        return _core.propagate(
+            atmosphere,
+            epoch,
+            state.state,
+            spacecraft.drag_parameter,
+            times,
+            method,
+            step,
+            tol,
+            floor,
+        )
+
+    return trajectory_from_core(state.epoch, run_in_field(model, state, span, floor, run))

@@ -3,13 +3,23 @@ imports an algorithm."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .. import _validate
+from ..constants import MU, R_EARTH, R_POLE
 from ..time import EpochLike, to_datetime64
+
+#: Largest accepted distance from the Earth's centre, in equatorial radii.
+MAX_RADII = 10.0
+#: Accepted speeds, as fractions of the circular speed sqrt(mu / |r|) at the position:
+#: below 0.3 the perigee radius is at most 5 % of |r| (2a - |r| with a = |r| / 1.91),
+#: deep inside the Earth; 1.5 is beyond the escape speed (sqrt 2 = 1.41), so every bound
+#: orbit and mildly hyperbolic states pass.
+SPEED_RANGE = (0.3, 1.5)
 
 
 @dataclass(frozen=True)
@@ -17,13 +27,19 @@ class OrbitState:
     """An inertial orbit state.
 
     Args:
-        epoch: UTC epoch: ISO string (``"2002-09-07T01:00:00Z"``), ``datetime`` (naive =
-            UTC) or ``numpy.datetime64``.
+        epoch: UTC epoch: ISO string (``"2002-09-07T01:00:00Z"``, also with a ``+hh:mm``
+            offset), ``datetime`` (naive = UTC), ``numpy.datetime64`` or astropy ``Time``
+            (see :mod:`rhoprop.time`; Julian dates through :func:`rhoprop.time.from_jd`).
         position: inertial position (3,), m.
         velocity: inertial velocity (3,), m/s.
 
     The inertial frame is treated as J2000/GCRF; the Earth-fixed frame is a rotation about
     z by GMST (IAU-82), precession-nutation neglected.
+
+    Raises:
+        ValueError: for a position inside the WGS-84 ellipsoid or beyond 10 Earth radii,
+            a speed outside 0.3-1.5 times the circular speed at that radius, and values
+            that look like km or km/s (the message says what was expected).
     """
 
     epoch: np.datetime64
@@ -32,8 +48,11 @@ class OrbitState:
 
     def __init__(self, epoch: EpochLike, position: Any, velocity: Any) -> None:
         object.__setattr__(self, "epoch", to_datetime64(epoch))
-        object.__setattr__(self, "position", _validate.vector3("position", position))
-        object.__setattr__(self, "velocity", _validate.vector3("velocity", velocity))
+        r = _validate.vector3("position", position)
+        v = _validate.vector3("velocity", velocity)
+        _check_orbit(r, v)
+        object.__setattr__(self, "position", r)
+        object.__setattr__(self, "velocity", v)
 
     @property
     def state(self) -> np.ndarray:
@@ -58,8 +77,54 @@ class Spacecraft:
         object.__setattr__(
             self, "area_to_mass", _validate.positive("area_to_mass", self.area_to_mass)
         )
+        product = self.cd * self.area_to_mass
+        if not (math.isfinite(product) and product > 0):
+            raise ValueError(
+                f"cd * area_to_mass = {self.cd:g} * {self.area_to_mass:g} m^2/kg is "
+                f"{product:g}: out of the float range"
+            )
 
     @property
     def drag_parameter(self) -> float:
         """Cd * A / m, m^2/kg."""
         return self.cd * self.area_to_mass
+
+
+def _check_orbit(r: np.ndarray, v: np.ndarray) -> None:
+    """ValueError unless ``r`` (m) and ``v`` (m/s) look like an Earth orbit in SI units.
+    Inside the WGS-84 ellipsoid is exact without an epoch: it is symmetric about z, the
+    axis that the inertial and Earth-fixed frames share."""
+    rn = float(np.linalg.norm(r))
+    top = MAX_RADII * R_EARTH
+    inside = (r[0] ** 2 + r[1] ** 2) / R_EARTH**2 + r[2] ** 2 / R_POLE**2 < 1.0
+    if inside:
+        if R_POLE <= 1e3 * rn <= top:
+            raise ValueError(
+                f"position looks like km: |r| = {rn:.4g}; rhoprop takes metres "
+                f"(that would be {1e3 * rn:.4g} m)"
+            )
+        raise ValueError(
+            f"position is below the Earth's surface: |r| = {rn:.4g} m, inside the WGS-84 "
+            f"ellipsoid ({R_POLE:.0f} to {R_EARTH:.0f} m from the centre); positions are "
+            "inertial, in metres"
+        )
+    if rn > top:
+        raise ValueError(
+            f"position is {rn / R_EARTH:.3g} Earth radii from the centre (|r| = {rn:.4g} m); "
+            f"rhoprop takes Earth orbits within {MAX_RADII:g} Earth radii ({top:.4g} m), "
+            "positions in metres"
+        )
+    speed = float(np.linalg.norm(v))
+    circular = math.sqrt(MU / rn)
+    low, high = SPEED_RANGE
+    if not low * circular <= speed <= high * circular:
+        if low * circular <= 1e3 * speed <= high * circular:
+            raise ValueError(
+                f"velocity looks like km/s: |v| = {speed:.4g}; rhoprop takes m/s "
+                f"(that would be {1e3 * speed:.4g} m/s)"
+            )
+        raise ValueError(
+            f"speed |v| = {speed:.4g} m/s is not orbital at |r| = {rn:.4g} m: expected "
+            f"{low:g} to {high:g} times the circular speed there ({circular:.4g} m/s), "
+            "velocities inertial, in m/s"
+        )

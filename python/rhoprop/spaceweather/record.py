@@ -30,7 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from ..time import to_datetime64
+from ..errors import OutsideRecordError
+from ..time import to_datetime64, to_datetime64_array
 from .celestrak import GEOMAGNETIC, MONTHLY_PREDICTED, SCALARS, SECTIONS, check_record, read
 from .files import DEFAULT_URL, bundled_path, cached_path, download
 
@@ -44,22 +45,10 @@ _DAY = np.timedelta64(1, "D")
 
 def _as_epochs(epochs: Any) -> np.ndarray:
     """1-D datetime64[ns] array from a datetime64 scalar or array, an ISO string, a
-    ``datetime``, or a sequence of those (UTC). NaT raises ValueError."""
-    if isinstance(epochs, (str, np.datetime64)) or not np.iterable(epochs):
-        values = np.array([to_datetime64(epochs)], dtype="datetime64[ns]")
-    else:
-        array = np.asarray(epochs)
-        if array.size == 0:
-            values = np.array([], dtype="datetime64[ns]")
-        elif array.dtype.kind == "M":
-            values = array.astype("datetime64[ns]").ravel()
-        elif array.dtype.kind in "OUS":
-            values = np.array([to_datetime64(e) for e in array.ravel()], dtype="datetime64[ns]")
-        else:
-            raise TypeError(f"epochs must be datetime64 or ISO strings, got dtype {array.dtype}")
-    if np.isnat(values).any():
-        raise ValueError(f"epochs: NaT (not a time) at index {int(np.isnat(values).argmax())}")
-    return values
+    ``datetime``, an astropy ``Time`` or a sequence of those (UTC). NaT raises ValueError
+    naming its index."""
+    values = to_datetime64_array(epochs, "epochs")
+    return values.ravel()
 
 
 # -- public classes ----------------------------------------------------------------------
@@ -276,7 +265,8 @@ class SpaceWeather:
     def daily(self, date: Any) -> dict[str, Any]:
         """The row of a UTC day (ISO string, ``date`` or ``datetime64``) as a dict, for
         inspection; a day covered only by a monthly predicted row gives that month's row.
-        Units as in the class docstring. Raises ValueError if the day is not covered."""
+        Units as in the class docstring. Raises :class:`~rhoprop.OutsideRecordError` (a
+        ValueError) if the day is not covered."""
         day = to_datetime64(date, "date").astype("datetime64[D]")
         row = int(np.searchsorted(self.date, day, side="right")) - 1
         found = row >= 0 and (
@@ -287,7 +277,7 @@ class SpaceWeather:
             )
         )
         if not found:
-            raise ValueError(
+            raise OutsideRecordError(
                 f"date {day} is not in the space-weather record ({self.date[0]} to {self.date[-1]})"
             )
         values: dict[str, Any] = {
@@ -303,15 +293,16 @@ class SpaceWeather:
         """NRLMSIS drivers (see :class:`Drivers`) at UTC ``epochs``: a ``datetime64``
         scalar or array, an ISO string, a ``datetime`` or a sequence of these (flattened to
         1-D). Only observed and daily predicted rows are used (monthly predicted rows carry
-        no ap). Raises ValueError for NaT, for epochs outside :attr:`span` (naming the
-        offending epoch and the span) and for missing values in the rows needed.
+        no ap). Raises ValueError for NaT, and :class:`~rhoprop.OutsideRecordError` (a
+        ValueError) for epochs outside :attr:`span` (naming the offending epoch and the
+        span) and for missing values in the rows needed.
         """
         t = _as_epochs(epochs)
         day0 = self.date[0].astype("datetime64[ns]")
         slot = (t - day0).astype(np.int64) // _NS_PER_SLOT
         outside = (slot < _HISTORY_SLOTS) | (slot >= 8 * self._n_daily)
         if outside.any():
-            raise ValueError(self._outside_message(t, outside))
+            raise OutsideRecordError(self._outside_message(t, outside))
         day = slot // 8
         ap = np.empty((len(t), 7))
         ap[:, 0] = self.ap_daily[day]
@@ -344,7 +335,7 @@ class SpaceWeather:
         )
         if not finite.all():
             bad = drivers.epochs[~finite][0]
-            raise ValueError(
+            raise OutsideRecordError(
                 f"space-weather record {self.source} has missing F10.7 or ap values for "
                 f"epoch {np.datetime_as_string(bad, unit='s')} (date "
                 f"{bad.astype('datetime64[D]')})"
@@ -356,7 +347,8 @@ class SpaceWeather:
         """A new record with every geomagnetic index (3-hourly ap and Kp, daily Ap, Cp, C9)
         replaced in every row by its mean over the days ``start`` to ``end`` (inclusive;
         3-hourly indices by the mean of all their 3-hourly values, NaN ignored). Solar
-        indices are unchanged. Raises ValueError if the range holds no values."""
+        indices are unchanged. Raises :class:`~rhoprop.OutsideRecordError` (a ValueError)
+        if the range holds no values."""
         first = to_datetime64(start, "start").astype("datetime64[D]")
         last = to_datetime64(end, "end").astype("datetime64[D]")
         rows = (self.date >= first) & (self.date <= last)
@@ -364,7 +356,7 @@ class SpaceWeather:
         for name in GEOMAGNETIC:
             values = columns[name][rows]
             if not np.isfinite(values).any():
-                raise ValueError(f"no {name} values between {first} and {last}")
+                raise OutsideRecordError(f"no {name} values between {first} and {last}")
             mean = float(np.nanmean(values))
             columns[name] = np.full(columns[name].shape, mean)
         return SpaceWeather._from_columns(columns, self.source, self.declared_counts, (first, last))

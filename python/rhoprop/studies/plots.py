@@ -40,7 +40,7 @@ def method_comparison_figure(self: MethodComparison, path: str | Path) -> Path:
     x = np.linspace(-4 * stds[-1], 4 * stds[-1], 4001)
     for k in keys:
         at = self.results[k].along_track[:, -1]
-        mu, sd = at.mean(), self.along_track_std[k]
+        mu, sd = np.nanmean(at), self.along_track_std[k]  # decayed members are NaN
         pdf = np.exp(-0.5 * ((x - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi))
         note = " (peak off scale)" if len(stds) > 1 and sd < stds[1] / 2 else ""
         ax.plot(x / 1e3, pdf * 1e3, lw=2, label=f"{LABELS[k]} (std {sd:,.0f} m){note}")

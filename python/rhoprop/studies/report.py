@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import frames
+from ..catalog.export import OutputFolder, command_line
 from ..density import Msis
 from ..ensemble import EnsembleResult
 from ..propagation import OrbitState, Spacecraft, propagate
@@ -23,22 +24,33 @@ def _stage(title: str, start: float) -> None:
     print(f"\n== {title}  (t = {time.perf_counter() - start:.0f} s)", flush=True)
 
 
-def run_paper(out: str | Path, *, quick: bool = False, members: int | None = None) -> list[Path]:
+def run_paper(
+    out: str | Path,
+    *,
+    quick: bool = False,
+    members: int | None = None,
+    overwrite: bool = False,
+    command: str | None = None,
+) -> list[Path]:
     """The paper's study: deterministic orbits, Fig. 4, Fig. 5 (four cases), Fig. 6.
 
     Args:
-        out: output directory (created).
+        out: output directory (created; an earlier run's folder is refused unless
+            ``overwrite``, which clears it first).
         quick: a smoke run, 1 day and 100 members instead of 3 days and 1000.
         members: Monte Carlo members per run (default 1000, 100 with ``quick``).
+        overwrite: clear ``out`` if it holds an earlier run's files.
+        command: the command recorded in ``manifest.json`` (default: this process's).
 
     Returns:
-        The paths written: three PNG figures, ``summary.json`` and ``summary.md``.
+        The paths written: three PNG figures, ``summary.json``, ``summary.md`` and
+        ``manifest.json``, each written to a temporary name and renamed.
     """
     start = time.perf_counter()
     members = members or (100 if quick else 1000)
     duration = 86400.0 if quick else scenarios.PAPER_DURATION
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
+    out = folder.directory
     record = SpaceWeather()
     state, craft = scenarios.paper_state(), scenarios.paper_spacecraft()
     print(f"rhoprop paper: {members} members per run, {duration / 86400:g} days, output in {out}")
@@ -50,12 +62,16 @@ def run_paper(out: str | Path, *, quick: bool = False, members: int | None = Non
     comparison = method_comparison(
         state, craft, Msis("2.1", space_weather=record), duration, n=members
     )
-    figures = [comparison.figure(out / "method_comparison.png")]
+    with folder.path("method_comparison.png") as tmp:
+        comparison.figure(tmp)
+    figures = [out / "method_comparison.png"]
     print(comparison.table())
 
     _stage("Ensembles for the four space-weather cases (paper Fig. 5)", start)
     ensembles = case_ensembles(n=members, duration=duration, record=record)
-    figures.append(ensemble_figure(ensembles, out / "ensembles.png"))
+    with folder.path("ensembles.png") as tmp:
+        ensemble_figure(ensembles, tmp)
+    figures.append(out / "ensembles.png")
     case_table = _case_table(ensembles)
     print(case_table)
 
@@ -69,7 +85,9 @@ def run_paper(out: str | Path, *, quick: bool = False, members: int | None = Non
         duration,
         n=members,
     )
-    figures.append(versus.figure(out / "ccsp_vs_monte_carlo.png"))
+    with folder.path("ccsp_vs_monte_carlo.png") as tmp:
+        versus.figure(tmp)
+    figures.append(out / "ccsp_vs_monte_carlo.png")
     print(versus.table())
 
     summary = {
@@ -98,16 +116,18 @@ def run_paper(out: str | Path, *, quick: bool = False, members: int | None = Non
         },
         "wall_seconds": time.perf_counter() - start,
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    folder.write_text("summary.json", json.dumps(summary, indent=2))
     days = f"{duration / 86400:g}"
-    (out / "summary.md").write_text(
+    folder.write_text(
+        "summary.md",
         f"# rhoprop paper study\n\n{members} members per Monte Carlo run, {days} days.\n\n"
         f"## Method comparison (Fig. 4)\n\n{comparison.table()}\n\n"
         f"## Ensembles (Fig. 5): along-track at {days} days\n\n{case_table}\n\n"
-        f"## CCSP vs Monte Carlo (Fig. 6)\n\n{versus.table()}\n"
+        f"## CCSP vs Monte Carlo (Fig. 6)\n\n{versus.table()}\n",
     )
+    manifest = folder.finish()
     _stage("Done", start)
-    written = [*figures, out / "summary.json", out / "summary.md"]
+    written = [*figures, out / "summary.json", out / "summary.md", manifest]
     for path in written:
         print(f"  wrote {path}")
     return written

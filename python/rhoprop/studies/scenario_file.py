@@ -14,6 +14,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from ..catalog.export import OutputFolder, command_line, sanitise
 from ..density import DensityModel, Exponential, Msis
 from ..ensemble import ensemble
 from ..errors import ScenarioError
@@ -193,7 +194,7 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
     _unknown(outp, "output", {"directory"})
     return {
         "name": _get(sc, "scenario", "name", str, p.stem),
-        "directory": _get(outp, "output", "directory", str, "rhoprop-run"),
+        "directory": _output_directory(p, _get(outp, "output", "directory", str, "rhoprop-run")),
         "state": state,
         "spacecraft": craft,
         "models": models,
@@ -205,13 +206,50 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
     }
 
 
-def run_scenario_file(path: str | Path, out: str | None = None) -> int:
-    """Runs a scenario file: the ensemble, its figure, summary.json and summary.md."""
+def _output_directory(scenario: Path, value: str) -> Path:
+    """``output.directory``: an absolute path as given; a relative one resolves against
+    the scenario file's folder and must stay inside it (a file from elsewhere must not
+    write to ``../../..``)."""
+    if not value.strip():
+        raise ScenarioError("output.directory must not be empty")
+    given = Path(value).expanduser()
+    if given.is_absolute():
+        return given
+    base = scenario.resolve().parent
+    target = (base / given).resolve()
+    if target != base and base not in target.parents:
+        raise ScenarioError(
+            f"output.directory {value!r} leads outside the scenario's folder {base}; give "
+            "a path inside it, an absolute path, or --out"
+        )
+    if target == base:
+        raise ScenarioError(
+            f"output.directory {value!r} is the scenario's own folder; name a subfolder"
+        )
+    return target
+
+
+def run_scenario_file(
+    path: str | Path,
+    out: str | Path | None = None,
+    *,
+    overwrite: bool = False,
+    command: str | None = None,
+) -> int:
+    """Runs a scenario file: the ensemble, its figure, summary.json, summary.md and
+    manifest.json, in ``out`` (relative to the working directory) or else the file's
+    ``output.directory`` (relative to the scenario file's folder). A folder holding an
+    earlier run's files is refused unless ``overwrite`` (which clears it)."""
     sc = load_scenario(path)
-    directory = Path(out or sc["directory"])
-    directory.mkdir(parents=True, exist_ok=True)
+    folder = OutputFolder(
+        Path(out) if out is not None else sc["directory"],
+        command=command or command_line(),
+        overwrite=overwrite,
+    )
+    directory = folder.directory
+    name = sanitise(sc["name"])
     print(
-        f"rhoprop run: {sc['name']}: {len(sc['models'])} models, {sc['method']}, "
+        f"rhoprop run: {name}: {len(sc['models'])} models, {sc['method']}, "
         f"{sc['duration'] / 86400:g} days"
     )
     ens = ensemble(
@@ -224,22 +262,27 @@ def run_scenario_file(path: str | Path, out: str | None = None) -> int:
         duration=sc["duration"],
         **sc["options"],
     )
-    figure = ensemble_figure({sc["name"]: ens}, directory / "ensemble.png")
+    with folder.path("ensemble.png") as tmp:
+        ensemble_figure({name: ens}, tmp)
     summary = {"scenario": sc["name"], "epoch": str(sc["state"].epoch) + "Z", **ens.summary()}
-    (directory / "summary.json").write_text(json.dumps(summary, indent=2))
+    folder.write_text("summary.json", json.dumps(summary, indent=2))
     lines = [
         "| model | Cd | along-track mean [m] | along-track std [m] |",
         "| --- | --- | --- | --- |",
     ]
-    for name, m in summary["models"].items():
+    for model, m in summary["models"].items():
         lines.append(
-            f"| {name} | {m['cd']:.4f} | {m['along_track_mean_m']:.1f} "
-            f"| {m['along_track_std_m']:.1f} |"
+            f"| {sanitise(model).replace('|', '/')} | {m['cd']:.4f} "
+            f"| {m['along_track_mean_m']:.1f} | {m['along_track_std_m']:.1f} |"
         )
     mix = summary["mixture"]
     lines.append(f"| mixture ({mix['modes']} modes) | | {mix['mean_m']:.1f} | {mix['std_m']:.1f} |")
     table = "\n".join(lines)
-    (directory / "summary.md").write_text(f"# {sc['name']}\n\n{table}\n")
+    folder.write_text("summary.md", f"# {name}\n\n{table}\n")
+    manifest = folder.finish()
     print(table)
-    print(f"  wrote {figure}, {directory / 'summary.json'}, {directory / 'summary.md'}")
+    print(
+        f"  wrote {directory / 'ensemble.png'}, {directory / 'summary.json'}, "
+        f"{directory / 'summary.md'}, {manifest}"
+    )
     return 0

@@ -23,6 +23,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("OMEGA_EARTH", constants::OMEGA_EARTH)?;
     m.add("SECONDS_PER_DAY", constants::SECONDS_PER_DAY)?;
     m.add("DEFAULT_FLOOR_ALTITUDE", DEFAULT_FLOOR_ALTITUDE)?;
+    m.add("MAX_STEPS", rhoprop_core::integrators::MAX_STEPS)?;
     m.add("KAPPA_KINDS", PyTuple::new(m.py(), KappaProcess::KINDS)?)?;
     m.add_function(wrap_pyfunction!(simd_path, m)?)?;
     Ok(())

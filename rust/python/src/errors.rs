@@ -7,19 +7,19 @@ use pyo3::PyErr;
 use rhoprop_core::CoreError;
 
 create_exception!(
-    _core,
+    rhoprop._core,
     RhopropError,
     PyValueError,
     "Base of all rhoprop errors (a ValueError)."
 );
 create_exception!(
-    _core,
+    rhoprop._core,
     DensityFieldError,
     RhopropError,
     "A density lookup fell outside the sampled field."
 );
 create_exception!(
-    _core,
+    rhoprop._core,
     IntegrationError,
     RhopropError,
     "The integrator could not complete (step underflow, too many steps)."

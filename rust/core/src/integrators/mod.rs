@@ -12,7 +12,7 @@ pub mod dop853_tableau;
 mod fixed;
 
 pub use adaptive::{integrate_adaptive, AdaptiveOptions};
-pub use fixed::{drive, FixedMethod, FixedStepper, StepPlan};
+pub use fixed::{drive, FixedMethod, FixedStepper, StepPlan, MAX_STEPS};
 
 use crate::dynamics::State;
 use crate::error::CoreError;

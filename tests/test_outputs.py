@@ -1,0 +1,168 @@
+"""Nothing lost or silently mixed in outputs (issue 13, item 12): output folders with a
+manifest that refuse (or, asked to, clear) an earlier run's files, files written to a
+temporary name and renamed, text from inputs sanitised, scenario output folders inside
+the scenario's folder, and ``rp.io.write_oem`` for single results."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sgp4 import exporter
+from sgp4.api import Satrec
+
+import rhoprop as rp
+from rhoprop import catalog, io
+from rhoprop.catalog.export import MANIFEST, OutputFolder, atomic_path, sanitise
+from rhoprop.cli import main
+from rhoprop.studies.scenario_file import ScenarioError, load_scenario
+
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+END = "2002-09-07T06:00:00"
+
+
+def test_output_folder_claims_lists_and_refuses(tmp_path):
+    out = tmp_path / "run"
+    folder = OutputFolder(out, command="rhoprop test")
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert manifest["complete"] is False and manifest["files"] == []
+    folder.write_text("a.txt", "A")
+    with folder.path("sub/b.bin") as tmp:
+        assert tmp.parent == out / "sub" and tmp.name != "b.bin"
+        tmp.write_bytes(b"B")
+        assert not (out / "sub" / "b.bin").exists()  # only the rename makes it appear
+    folder.finish()
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert manifest["complete"] and manifest["files"] == ["a.txt", "sub/b.bin"]
+    assert manifest["rhoprop_version"] == rp.__version__ and manifest["command"] == "rhoprop test"
+    assert sorted(p.name for p in out.rglob("*")) == ["a.txt", "b.bin", MANIFEST, "sub"]
+    # Another run into the same folder: refused, or cleared with overwrite=True.
+    with pytest.raises(FileExistsError, match="holds the files of an earlier run"):
+        OutputFolder(out, command="again")
+    OutputFolder(out, command="again", overwrite=True)
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST]
+    # That run stopped before writing anything (e.g. bad input): the folder is reusable.
+    OutputFolder(out, command="third")
+    # A folder of files rhoprop did not write is never cleared.
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("precious")
+    with pytest.raises(FileExistsError, match=r"holds no manifest\.json"):
+        OutputFolder(mine, command="x", overwrite=True)
+    assert (mine / "thesis.tex").read_text() == "precious"
+
+
+def test_a_failed_write_leaves_no_file(tmp_path):
+    target = tmp_path / "x.txt"
+    target.write_text("old")
+    with pytest.raises(RuntimeError), atomic_path(target) as tmp:
+        tmp.write_text("half")
+        raise RuntimeError("writer died")
+    assert target.read_text() == "old" and sorted(p.name for p in tmp_path.iterdir()) == ["x.txt"]
+
+
+def test_sanitise():
+    assert sanitise("EVIL\nMETA_STOP\r\nX\x00Y\tZ é") == "EVIL_META_STOP__X_Y_Z _"
+    assert sanitise("  fine name  ") == "fine name" and len(sanitise("a" * 500)) == 100
+
+
+def test_object_names_cannot_inject_lines_into_an_oem(tmp_path):
+    from oem import OrbitEphemerisMessage
+
+    l1, l2 = SAMPLE.read_text().splitlines()[1:3]
+    record = exporter.export_omm(Satrec.twoline2rv(l1, l2), "SAT")
+    record["OBJECT_NAME"] = "EVIL\nMETA_STOP\nREF_FRAME = ITRF"
+    path = tmp_path / "evil.json"
+    path.write_text(json.dumps([record]))
+    cat = catalog.load(path)
+    r = catalog.propagate_catalog(
+        cat, rp.scenarios.benchmark_exponential(0.2), END, output_step=1800.0, progress=False
+    )
+    (oem_path,) = io.write_oem(r, tmp_path / "oem")
+    text = oem_path.read_text()
+    assert "OBJECT_NAME = EVIL_META_STOP_REF_FRAME = ITRF\n" in text
+    assert text.count("META_STOP") == 2 and text.count("\nREF_FRAME = TEME") == 1
+    oem = OrbitEphemerisMessage.open(str(oem_path))
+    assert len(list(oem.segments[0].states)) == len(r.epochs)
+
+
+def test_non_utf8_bytes_are_skipped_or_named(tmp_path):
+    # A stray byte in one name: "raise" names the line; "skip" still loads everything.
+    path = tmp_path / "latin1.tle"
+    path.write_bytes(SAMPLE.read_bytes().replace(b"SYNTH-2", b"SYNTH-\xe9"))
+    with pytest.raises(ValueError, match=r"latin1.tle line 4: byte 0xe9 is not UTF-8"):
+        catalog.load(path)
+    cat = catalog.load(path, errors="skip")
+    assert len(cat) == 6 and cat[1].name == "SYNTH-\ufffd"
+
+
+@pytest.fixture(scope="module")
+def single():
+    state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+    model = rp.scenarios.benchmark_exponential(0.2)
+    return {
+        "ccsp": rp.ccsp(state, craft, model, 7200.0),
+        "mc": rp.monte_carlo(state, craft, model, 7200.0, n=20, progress=False),
+        "trajectory": rp.propagate(state, craft, model, 7200.0, output_step=3600.0),
+    }
+
+
+@pytest.mark.parametrize("kind", ["ccsp", "mc", "trajectory"])
+def test_write_oem_takes_a_single_result(tmp_path, single, kind):
+    from oem import OrbitEphemerisMessage
+
+    result = single[kind]
+    (path,) = io.write_oem(result, tmp_path, object_name="PAPER\nSAT", object_id="2002-001A")
+    assert path.name == "2002-001A.oem"
+    text = path.read_text()
+    assert "OBJECT_NAME = PAPER_SAT\n" in text and "REF_FRAME = EME2000" in text
+    segment = OrbitEphemerisMessage.open(str(path)).segments[0]
+    m = result.moments()
+    states = np.array([s.vector for s in segment.states]) * 1e3
+    np.testing.assert_allclose(states, m.mean, rtol=1e-8)
+    if kind == "trajectory":
+        assert "COVARIANCE_START" not in text
+    else:
+        cov = np.array([c.matrix for c in segment.covariances]) * 1e6
+        np.testing.assert_allclose(cov, m.covariance, rtol=1e-8, atol=1e-12)
+
+
+def test_write_oem_says_what_it_takes(tmp_path):
+    with pytest.raises(TypeError, match=r"write_oem takes a CatalogResult .* not a list"):
+        io.write_oem([1, 2], tmp_path)
+
+
+def test_scenario_output_stays_in_the_scenario_folder(tmp_path):
+    from test_ensemble import GOOD
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    path = folder / "s.toml"
+    path.write_text(GOOD + '\n[output]\ndirectory = "results"\n')
+    # Relative to the scenario file, not to the working directory.
+    assert load_scenario(path)["directory"] == (folder / "results").resolve()
+    for bad in ("../../..", "../elsewhere", "."):
+        path.write_text(GOOD + f'\n[output]\ndirectory = "{bad}"\n')
+        with pytest.raises(ScenarioError, match=r"output\.directory"):
+            load_scenario(path)
+    absolute = tmp_path / "abs"
+    path.write_text(GOOD + f"\n[output]\ndirectory = {json.dumps(str(absolute))}\n")
+    assert load_scenario(path)["directory"] == absolute
+
+
+def test_rhoprop_run_writes_a_manifest_and_refuses_to_mix(tmp_path, capsys):
+    from test_ensemble import GOOD
+
+    path = tmp_path / "s.toml"
+    path.write_text(GOOD.replace('name = "tiny"', 'name = "tiny\\nstudy"'))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out)]) == 0
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert manifest["complete"]
+    assert sorted(manifest["files"]) == ["ensemble.png", "summary.json", "summary.md"]
+    assert (out / "summary.md").read_text().startswith("# tiny_study\n")
+    assert main(["run", str(path), "--out", str(out)]) == 1
+    assert "--overwrite" in capsys.readouterr().err
+    assert main(["run", str(path), "--out", str(out), "--overwrite"]) == 0
