@@ -34,3 +34,21 @@ def paper_craft() -> rp.Spacecraft:
 @pytest.fixture
 def benchmark_atmosphere() -> rp.density.Exponential:
     return rp.scenarios.benchmark_exponential()
+
+
+@pytest.fixture(scope="session")
+def test_data() -> Path:
+    """The third-party reference data (``../shared/data`` in CI): never copied into the
+    repository, read from ``$RHOPROP_TEST_DATA``. Skips with a reason where it is unset (a
+    user's clone); fails under CI, which must provide it."""
+    import os
+
+    root = os.environ.get("RHOPROP_TEST_DATA")
+    if not root:
+        if os.environ.get("CI"):
+            pytest.fail("RHOPROP_TEST_DATA is unset under CI; .ci/run must point it at the data")
+        pytest.skip("RHOPROP_TEST_DATA is unset: reference data not available in this clone")
+    path = Path(root)
+    if not path.is_dir():
+        pytest.fail(f"RHOPROP_TEST_DATA={root} is not a directory")
+    return path
