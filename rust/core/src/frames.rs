@@ -88,9 +88,10 @@ pub fn geodetic(r: [f64; 3]) -> Geodetic {
     }
 }
 
-/// atan2(y, x) in (-pi, pi] to about 1e-12 rad, without branches so that lane loops
+/// atan2(y, x) in (-pi, pi] to about 1e-10 rad, without branches so that lane loops
 /// vectorise: the argument is folded to [0, tan(pi/8)] (octant symmetry and one
-/// tangent-subtraction step) and its Taylor series summed to degree 29.
+/// tangent-subtraction step) and its Taylor series summed to degree 23 (the first term
+/// left out is below 0.42^25 / 25 = 2e-11).
 #[inline(always)]
 pub fn atan2_lanes(y: f64, x: f64) -> f64 {
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
@@ -101,10 +102,9 @@ pub fn atan2_lanes(y: f64, x: f64) -> f64 {
     let fold = t > std::f64::consts::SQRT_2 - 1.0;
     let u = if fold { (t - 1.0) / (t + 1.0) } else { t };
     let u2 = u * u;
-    let mut p = 1.0 / 29.0;
-    for k in (0..14).rev() {
-        let term = 1.0 / (2 * k + 1) as f64;
-        p = term - p * u2;
+    let mut p = 1.0 / 23.0;
+    for k in (0..11).rev() {
+        p = 1.0 / (2 * k + 1) as f64 - p * u2;
     }
     let mut a = u * p + if fold { FRAC_PI_4 } else { 0.0 };
     a = if ay > ax { FRAC_PI_2 - a } else { a };
@@ -128,12 +128,12 @@ pub fn geodetic_lanes(x: f64, y: f64, z: f64) -> (f64, f64, f64) {
     let p = (x * x + y * y).sqrt();
     // Parametric latitude theta: tan(theta) = a z / (b p), its sine and cosine.
     let (u, w) = (a * z, b * p);
-    let d = (u * u + w * w).sqrt();
-    let (st, ct) = (u / d, w / d);
+    let inv_d = 1.0 / (u * u + w * w).sqrt();
+    let (st, ct) = (u * inv_d, w * inv_d);
     let num = z + ep2 * b * st * st * st;
     let den = p - e2 * a * ct * ct * ct;
-    let q = (num * num + den * den).sqrt();
-    let (sl, cl) = (num / q, den / q);
+    let inv_q = 1.0 / (num * num + den * den).sqrt();
+    let (sl, cl) = (num * inv_q, den * inv_q);
     let alt = p * cl + z * sl - a * (1.0 - e2 * sl * sl).sqrt();
     (atan2_lanes(num, den), atan2_lanes(y, x), alt)
 }
@@ -230,7 +230,7 @@ mod tests {
         ] {
             let d: f64 = atan2_lanes(y, x) - f64::atan2(y, x);
             assert!(
-                d.abs() < 1e-12 || (d.abs() - std::f64::consts::TAU).abs() < 1e-12,
+                d.abs() < 1e-10 || (d.abs() - std::f64::consts::TAU).abs() < 1e-10,
                 "{y} {x}"
             );
         }

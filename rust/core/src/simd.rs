@@ -16,7 +16,7 @@ pub const LANES: usize = 4;
 /// The instruction set batch kernels run with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SimdPath {
-    /// x86-64 with AVX-512F (8 f64 lanes), AVX2 and FMA.
+    /// x86-64 with AVX-512F/DQ/VL (8 f64 lanes), AVX2 and FMA.
     Avx512,
     /// x86-64 with AVX2 and FMA.
     Avx2Fma,
@@ -45,7 +45,7 @@ impl SimdPath {
         {
             use std::arch::is_x86_feature_detected as has;
             if has!("avx2") && has!("fma") {
-                return if has!("avx512f") {
+                return if has!("avx512f") && has!("avx512dq") && has!("avx512vl") {
                     SimdPath::Avx512
                 } else {
                     SimdPath::Avx2Fma
@@ -122,7 +122,7 @@ pub fn dispatch_on<K: Kernel>(path: SimdPath, kernel: K) -> K::Output {
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
 unsafe fn run_avx512<K: Kernel>(kernel: K) -> K::Output {
     kernel.run()
 }

@@ -344,6 +344,8 @@ impl Atmosphere for GriddedField {
         let (na, nl, no) = (self.alt.len, self.lat.len, self.nlon);
         let (last_a, last_l, nof) = ((na - 1) as f64, (nl - 1) as f64, no as f64);
         let step_lon = TAU / nof;
+        let (inv_alt, inv_lat, inv_lon) =
+            (1.0 / self.alt.step, 1.0 / self.lat.step, 1.0 / step_lon);
         // Straight-line lane loops (no clamp asserts, no integer work) so that they
         // vectorise: the geodetic position, then the cell and fractions.
         let (mut lat, mut lon, mut alt) = ([0.0; W], [0.0; W], [0.0; W]);
@@ -359,16 +361,16 @@ impl Atmosphere for GriddedField {
         let mut outside = [false; W];
         let it_f = it as f64;
         for l in 0..W {
-            let ua = (alt[l] - self.alt.start) / self.alt.step;
-            let ul = (lat[l] - self.lat.start) / self.lat.step;
+            let ua = (alt[l] - self.alt.start) * inv_alt;
+            let ul = (lat[l] - self.lat.start) * inv_lat;
             outside[l] =
                 !(ua >= -1e-9 && ua <= last_a + 1e-9 && ul >= -1e-9 && ul <= last_l + 1e-9);
             let ia = ua.floor().max(0.0).min(last_a - 1.0);
             let il = ul.floor().max(0.0).min(last_l - 1.0);
             fa[l] = (ua - ia).clamp(0.0, 1.0);
             fl[l] = (ul - il).clamp(0.0, 1.0);
-            let uo = (lon[l] - self.lon0) / step_lon;
-            let uo = uo - (uo / nof).floor() * nof;
+            let uo = (lon[l] - self.lon0) * inv_lon;
+            let uo = uo - (uo * (1.0 / nof)).floor() * nof;
             let io = uo.floor().max(0.0).min(nof - 1.0);
             fo[l] = uo - io;
             // Offset of the next longitude node: +1, or back to node 0 past the last.
