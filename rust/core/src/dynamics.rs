@@ -17,6 +17,12 @@ pub type State<const W: usize> = [[f64; W]; 6];
 pub trait BatchRhs<const W: usize> {
     /// Writes dy/dt at `t` (seconds from the epoch) into `dy`.
     fn eval(&mut self, t: f64, y: &State<W>, dy: &mut State<W>) -> Result<(), CoreError>;
+
+    /// Changes whenever the right-hand side changes discontinuously (a new kappa node),
+    /// so that a multistep method restarts instead of differencing across it.
+    fn generation(&self) -> u64 {
+        0
+    }
 }
 
 /// How the normalised offset kappa perturbs the density (DESIGN.md section 4).
@@ -43,6 +49,9 @@ pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     pub clipped: [u64; W],
     /// Number of batch RHS evaluations.
     pub evaluations: u64,
+    /// Bumped by whoever changes `kappa` or `drag` discontinuously (see
+    /// [`BatchRhs::generation`]).
+    pub generation: u64,
 }
 
 impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
@@ -56,6 +65,7 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             perturbation: Perturbation::Additive,
             clipped: [0; W],
             evaluations: 0,
+            generation: 0,
         }
     }
 }
@@ -97,6 +107,11 @@ pub fn perturb(mean: f64, sigma: f64, kappa: f64, perturbation: Perturbation) ->
 }
 
 impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> {
+    #[inline(always)]
+    fn generation(&self) -> u64 {
+        self.generation
+    }
+
     #[inline(always)]
     fn eval(&mut self, t: f64, y: &State<W>, dy: &mut State<W>) -> Result<(), CoreError> {
         self.evaluations += 1;

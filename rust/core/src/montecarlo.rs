@@ -295,6 +295,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> fo
         dynamics: &mut Dynamics<'_, A, W>,
     ) {
         if matches!(grid, Some(k) if k > 0 && k % self.per_node == 0) {
+            // A new segment is a jump in the right-hand side (or in its slope).
+            dynamics.generation += 1;
             let kl = &mut dynamics.kappa;
             let d = self.spacing.expect("nodes exist when per_node is finite");
             kl.t0 = t;
@@ -332,6 +334,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> fo
                 // A decayed lane keeps stepping harmlessly without drag; its outputs stay
                 // frozen at the decay state.
                 dynamics.drag[l] = 0.0;
+                dynamics.generation += 1;
             }
         }
         self.last = (t, *y);

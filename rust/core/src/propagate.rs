@@ -18,6 +18,8 @@ pub enum Method {
     Rk4 { step: f64 },
     /// Fixed-step 8th-order Dormand-Prince with the given largest step, s.
     Rk8 { step: f64 },
+    /// Fixed-step Adams-Bashforth-Moulton (started with RK8) with the given largest step, s.
+    Abm { step: f64 },
     /// Adaptive DOP853 with dense output.
     Dop853(AdaptiveOptions),
 }
@@ -99,11 +101,11 @@ pub fn propagate<A: Atmosphere + ?Sized>(
         decayed_at: None,
     };
     let outcome = match method {
-        Method::Rk4 { step } | Method::Rk8 { step } => {
-            let scheme = if matches!(method, Method::Rk4 { .. }) {
-                FixedMethod::Rk4
-            } else {
-                FixedMethod::Rk8
+        Method::Rk4 { step } | Method::Rk8 { step } | Method::Abm { step } => {
+            let scheme = match method {
+                Method::Rk4 { .. } => FixedMethod::Rk4,
+                Method::Rk8 { .. } => FixedMethod::Rk8,
+                _ => FixedMethod::Abm,
             };
             let plan = StepPlan::equal_steps(0.0, output_times, step)?;
             drive(scheme, &mut dynamics, &mut y, &plan, &mut observer)?

@@ -49,9 +49,10 @@ pub fn monte_carlo<'py>(
     let method = match method {
         "rk8" => FixedMethod::Rk8,
         "rk4" => FixedMethod::Rk4,
+        "abm" => FixedMethod::Abm,
         other => {
             return Err(PyValueError::new_err(format!(
-                "unknown method {other:?}; a Monte Carlo uses 'rk8' or 'rk4'"
+                "unknown method {other:?}; a Monte Carlo uses 'rk8', 'rk4' or 'abm'"
             )))
         }
     };

@@ -48,6 +48,7 @@ pub fn propagate<'py>(
     let method = match method {
         "rk4" => Method::Rk4 { step: need_step()? },
         "rk8" => Method::Rk8 { step: need_step()? },
+        "abm" => Method::Abm { step: need_step()? },
         "dop853" => Method::Dop853(AdaptiveOptions {
             rtol: rtol.unwrap_or(AdaptiveOptions::default().rtol),
             max_step: step.unwrap_or(f64::INFINITY),
@@ -55,7 +56,7 @@ pub fn propagate<'py>(
         }),
         other => {
             return Err(PyValueError::new_err(format!(
-                "unknown method {other:?}; expected one of 'dop853', 'rk8', 'rk4'"
+                "unknown method {other:?}; expected one of 'dop853', 'rk8', 'rk4', 'abm'"
             )))
         }
     };

@@ -15,12 +15,69 @@ pub enum FixedMethod {
     /// 8th-order Dormand-Prince (DOP853 tableau without its error estimate), 12 RHS
     /// evaluations per step.
     Rk8,
+    /// Adams-Bashforth-Moulton predict-evaluate-correct-evaluate with [`ABM_STEPS`]
+    /// back values (Adams-Bashforth of that order predicts, Adams-Moulton one order higher
+    /// corrects): 2 RHS evaluations per step. It starts, and restarts wherever the step
+    /// size changes or the right-hand side jumps (a kappa node), with RK8 steps; so it pays
+    /// where the force is smooth over many steps (deterministic ensembles, held kappa).
+    Abm,
+}
+
+/// Back values of the multistep method.
+pub const ABM_STEPS: usize = 10;
+
+/// Adams-Bashforth (`ab`, weights of f_n, f_{n-1}, ...) and Adams-Moulton (`am`, weights of
+/// f_{n+1}, f_n, ...) coefficients from the backward-difference series (Hairer, Norsett &
+/// Wanner I, III.1): gamma_i = 1 - sum_j gamma_j / (i + 1 - j), gamma*_i = -sum_j
+/// gamma*_j / (i + 1 - j), beta_j = (-1)^j sum_{i >= j} gamma_i C(i, j).
+fn adams_coefficients() -> ([f64; ABM_STEPS], [f64; ABM_STEPS + 1]) {
+    let k = ABM_STEPS;
+    let mut g = vec![0.0; k + 1];
+    let mut gs = vec![0.0; k + 1];
+    for i in 0..=k {
+        let (mut a, mut b) = (0.0, 0.0);
+        for j in 0..i {
+            a += g[j] / (i + 1 - j) as f64;
+            b += gs[j] / (i + 1 - j) as f64;
+        }
+        g[i] = 1.0 - a;
+        gs[i] = if i == 0 { 1.0 } else { -b };
+    }
+    let binom = |n: usize, r: usize| (0..r).fold(1.0, |c, q| c * (n - q) as f64 / (q + 1) as f64);
+    let sign = |j: usize| if j % 2 == 0 { 1.0 } else { -1.0 };
+    let ab = std::array::from_fn(|j| sign(j) * (j..k).map(|i| g[i] * binom(i, j)).sum::<f64>());
+    let am = std::array::from_fn(|j| sign(j) * (j..=k).map(|i| gs[i] * binom(i, j)).sum::<f64>());
+    (ab, am)
+}
+
+/// Back values of f for the multistep method: newest first.
+struct History<const W: usize> {
+    f: [State<W>; ABM_STEPS],
+    /// Values held (the newest at index 0).
+    len: usize,
+    /// Where the next step must start, its size and the RHS generation for the values
+    /// to be usable.
+    t_next: f64,
+    h: f64,
+    generation: u64,
+    ab: [f64; ABM_STEPS],
+    am: [f64; ABM_STEPS + 1],
+}
+
+impl<const W: usize> History<W> {
+    fn push(&mut self, f: &State<W>) {
+        self.f.copy_within(0..ABM_STEPS - 1, 1);
+        self.f[0] = *f;
+        self.len = (self.len + 1).min(ABM_STEPS);
+    }
 }
 
 /// Stage workspace for one batch, reused for every step.
 pub struct FixedStepper<const W: usize> {
     k: [State<W>; 12],
     tmp: State<W>,
+    /// Back values of the multistep method (allocated on its first use).
+    history: Option<Box<History<W>>>,
 }
 
 impl<const W: usize> Default for FixedStepper<W> {
@@ -28,6 +85,7 @@ impl<const W: usize> Default for FixedStepper<W> {
         Self {
             k: [[[0.0; W]; 6]; 12],
             tmp: [[0.0; W]; 6],
+            history: None,
         }
     }
 }
@@ -58,14 +116,102 @@ impl<const W: usize> FixedStepper<W> {
             }
             FixedMethod::Rk8 => {
                 rhs.eval(t, y, &mut self.k[0])?;
-                for s in 1..12 {
-                    combine(&mut self.tmp, y, h, &tab::A[s][..s], &self.k[..s]);
-                    rhs.eval(t + tab::C[s] * h, &self.tmp, &mut self.k[s])?;
-                }
-                combine(&mut self.tmp, y, h, &tab::B, &self.k[..12]);
+                self.rk8_stages(rhs, t, h, y)?;
             }
+            FixedMethod::Abm => return self.abm_step(rhs, t, h, y),
         }
         *y = self.tmp;
+        Ok(())
+    }
+
+    /// RK8 stages 2..12 and the combination into `tmp`, with k[0] = f(t, y) given.
+    #[inline(always)]
+    fn rk8_stages<R: BatchRhs<W>>(
+        &mut self,
+        rhs: &mut R,
+        t: f64,
+        h: f64,
+        y: &State<W>,
+    ) -> Result<(), CoreError> {
+        for s in 1..12 {
+            combine(&mut self.tmp, y, h, &tab::A[s][..s], &self.k[..s]);
+            rhs.eval(t + tab::C[s] * h, &self.tmp, &mut self.k[s])?;
+        }
+        combine(&mut self.tmp, y, h, &tab::B, &self.k[..12]);
+        Ok(())
+    }
+
+    /// One Adams-Bashforth-Moulton PECE step, or an RK8 starting step while fewer than
+    /// [`ABM_STEPS`] back values are valid for this step size and right-hand side.
+    #[inline(always)]
+    fn abm_step<R: BatchRhs<W>>(
+        &mut self,
+        rhs: &mut R,
+        t: f64,
+        h: f64,
+        y: &mut State<W>,
+    ) -> Result<(), CoreError> {
+        let hist = self.history.get_or_insert_with(|| {
+            let (ab, am) = adams_coefficients();
+            Box::new(History {
+                f: [[[0.0; W]; 6]; ABM_STEPS],
+                len: 0,
+                t_next: f64::NAN,
+                h: f64::NAN,
+                generation: 0,
+                ab,
+                am,
+            })
+        });
+        let tol = 1e-9 * h.abs().max(t.abs()).max(1.0);
+        if !((t - hist.t_next).abs() <= tol && h == hist.h && rhs.generation() == hist.generation) {
+            hist.len = 0;
+        }
+        if hist.len == 0 {
+            rhs.eval(t, y, &mut self.k[0])?;
+            hist.push(&self.k[0]);
+        }
+        if hist.len < ABM_STEPS {
+            // Start-up: an RK8 step whose first stage is the newest back value.
+            self.k[0] = hist.f[0];
+            self.rk8_stages(rhs, t, h, y)?;
+            *y = self.tmp;
+            rhs.eval(t + h, y, &mut self.k[0])?;
+        } else {
+            // Predict (Adams-Bashforth), evaluate, correct (Adams-Moulton), evaluate.
+            let (ab, am) = (hist.ab, hist.am);
+            let mut pred = *y;
+            for (j, &b) in ab.iter().enumerate() {
+                let hb = h * b;
+                for c in 0..6 {
+                    for l in 0..W {
+                        pred[c][l] += hb * hist.f[j][c][l];
+                    }
+                }
+            }
+            rhs.eval(t + h, &pred, &mut self.k[1])?;
+            let mut corr = *y;
+            for c in 0..6 {
+                for l in 0..W {
+                    corr[c][l] += h * am[0] * self.k[1][c][l];
+                }
+            }
+            for (j, &b) in am[1..].iter().enumerate() {
+                let hb = h * b;
+                for c in 0..6 {
+                    for l in 0..W {
+                        corr[c][l] += hb * hist.f[j][c][l];
+                    }
+                }
+            }
+            *y = corr;
+            rhs.eval(t + h, y, &mut self.k[0])?;
+        }
+        let hist = self.history.as_mut().expect("set above");
+        hist.push(&self.k[0]);
+        hist.t_next = t + h;
+        hist.h = h;
+        hist.generation = rhs.generation();
         Ok(())
     }
 }
@@ -389,6 +535,37 @@ mod tests {
             ratio.log2()
         );
         assert!(error_after(FixedMethod::Rk8, 0.25) < 1e-9);
+    }
+
+    #[test]
+    fn adams_coefficients_are_the_textbook_ones() {
+        // Each family's weights sum to 1 (exact for f = const); AB2 = (3/2, -1/2) and
+        // AM with two points is the trapezoid, from the same recursion at lower order.
+        let (ab, am) = adams_coefficients();
+        assert!((ab.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert!((am.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        // Exact for polynomials up to degree ABM_STEPS - 1 (AB) and ABM_STEPS (AM):
+        // integrate f(t) = t^q over [0, 1] from nodes 0, -1, -2, ... (and 1 for AM).
+        for q in 0..ABM_STEPS as i32 {
+            let exact = 1.0 / (q + 1) as f64;
+            // Tolerance: rounding of sums whose terms reach ~10^q.
+            let scale: f64 = (0..=ABM_STEPS).map(|j| (j as f64).powi(q)).sum::<f64>() * 1e-13;
+            let b: f64 = (0..ABM_STEPS).map(|j| ab[j] * (-(j as f64)).powi(q)).sum();
+            assert!((b - exact).abs() < scale.max(1e-13), "AB q = {q}: {b}");
+            let m: f64 = (0..=ABM_STEPS)
+                .map(|j| am[j] * (1.0 - j as f64).powi(q))
+                .sum();
+            assert!((m - exact).abs() < scale.max(1e-13), "AM q = {q}: {m}");
+        }
+    }
+
+    #[test]
+    fn abm_converges_at_high_order_and_restarts_on_jumps() {
+        let e1 = error_after(FixedMethod::Abm, 0.2);
+        let e2 = error_after(FixedMethod::Abm, 0.1);
+        let order = (e1 / e2).log2();
+        assert!(order > 9.0, "observed order {order} ({e1}, {e2})");
+        assert!(e2 < 1e-10, "{e2}");
     }
 
     #[test]
