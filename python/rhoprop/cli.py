@@ -1,7 +1,8 @@
 """The ``rhoprop`` command line: ``rhoprop paper`` (the paper's study), ``rhoprop run
-SCENARIO.toml`` (a user's own ensemble study) and ``rhoprop catalog FILE`` (a TLE/OMM
-catalog). Argument parsing only: each command calls one function of the package.
-Exit codes: 0 ok, 1 failure, 2 usage."""
+SCENARIO.toml`` (a user's own ensemble study), ``rhoprop catalog FILE`` (a TLE/OMM
+catalog), ``rhoprop reentry FILE`` (reentry windows) and ``rhoprop data refresh``.
+Argument parsing only: each command calls one function of the package. Exit codes: 0 ok,
+1 failure, 2 usage."""
 
 from __future__ import annotations
 
@@ -42,7 +43,35 @@ def _catalog(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         duplicates=args.duplicates,
         command=args.command_line,
+        fit=args.fit,
+        initial_covariance=args.initial_covariance,
     )
+    return 0
+
+
+def _reentry(args: argparse.Namespace) -> int:
+    from .catalog.job import run_reentry_file
+
+    run_reentry_file(
+        args.file,
+        args.out,
+        horizon_days=args.horizon,
+        members=args.members,
+        model=args.model,
+        fit=args.fit,
+        drag_sigma=args.drag_sigma,
+        skip_bad=args.skip_bad,
+        overwrite=args.overwrite,
+        command=args.command_line,
+    )
+    return 0
+
+
+def _data_refresh(args: argparse.Namespace) -> int:
+    from .catalog.job import refresh_data
+
+    for line in refresh_data(timeout=args.timeout):
+        print(line)
     return 0
 
 
@@ -153,8 +182,59 @@ def build_parser() -> argparse.ArgumentParser:
         help="NORAD ids occurring more than once: an error (default) or OEM files named "
         "<id>_2.oem, <id>_3.oem, ...",
     )
+    cat.add_argument(
+        "--fit",
+        action="store_true",
+        help="fit each object's state and Cd*A/m to its SGP4 positions over one day either "
+        "side of its epoch with rhoprop's dynamics and the model (about 0.1 s per object; "
+        "needed for B* <= 0 objects)",
+    )
+    cat.add_argument(
+        "--initial-covariance",
+        default=None,
+        metavar="KIND|FILE",
+        help="initial covariance: 'object' (default: published TLE accuracy by regime, plus "
+        "the fit's with --fit), 'tle', 'paper' (near-zero, 1 mm / 1 um/s) or a text file "
+        "with a 6x6 inertial covariance in m^2, m^2/s, m^2/s^2",
+    )
     _overwrite(cat)
     cat.set_defaults(run=_catalog)
+    reentry = sub.add_parser(
+        "reentry",
+        help="reentry windows of a TLE/OMM catalog",
+        description="Monte Carlo over density and ballistic-coefficient uncertainty for "
+        "every element set of FILE: the 2.5 %%, median and 97.5 %% decay epochs within "
+        "--horizon days and the fraction of members decayed; printed and written to "
+        "OUT/reentry.csv.",
+    )
+    reentry.add_argument("file", help="TLE or OMM file")
+    reentry.add_argument("--horizon", type=float, default=30.0, help="days after each epoch")
+    reentry.add_argument("--members", type=int, default=100, help="Monte Carlo members")
+    reentry.add_argument("--model", default="2.1", choices=MODEL_NAMES)
+    reentry.add_argument("--fit", action="store_true", help="fit state and Cd*A/m first")
+    reentry.add_argument(
+        "--drag-sigma",
+        type=float,
+        default=None,
+        help="relative 1-sigma of Cd*A/m (default: the fit's, at least 0.15; else 0.15)",
+    )
+    reentry.add_argument("--out", default="rhoprop-reentry", help="output directory")
+    reentry.add_argument(
+        "--skip-bad", action="store_true", help="skip malformed element sets (listed on stderr)"
+    )
+    _overwrite(reentry)
+    reentry.set_defaults(run=_reentry)
+    data = sub.add_parser("data", help="manage data files (space weather, JB2008 indices)")
+    data_sub = data.add_subparsers(dest="data_command", metavar="ACTION")
+    refresh = data_sub.add_parser(
+        "refresh",
+        help="download the current space-weather record and JB2008 indices into the cache",
+        description="Download CelesTrak's SW-All.csv (observed and predicted F10.7, Kp, ap) "
+        "and SET's JB2008 index files into the user cache ($RHOPROP_CACHE, else "
+        "$XDG_CACHE_HOME/rhoprop or ~/.cache/rhoprop), where rhoprop reads them next.",
+    )
+    refresh.add_argument("--timeout", type=float, default=60.0, help="per download, s")
+    refresh.set_defaults(run=_data_refresh)
     return parser
 
 

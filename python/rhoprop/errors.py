@@ -13,7 +13,8 @@ are raised by the extension as these same classes.
         └── ScenarioError        an invalid scenario file
 
     RuntimeWarning
-    └── CacheWarning             the disk cache could not be used (the result is kept)
+    ├── CacheWarning             the disk cache could not be used (the result is kept)
+    └── PredictedDriversWarning  predicted (not observed) space weather is in use
 """
 
 from __future__ import annotations
@@ -41,12 +42,19 @@ class CacheWarning(RuntimeWarning):
     vanished directory); the value was computed and is used from memory."""
 
 
+class PredictedDriversWarning(RuntimeWarning):
+    """Space-weather drivers after the last observed day are predictions (a forecast
+    record, :meth:`~rhoprop.SpaceWeather.with_forecast`); the message gives the lead time
+    and how to refresh the record (``rhoprop data refresh``)."""
+
+
 __all__ = [
     "CacheWarning",
     "DecayError",
     "DensityFieldError",
     "IntegrationError",
     "OutsideRecordError",
+    "PredictedDriversWarning",
     "RhopropError",
     "ScenarioError",
 ]

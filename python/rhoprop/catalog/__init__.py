@@ -1,9 +1,14 @@
-"""Catalogs: element sets in (``elements``: TLE and CCSDS OMM through ``sgp4``), runs
-over many objects to common epochs, locally or on Dask (``run``), and files out
-(``export``: CCSDS OEM and a Parquet summary)."""
+"""Catalogs: element sets in (``elements``: TLE and CCSDS OMM through ``sgp4``), states
+and ballistic coefficients fitted to them (``fit``), their initial covariance
+(``covariance``: published TLE accuracy), runs over many objects to common epochs, locally
+or on Dask (``run``), reentry windows (``reentry_windows``) and files out (``export``:
+CCSDS OEM and a Parquet summary)."""
 
+from .covariance import TleAccuracy, tle_accuracy, tle_covariance
 from .elements import SGP4_RHO0, Catalog, CatalogObject, drag_parameter_from_bstar, load
 from .export import summary_table, write_oem, write_summary
+from .fit import FitResult, fit_element_set
+from .reentry_windows import ReentryResult, reentry
 from .run import CatalogResult, common_epochs, propagate_catalog
 
 __all__ = [
@@ -11,11 +16,18 @@ __all__ = [
     "Catalog",
     "CatalogObject",
     "CatalogResult",
+    "FitResult",
+    "ReentryResult",
+    "TleAccuracy",
     "common_epochs",
     "drag_parameter_from_bstar",
+    "fit_element_set",
     "load",
     "propagate_catalog",
+    "reentry",
     "summary_table",
+    "tle_accuracy",
+    "tle_covariance",
     "write_oem",
     "write_summary",
 ]

@@ -21,20 +21,34 @@ import numpy as np
 
 from ..propagation import OrbitState
 from ..time import from_jd
+from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
 
-#: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
-SGP4_RHO0 = 0.15696615
-
-
-def drag_parameter_from_bstar(bstar: float) -> float:
-    """Cd*A/m (m^2/kg) from an SGP4 B* (1/Earth radii): 2 B* / rho0."""
-    return 2.0 * bstar / SGP4_RHO0
+__all__ = [
+    "DEFAULT_DRAG_PARAMETER",
+    "SGP4_RHO0",
+    "Catalog",
+    "CatalogObject",
+    "drag_parameter_from_bstar",
+    "load",
+]
 
 
 @dataclass(frozen=True)
 class CatalogObject:
     """One element set: ``state`` at its epoch (TEME taken as inertial), the drag
-    parameter Cd*A/m (m^2/kg), B* (1/ER) and where it came from."""
+    parameter Cd*A/m (m^2/kg), B* (1/ER) and where it came from.
+
+    Attributes:
+        covariance: the object's own initial covariance (6, 6) at its epoch (m^2, m^2/s,
+            m^2/s^2, inertial), or None: ``load`` sets the published TLE accuracy
+            (:func:`~rhoprop.catalog.covariance.tle_covariance`), ``load(fit=True)`` that
+            plus the fit's own covariance.
+        covariance_note: what ``covariance`` includes, in words (OEM comment, summary).
+        fit: the :class:`~rhoprop.catalog.fit.FitResult` when the state and drag
+            parameter were fitted (``load(fit=True)``), else None.
+        elements: the element set as read (TLE lines or the OMM record), to rebuild the
+            SGP4 propagator (``Satrec`` does not pickle).
+    """
 
     name: str
     norad_id: int
@@ -42,6 +56,23 @@ class CatalogObject:
     drag_parameter: float
     bstar: float
     source: str
+    covariance: np.ndarray | None = field(default=None, repr=False, compare=False)
+    covariance_note: str = field(default="", compare=False)
+    fit: Any = field(default=None, repr=False, compare=False)
+    elements: Any = field(default=None, repr=False, compare=False)
+
+    def satrec(self) -> Any:
+        """A fresh ``sgp4`` ``Satrec`` of the element set (None without ``elements``)."""
+        from sgp4 import omm
+        from sgp4.api import Satrec
+
+        if self.elements is None:
+            return None
+        if isinstance(self.elements, dict):
+            sat = Satrec()
+            omm.initialize(sat, self.elements)
+            return sat
+        return Satrec.twoline2rv(*self.elements)
 
 
 @dataclass
@@ -62,8 +93,17 @@ class Catalog:
         return self.objects[i]
 
 
-def _object_from_satrec(sat: Any, name: str, where: str, drag: float | None) -> CatalogObject:
+def _object_from_satrec(
+    sat: Any,
+    name: str,
+    where: str,
+    drag: float | None,
+    elements: Any = None,
+    allow_nonpositive: bool = False,
+) -> CatalogObject:
     from sgp4.api import SGP4_ERRORS
+
+    from .covariance import tle_accuracy, tle_covariance
 
     err, r, v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
     if err:
@@ -72,14 +112,37 @@ def _object_from_satrec(sat: Any, name: str, where: str, drag: float | None) -> 
     epoch = from_jd(sat.jdsatepoch, sat.jdsatepochF, scale="utc")
     bstar = float(sat.bstar)
     if drag is None:
-        if not bstar > 0:
+        if bstar > 0:
+            drag = drag_parameter_from_bstar(bstar)
+        elif allow_nonpositive:  # the fit replaces it; a typical value to start from
+            drag = DEFAULT_DRAG_PARAMETER
+        else:
             raise ValueError(
                 f"{where}: B* = {bstar} is not positive, so no drag parameter follows from it; "
-                "give drag_parameters for this object"
+                "load with fit=True (fits Cd*A/m to the element set) or give drag_parameters "
+                "for this object"
             )
-        drag = drag_parameter_from_bstar(bstar)
     state = OrbitState(epoch, np.array(r) * 1e3, np.array(v) * 1e3)
-    return CatalogObject(name or str(sat.satnum), int(sat.satnum), state, drag, bstar, where)
+    acc = tle_accuracy(state)
+    return CatalogObject(
+        name or str(sat.satnum),
+        int(sat.satnum),
+        state,
+        drag,
+        bstar,
+        where,
+        covariance=tle_covariance(state, acc),
+        covariance_note=_tle_note(acc),
+        elements=elements,
+    )
+
+
+def _tle_note(acc: Any) -> str:
+    return (
+        f"initial covariance: published TLE accuracy ({acc.regime}: RMS radial "
+        f"{acc.radial:.0f} m, along-track {acc.along_track:.0f} m, cross-track "
+        f"{acc.cross_track:.0f} m, drift {acc.drift_rate * 86400 / 1e3:.1f} km/day)"
+    )
 
 
 def _checksum_ok(line: str) -> bool:
@@ -126,7 +189,7 @@ def _parse_tle(text: str, path: str) -> list[tuple[str, Any]]:
         except (ValueError, IndexError) as err:
             entries.append((where, ValueError(f"{where}: unreadable field: {err}")))
             continue
-        entries.append((where, (sat, name)))
+        entries.append((where, (sat, name, (l1, l2))))
     return entries
 
 
@@ -160,25 +223,55 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
         except (ValueError, TypeError) as err:
             entries.append((where, ValueError(f"{where}: unreadable field: {err}")))
             continue
-        entries.append((where, (sat, str(rec.get("OBJECT_NAME", "")).strip())))
+        entries.append((where, (sat, str(rec.get("OBJECT_NAME", "")).strip(), dict(rec))))
     return entries
 
 
 def load(
-    path: str | Path, *, errors: str = "raise", drag_parameters: dict[int, float] | None = None
+    path: str | Path,
+    *,
+    errors: str = "raise",
+    drag_parameters: dict[int, float] | None = None,
+    fit: bool = False,
+    model: Any = None,
+    span: tuple[float, float] | None = None,
+    threads: int | None = None,
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content.
 
+    Every object gets an initial ``covariance``: the published accuracy of TLE-derived
+    states for its regime (:mod:`rhoprop.catalog.covariance`), and a ``covariance_note``
+    saying so.
+
     Args:
         path: the file.
-        errors: ``"raise"`` (default): the first malformed line/record raises ValueError
-            naming it and the field; ``"skip"``: it is skipped and listed in
-            ``Catalog.skipped``.
-        drag_parameters: optional {NORAD id: Cd*A/m (m^2/kg)} overriding B*.
+        errors: ``"raise"`` (default): the first malformed line/record (or failed fit of
+            a B* <= 0 object) raises ValueError naming it and the field; ``"skip"``: it
+            is skipped and listed in ``Catalog.skipped``.
+        drag_parameters: optional {NORAD id: Cd*A/m (m^2/kg)} overriding B* (with
+            ``fit=True``: the fit's starting value and prior).
+        fit: fit each object's state and Cd*A/m to its SGP4 positions over ``span`` with
+            rhoprop's dynamics and ``model`` (:func:`~rhoprop.catalog.fit.fit_element_set`,
+            about 0.1 s per object). Fitted objects carry ``fit`` (residuals, covariance)
+            and as ``covariance`` the TLE accuracy plus the fit's state covariance. Objects
+            with B* <= 0 load only this way. Where a fit fails (the orbit decays within the
+            span, SGP4 fails) the object keeps its B* state, and its note says why. The B*
+            conversion (``fit=False``) stays the default: it is instant, and a fit needs a
+            density model and space weather over the span.
+        model: density model for the fit (required with ``fit=True``): a sampled model
+            is sampled once into one field covering every object's span and altitudes;
+            a ``DensityField`` is used as given.
+        span: fit span, s from each epoch (default ``fit.DEFAULT_SPAN``, one day either
+            side).
+        threads: objects fitted at once (default: CPU count).
     """
+    from .fit import DEFAULT_SPAN
+
     if errors not in ("raise", "skip"):
         raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
+    if fit and model is None:
+        raise ValueError("fit=True needs a density model: load(path, fit=True, model=...)")
     p = Path(path)
     raw = p.read_bytes()
     try:
@@ -200,13 +293,81 @@ def load(
         try:
             if isinstance(item, Exception):
                 raise item
-            sat, name = item
+            sat, name, elements = item
             drag = (drag_parameters or {}).get(int(sat.satnum))
-            out.objects.append(_object_from_satrec(sat, name, where, drag))
+            out.objects.append(
+                _object_from_satrec(sat, name, where, drag, elements, allow_nonpositive=fit)
+            )
         except ValueError as err:
             if errors == "raise":
                 raise
             out.skipped.append((where, str(err)))
     if not out.objects and not out.skipped:
         raise ValueError(f"{p} holds no TLE or OMM element sets")
+    if fit and out.objects:
+        _fit_all(out, model, span or DEFAULT_SPAN, errors, threads)
     return out
+
+
+def _fit_all(
+    cat: Catalog, model: Any, span: tuple[float, float], errors: str, threads: int | None
+) -> None:
+    """Replaces the objects of ``cat`` by fitted ones (in place, order kept)."""
+    import concurrent.futures as cf
+    import dataclasses
+    import os
+
+    from ..density import SampledModel, altitude_band
+    from .covariance import tle_accuracy, tle_covariance
+    from .fit import fit_element_set
+
+    objs = cat.objects
+    atmosphere = model
+    if isinstance(model, SampledModel):
+        lows, highs = zip(
+            *(altitude_band(o.state.position, o.state.velocity) for o in objs), strict=True
+        )
+        start = min(o.state.epoch for o in objs) + np.timedelta64(int(span[0] * 1e9), "ns")
+        end = max(o.state.epoch for o in objs) + np.timedelta64(int(span[1] * 1e9), "ns")
+        # Over a day before its epoch an orbit near reentry was tens of km higher.
+        atmosphere = model.field(
+            start, end, altitude_range=(max(min(lows) - 50e3, 0.0), max(highs) + 150e3)
+        )
+
+    def one(obj: CatalogObject) -> CatalogObject | Exception:
+        try:
+            f = fit_element_set(obj, atmosphere, span=span)
+        except Exception as err:  # recorded per object below
+            return err
+        acc = tle_accuracy(f.state)
+        return dataclasses.replace(
+            obj,
+            state=f.state,
+            drag_parameter=f.drag_parameter,
+            covariance=tle_covariance(f.state, acc) + f.covariance[:6, :6],
+            covariance_note=(
+                f"{_tle_note(acc)} plus the covariance of the fit to SGP4 over "
+                f"{span[0] / 3600:+.0f}..{span[1] / 3600:+.0f} h (RMS residual "
+                f"{f.rms_total:.0f} m); Cd*A/m fitted, {f.drag_parameter:.4g} "
+                f"+- {f.drag_sigma:.2g} m^2/kg (its uncertainty is not propagated)"
+            ),
+            fit=f,
+        )
+
+    with cf.ThreadPoolExecutor(max_workers=threads or os.cpu_count() or 1) as pool:
+        fitted = list(pool.map(one, objs))
+    kept: list[CatalogObject] = []
+    for obj, res in zip(objs, fitted, strict=True):
+        if isinstance(res, CatalogObject):
+            kept.append(res)
+            continue
+        message = f"{obj.source}: fit failed: {type(res).__name__}: {res}"
+        if obj.bstar > 0:
+            kept.append(
+                dataclasses.replace(obj, covariance_note=f"{obj.covariance_note}; {message}")
+            )
+        elif errors == "raise":
+            raise ValueError(message) from res
+        else:
+            cat.skipped.append((obj.source, message))
+    cat.objects = kept

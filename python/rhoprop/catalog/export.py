@@ -203,8 +203,11 @@ def _oem_text(
     epochs: np.ndarray,
     mean: np.ndarray,
     covariance: np.ndarray | None,
+    note: str = "",
 ) -> str:
-    """One OEM segment: states in km and km/s, covariances in km^2, km^2/s, km^2/s^2."""
+    """One OEM segment: states in km and km/s, covariances in km^2, km^2/s, km^2/s^2;
+    ``note`` (what the covariance includes) becomes COMMENT lines of the covariance
+    section."""
     created = _dt.datetime.now(_dt.timezone.utc).replace(tzinfo=None).isoformat(timespec="seconds")
     frame = sanitise(ref_frame)
     lines = [
@@ -227,6 +230,7 @@ def _oem_text(
         lines.append(f"{_iso(t)} " + " ".join(f"{v:.9e}" for v in s))
     if covariance is not None:
         lines += ["", "COVARIANCE_START"]
+        lines += [f"COMMENT {chunk}" for chunk in _wrap(sanitise(note, 2000))]
         for t, c in zip(epochs, covariance / 1e6, strict=True):
             lines += [f"EPOCH = {_iso(t)}", f"COV_REF_FRAME = {frame}"]
             for row in range(6):
@@ -234,6 +238,13 @@ def _oem_text(
         lines += ["COVARIANCE_STOP"]
     lines.append("")
     return "\n".join(lines)
+
+
+def _wrap(text: str, width: int = 70) -> list[str]:
+    """``text`` in lines of at most about ``width`` characters (none when empty)."""
+    import textwrap
+
+    return textwrap.wrap(text, width) if text else []
 
 
 def write_oem(
@@ -305,15 +316,23 @@ def write_oem(
             result.epochs[idx],
             result.mean[k, idx],
             result.covariance[k, idx],
+            _note(result, k),
         )
         paths.append(write_text_atomic(out / names[k], text))
     return paths
 
 
+def _note(result: Any, k: int) -> str:
+    """What object ``k``'s covariance includes ("" when the result does not say)."""
+    notes = getattr(result, "covariance_note", None)
+    return "" if notes is None else str(notes[k])
+
+
 def summary_table(result: Any) -> dict[str, np.ndarray]:
     """Per-object statistics at the last valid output: radial, along-track and
     cross-track 1-sigma (m, in the RTN frame of the mean; NaN for an object with no valid
-    output), the status and reason, decay epoch and fraction."""
+    output), the status and reason, decay epoch and fraction, and what the covariance
+    includes (``covariance_includes``)."""
     n = len(result.objects)
     stats = {
         k: np.full(n, np.nan) for k in ("radial_std_m", "along_track_std_m", "cross_track_std_m")
@@ -340,6 +359,7 @@ def summary_table(result: Any) -> dict[str, np.ndarray]:
         "decay_epoch": result.decay_epoch,
         "decay_fraction": result.decay_fraction,
         **stats,
+        "covariance_includes": np.array([sanitise(_note(result, k), 2000) for k in range(n)]),
     }
 
 

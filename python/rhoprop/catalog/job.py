@@ -6,10 +6,13 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..density import DensityModel, Exponential, Msis
+from ..spaceweather import SpaceWeather
+from .covariance import COVARIANCE_NAMES
 from .elements import load
 from .export import OutputFolder, command_line, oem_names, sanitise, write_oem, write_summary
 from .run import STATUSES, propagate_catalog
@@ -25,7 +28,60 @@ def model_by_name(name: str) -> DensityModel:
         return Exponential.benchmark(0.2)
     if name not in MODEL_NAMES:
         raise ValueError(f"unknown model {name!r}; expected one of {', '.join(MODEL_NAMES)}")
-    return Msis(name)
+    # The last refreshed record (else the bundled one), with its predictions usable as
+    # forecast drivers (uncertainty growing with lead time, PredictedDriversWarning).
+    return Msis(name, space_weather=SpaceWeather.cached().with_forecast())
+
+
+def initial_covariance_option(value: str | None) -> Any:
+    """The ``--initial-covariance`` value: None, a name (``object``, ``tle``, ``paper``)
+    or the path of a text file with a 6x6 inertial covariance (m^2, m^2/s, m^2/s^2)."""
+    if value is None or value in COVARIANCE_NAMES:
+        return value
+    path = Path(value)
+    if not path.is_file():
+        raise ValueError(
+            f"--initial-covariance must be one of {', '.join(COVARIANCE_NAMES)} or a file "
+            f"with a 6x6 matrix, got {value!r}"
+        )
+    matrix = np.loadtxt(path, ndmin=2)
+    if matrix.shape != (6, 6):
+        raise ValueError(f"{path}: a 6x6 covariance matrix is needed, got {matrix.shape}")
+    return matrix
+
+
+def refresh_data(timeout: float = 60.0) -> list[str]:
+    """Downloads the current space-weather record (CelesTrak ``SW-All.csv``) and the
+    JB2008 index files (SET's ``SOLFSMY.TXT`` and ``DTCFILE.TXT``) into the user cache;
+    returns one line per source saying what was stored (or why not)."""
+    from ..cache import cache_dir
+    from ..spaceweather import DEFAULT_URL
+
+    lines = []
+    try:
+        sw = SpaceWeather.refresh(timeout=timeout)
+    except OSError as err:
+        raise OSError(
+            f"space-weather refresh from {DEFAULT_URL} failed ({err}); offline, download "
+            f"SW-All.csv elsewhere and copy it to {cache_dir()}/SW-All.csv, or pass its "
+            "path to rhoprop.SpaceWeather(path)"
+        ) from err
+    lines.append(f"space weather: {sw.source} (observed to {sw.observed_end})")
+    try:
+        from ..density import Jb2008Indices
+    except ImportError:  # pragma: no cover - JB2008 not present in this build
+        lines.append("JB2008 indices: this rhoprop has no JB2008 model; nothing to refresh")
+    else:
+        try:
+            jb = Jb2008Indices.refresh(timeout=timeout)
+        except OSError as err:
+            raise OSError(
+                f"space weather refreshed, but the JB2008 index download failed ({err}); "
+                "offline, put SOLFSMY.TXT and DTCFILE.TXT in a directory named by "
+                "$RHOPROP_JB2008_DATA"
+            ) from err
+        lines.append(f"JB2008 indices: {jb}")
+    return lines
 
 
 def run_catalog_file(
@@ -42,6 +98,8 @@ def run_catalog_file(
     overwrite: bool = False,
     duplicates: str = "error",
     command: str | None = None,
+    fit: bool = False,
+    initial_covariance: str | None = None,
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -52,14 +110,23 @@ def run_catalog_file(
     get status "failed" (both reported on stderr) instead of stopping the run.
     ``overwrite``: clear ``out`` if it holds an earlier run's files (else refused).
     ``duplicates``: NORAD ids occurring twice are an error (default, checked before any
-    propagation) or get suffixed OEM names (``"suffix"``). Returns the paths written."""
-    cat = load(file, errors="skip" if skip_bad else "raise")
+    propagation) or get suffixed OEM names (``"suffix"``). ``fit``: fit state and Cd*A/m
+    to each element set first (``load(fit=True)``). ``initial_covariance``: see
+    :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
+    the fit's with ``fit``). Returns the paths written."""
+    covariance = initial_covariance_option(initial_covariance or "object")
+    atmosphere = model_by_name(model)
+    cat = load(
+        file,
+        errors="skip" if skip_bad else "raise",
+        fit=fit,
+        model=atmosphere if fit else None,
+    )
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
     if not len(cat):
         raise ValueError(f"{file}: no element set could be read ({len(cat.skipped)} skipped)")
     oem_names(cat.objects, duplicates)  # repeated ids fail here, before any work
-    atmosphere = model_by_name(model)
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     client = None
     if scheduler:
@@ -76,6 +143,7 @@ def run_catalog_file(
         client=client,
         output_step=output_step,
         errors="record" if skip_bad else "raise",
+        initial_covariance=covariance,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory
@@ -103,3 +171,62 @@ def run_catalog_file(
         + f", {summary} and {manifest}"
     )
     return [*paths, summary, manifest]
+
+
+def run_reentry_file(
+    file: str | Path,
+    out: str | Path,
+    *,
+    horizon_days: float = 30.0,
+    members: int = 100,
+    model: str = "2.1",
+    fit: bool = False,
+    drag_sigma: float | None = None,
+    skip_bad: bool = False,
+    overwrite: bool = False,
+    command: str | None = None,
+) -> list[Path]:
+    """Reentry windows (:func:`~rhoprop.catalog.reentry.reentry`) of every element set of
+    ``file`` within ``horizon_days`` of its epoch: printed as a table and written to
+    ``out/reentry.csv`` (one row per object: NORAD id, name, 2.5 %, median and 97.5 %
+    decay epochs in UTC, empty beyond the horizon, decayed fraction, Cd*A/m and its
+    relative sigma) with ``out/manifest.json``. Returns the paths written."""
+    import csv
+    import io
+
+    from .reentry_windows import reentry
+
+    atmosphere = model_by_name(model)
+    cat = load(
+        file, errors="skip" if skip_bad else "raise", fit=fit, model=atmosphere if fit else None
+    )
+    for where, message in cat.skipped:
+        print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
+    if not len(cat):
+        raise ValueError(f"{file}: no element set could be read ({len(cat.skipped)} skipped)")
+    folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
+    t0 = time.perf_counter()
+    result = reentry(
+        cat, atmosphere, n=members, horizon=horizon_days * 86400.0, drag_sigma=drag_sigma
+    )
+    wall = time.perf_counter() - t0
+    rows = result.rows()
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]))
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({**row, "name": sanitise(row["name"])})
+    path = folder.write_text("reentry.csv", buffer.getvalue())
+    manifest = folder.finish()
+    print(f"{'NORAD':>6} {'name':24} {'2.5 %':20} {'median':20} {'97.5 %':20} decayed")
+    for row in rows:
+        print(
+            f"{row['norad_id']:>6} {sanitise(row['name'], 24):24} "
+            f"{row['epoch_q025'] or '-':20} {row['epoch_median'] or '-':20} "
+            f"{row['epoch_q975'] or '-':20} {100 * row['decayed_fraction']:5.1f} %"
+        )
+    print(
+        f"{len(cat)} objects, {result.members} members each, horizon {horizon_days:g} days: "
+        f"{wall:.1f} s; wrote {path} and {manifest}"
+    )
+    return [path, manifest]

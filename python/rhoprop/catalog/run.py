@@ -20,7 +20,6 @@ from ..density import DensityModel, SampledModel, altitude_band
 from ..errors import RhopropError
 from ..progress import ProgressBar
 from ..propagation import (
-    DEFAULT_INITIAL_COVARIANCE,
     Spacecraft,
     ccsp,
     monte_carlo,
@@ -36,6 +35,7 @@ from ..time import (
     to_datetime64,
     to_seconds,
 )
+from .covariance import paper_covariance
 from .elements import CatalogObject
 
 #: Status of an object in a :class:`CatalogResult`.
@@ -59,6 +59,8 @@ class CatalogResult:
         decay_epoch: predicted decay epoch of the mean orbit, or NaT.
         decay_fraction: Monte Carlo only: fraction of members decayed by the end (else 0).
         method: "ccsp" or "monte_carlo".
+        covariance_note: per object, what the covariance includes (initial covariance
+            and what propagation adds), in words.
         status: per object (objects,): ``"propagated"`` (every output valid),
             ``"decayed"`` (the mean orbit came down at ``decay_epoch``), ``"shortened"``
             (the CCSP stopped early: a sigma point came down, or its covariance lost
@@ -78,6 +80,51 @@ class CatalogResult:
     method: str
     status: np.ndarray
     reason: np.ndarray
+    covariance_note: np.ndarray | None = None
+
+
+#: What the covariance of a catalog run includes beside the initial covariance.
+PROPAGATED_NOTE = (
+    "propagated: density uncertainty of the model (kappa); not included: ballistic "
+    "coefficient uncertainty, space-weather forecast error beyond the model's driver "
+    "sigma, manoeuvres"
+)
+
+
+_PAPER_NOTE = "initial covariance: the paper's near-zero 1 mm, 1 um/s (Monte Carlo: none)"
+
+
+def _initial_covariance(obj: CatalogObject, choice: Any) -> tuple[np.ndarray | None, str]:
+    """The initial covariance (6, 6) of ``obj`` for ``initial_covariance=choice`` and
+    what it includes, in words; None for the propagators' own default (the paper's
+    near-zero covariance in the CCSP, an exact initial state in a Monte Carlo)."""
+    from .covariance import tle_covariance
+
+    if isinstance(choice, str) and choice == "object":
+        if obj.covariance is not None:
+            return np.asarray(obj.covariance, dtype=float), obj.covariance_note
+        return None, _PAPER_NOTE
+    if choice is None or isinstance(choice, str):
+        if choice is None or choice == "paper":
+            return None, _PAPER_NOTE
+        if choice == "tle":
+            from .covariance import tle_accuracy
+            from .elements import _tle_note
+
+            return tle_covariance(obj.state), _tle_note(tle_accuracy(obj.state))
+        raise ValueError(
+            f"initial_covariance must be 'object', 'tle', 'paper', a (6, 6) matrix or a "
+            f"callable, got {choice!r}"
+        )
+    if callable(choice):
+        cov = np.asarray(choice(obj), dtype=float)
+        note = "initial covariance: user-supplied (per object)"
+    else:
+        cov = np.asarray(choice, dtype=float)
+        note = "initial covariance: user-supplied matrix"
+    if cov.shape != (6, 6) or not np.all(np.isfinite(cov)):
+        raise ValueError(f"initial_covariance must be a finite (6, 6) matrix, got {cov.shape}")
+    return cov, note
 
 
 def _shipped_model(
@@ -155,6 +202,7 @@ def _propagate_object(
     stop: threading.Event | None,
 ) -> dict[str, Any]:
     craft = Spacecraft(1.0, obj.drag_parameter)
+    initial, _note = _initial_covariance(obj, cfg["initial_covariance"])
     offsets = to_seconds(epochs, obj.state.epoch)
     nt = len(epochs)
     out_mean = np.full((nt, 6), np.nan)
@@ -173,7 +221,7 @@ def _propagate_object(
         decay = mean.decayed_at
         k = int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
         if k:
-            means, covs, stopped = _ccsp_outputs(obj, craft, model, offsets[:k], cfg)
+            means, covs, stopped = _ccsp_outputs(obj, craft, model, offsets[:k], cfg, initial)
             done = len(means)
             out_mean[:done], out_cov[:done] = means, covs
             if stopped:
@@ -194,6 +242,7 @@ def _propagate_object(
             kappa=cfg["kappa"],
             seed=cfg["seed"] + index,
             output_step=None,
+            initial_covariance=initial,
             progress=check,
             floor_altitude=cfg["floor_altitude"],
         )
@@ -233,6 +282,7 @@ def _ccsp_outputs(
     model: Any,
     offsets: np.ndarray,
     cfg: dict[str, Any],
+    initial: np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """CCSP means (k, 6) and covariances (k, 6, 6) at the first k of ``offsets`` (s from
     the object's epoch) it reached, and "" or why it stopped before the last. Only a
@@ -248,6 +298,7 @@ def _ccsp_outputs(
             craft,
             model,
             update_times=_update_times(offsets[:k], cfg["update_interval"]),
+            initial_covariance=initial,
             floor_altitude=cfg["floor_altitude"],
         )
 
@@ -272,7 +323,8 @@ def _ccsp_outputs(
             raise again from err
     if r is None:
         means = np.broadcast_to(state.state, (k, 6))
-        return means, np.broadcast_to(DEFAULT_INITIAL_COVARIANCE, (k, 6, 6)), why
+        start = paper_covariance() if initial is None else initial
+        return means, np.broadcast_to(start, (k, 6, 6)), why
     reached = int(np.count_nonzero(offsets[:k] <= r.times[-1] * (1 + 1e-12)))
     if r.decayed_at is not None and reached < len(offsets):
         why = (
@@ -412,6 +464,7 @@ def propagate_catalog(
     chunk_size: int = 50,
     progress: bool = True,
     errors: str = "raise",
+    initial_covariance: Any = None,
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -433,6 +486,15 @@ def propagate_catalog(
         errors: ``"raise"`` (default): the first object that fails raises its error (same
             type, the object named, chained to the cause); ``"record"``: it gets status
             "failed" with the error as reason and no valid output, and the run goes on.
+        initial_covariance: each object's initial covariance at its epoch:
+            ``"object"`` (recommended; the ``rhoprop catalog`` default): the object's own
+            ``covariance`` (``load`` sets the published TLE accuracy of its regime; fitted
+            objects add the fit's); ``"tle"``: the TLE accuracy of the regime;
+            ``"paper"`` or ``None`` (the default, kept for compatibility): the paper's
+            near-zero diag(1 mm^2, 1 um^2/s^2), 100x too small for TLE-derived states
+            (docs/catalog-realism.md); a (6, 6) matrix (m^2, m^2/s, m^2/s^2, inertial) for
+            every object; or a callable object -> matrix. What it includes is in
+            ``covariance_note`` (and the OEM and summary).
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -472,7 +534,9 @@ def propagate_catalog(
         "update_interval": _validate.positive("update_interval", update_interval),
         "floor_altitude": floor,
         "errors": errors,
+        "initial_covariance": initial_covariance,
     }
+    notes = [f"{_initial_covariance(o, initial_covariance)[1]}; {PROPAGATED_NOTE}" for o in objs]
     epochs = common_epochs(objs, end64, step)
     shipped = _shipped_model(model, objs, end64, floor)
     bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
@@ -507,4 +571,5 @@ def propagate_catalog(
         method=method,
         status=np.array([r["status"] for r in order], dtype=object),
         reason=np.array([r["reason"] for r in order], dtype=object),
+        covariance_note=np.array(notes, dtype=object),
     )

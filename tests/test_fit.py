@@ -1,0 +1,166 @@
+"""TLE -> numerical state and Cd*A/m by a least-squares fit to SGP4 pseudo-observations
+(``rp.catalog.fit``), the TLE-accuracy initial covariance (``rp.catalog.covariance``) and
+how a catalog run uses and reports them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sgp4 import exporter
+from sgp4.api import WGS72, Satrec
+
+import rhoprop as rp
+from rhoprop import catalog
+from rhoprop.catalog.covariance import tle_accuracy, tle_covariance
+from rhoprop.catalog.fit import fit_element_set
+from rhoprop.cli import main
+from rhoprop.frames import rtn_basis
+
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+
+
+def _tle(norad: int, alt_km: float, bstar: float, ecc: float = 1e-3) -> tuple[str, str]:
+    sat = Satrec()
+    mean_motion = np.sqrt(3.986004418e14 / (6378137.0 + alt_km * 1e3) ** 3) * 60.0
+    sat.sgp4init(
+        WGS72, "i", norad, 2452524.0 - 2433281.5, bstar, 0.0, 0.0, ecc, 1.0, 0.9, 2.0,
+        mean_motion, 0.5,
+    )  # fmt: skip
+    l1, l2 = exporter.export_tle(sat)
+    l1 = l1[:9] + "02900A  " + l1[17:68]
+    return l1 + str(exporter.compute_checksum(l1)), l2
+
+
+@pytest.fixture(scope="module")
+def atmosphere():
+    return rp.scenarios.benchmark_exponential(0.2)
+
+
+@pytest.fixture(scope="module")
+def tle_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("tle") / "fit.tle"
+    lines = []
+    for norad, alt, bstar in ((91001, 400.0, 3e-4), (91002, 450.0, 0.0), (91003, 420.0, -1e-4)):
+        lines += [f"OBJ {norad}", *_tle(norad, alt, bstar)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_fit_converges_and_reports_residuals(tle_file, atmosphere):
+    obj = catalog.load(tle_file, errors="skip")[0]
+    f = fit_element_set(obj, atmosphere)
+    assert f.converged and f.iterations <= 8
+    assert f.state.epoch == obj.state.epoch
+    assert f.residuals.shape == (len(f.times), 3) and f.times[0] == -86400 and f.times[-1] == 86400
+    assert f.rms_total < 2000.0  # m: J2 numerical orbit vs SGP4 over two days
+    assert np.isclose(f.rms_total, np.sqrt(np.sum(f.rms**2)))
+    assert f.drag_parameter > 0 and f.drag_sigma > 0
+    assert f.covariance.shape == (7, 7)
+    np.testing.assert_allclose(f.covariance, f.covariance.T)
+    assert np.linalg.eigvalsh(f.covariance).min() > -1e-9 * np.abs(f.covariance).max()
+    # The fitted state reproduces SGP4 at the epoch to about the residual level.
+    assert np.linalg.norm(f.state.position - obj.state.position) < 3 * f.rms_total + 100
+
+
+def test_fit_is_independent_of_the_starting_drag(tle_file, atmosphere):
+    obj = catalog.load(tle_file, errors="skip")[0]
+    a = fit_element_set(obj, atmosphere)
+    b = fit_element_set(obj, atmosphere, drag_parameter=3 * obj.drag_parameter)
+    assert abs(a.drag_parameter - b.drag_parameter) < 0.1 * a.drag_parameter
+
+
+def test_nonpositive_bstar_loads_only_with_fit(tle_file, atmosphere):
+    with pytest.raises(ValueError, match="fit=True"):
+        catalog.load(tle_file)
+    fitted = catalog.load(tle_file, fit=True, model=atmosphere)
+    assert [o.norad_id for o in fitted] == [91001, 91002, 91003]
+    assert all(o.fit is not None and o.drag_parameter > 0 for o in fitted)
+    assert all("fit to SGP4" in o.covariance_note for o in fitted)
+    with pytest.raises(ValueError, match="needs a density model"):
+        catalog.load(tle_file, fit=True)
+    r = catalog.propagate_catalog(
+        fitted, atmosphere, "2002-09-09T00:00", initial_covariance="object", progress=False
+    )
+    assert (r.status == "propagated").all()
+
+
+def test_tle_covariance_has_the_regime_rms_in_rtn(tle_file):
+    obj = catalog.load(tle_file, errors="skip")[0]
+    acc = tle_accuracy(obj.state)
+    assert acc.regime == "LEO below 800 km"
+    cov = tle_covariance(obj.state)
+    basis = rtn_basis(obj.state.position, obj.state.velocity)
+    sig = np.sqrt(np.diag(basis @ cov[:3, :3] @ basis.T))
+    np.testing.assert_allclose(sig, [acc.radial, acc.along_track, acc.cross_track], rtol=1e-9)
+    assert np.linalg.eigvalsh(cov).min() > -1e-9 * np.abs(cov).max()
+    np.testing.assert_allclose(obj.covariance, cov)
+
+
+def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):
+    cat = catalog.load(SAMPLE)
+    end = "2002-09-08T00:00"
+    kw = {"progress": False, "output_step": 21600.0}
+    paper = catalog.propagate_catalog(cat, atmosphere, end, **kw)
+    tle = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="tle", **kw)
+    own = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="object", **kw)
+    np.testing.assert_array_equal(tle.covariance, own.covariance)
+    ok = paper.valid[:, -1] & tle.valid[:, -1]
+    # Position variance only grows; where density adds little it grows a hundredfold.
+    var_tle = np.trace(tle.covariance[ok, -1, :3, :3], axis1=1, axis2=2)
+    var_paper = np.trace(paper.covariance[ok, -1, :3, :3], axis1=1, axis2=2)
+    assert (var_tle > var_paper).all() and (var_tle > 100 * var_paper).any()
+    assert "near-zero" in paper.covariance_note[0]
+    assert "TLE accuracy" in tle.covariance_note[0] and "not included" in tle.covariance_note[0]
+    matrix = np.diag([1e4, 1e4, 1e4, 1.0, 1.0, 1.0])
+    user = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance=matrix, **kw)
+    assert "user-supplied" in user.covariance_note[0]
+    with pytest.raises(ValueError, match="initial_covariance"):
+        catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="huge", **kw)
+    paths = rp.io.write_oem(tle, tmp_path / "oem")
+    assert "COMMENT initial covariance: published TLE accuracy" in paths[0].read_text()
+    table = catalog.summary_table(tle)
+    assert all("TLE accuracy" in t for t in table["covariance_includes"])
+
+
+def test_cli_catalog_fit_and_initial_covariance(tmp_path, tle_file):
+    out = tmp_path / "run"
+    code = main(
+        [
+            "catalog",
+            str(tle_file),
+            "--end",
+            "2002-09-08T00:00Z",
+            "--out",
+            str(out),
+            "--model",
+            "exponential",
+            "--fit",
+            "--output-step",
+            "21600",
+        ]
+    )
+    assert code == 0
+    assert "fit to SGP4" in (out / "oem" / "91002.oem").read_text()
+    matrix = tmp_path / "cov.txt"
+    np.savetxt(matrix, np.eye(6))
+    code = main(
+        [
+            "catalog",
+            str(SAMPLE),
+            "--end",
+            "2002-09-08T00:00Z",
+            "--out",
+            str(tmp_path / "run2"),
+            "--model",
+            "exponential",
+            "--initial-covariance",
+            str(matrix),
+        ]
+    )
+    assert code == 0
+    assert "user-supplied" in next((tmp_path / "run2" / "oem").iterdir()).read_text()
+    bad = main(["catalog", str(SAMPLE), "--end", "2002-09-08T00:00Z", "--out",
+                str(tmp_path / "run3"), "--initial-covariance", "nonsense"])  # fmt: skip
+    assert bad == 1

@@ -1,0 +1,74 @@
+"""Reentry windows (``rp.catalog.reentry``, ``rhoprop reentry``): Monte Carlo over density
+and ballistic-coefficient uncertainty, decay epochs as quantiles with NaT beyond the
+horizon."""
+
+from __future__ import annotations
+
+import datetime as dt
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+from rhoprop import catalog
+from rhoprop.catalog import CatalogObject
+from rhoprop.cli import main
+
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+
+
+def _low(norad: int, alt: float) -> CatalogObject:
+    r = 6378137.0 + alt
+    v = np.sqrt(3.986004418e14 / r)
+    state = rp.OrbitState("2002-09-06T12:00", [r, 0, 0], [0, v * 0.6, v * 0.8])
+    return CatalogObject(f"LOW {norad}", norad, state, 0.02, 1e-3, "test")
+
+
+@pytest.fixture(scope="module")
+def atmosphere():
+    return rp.scenarios.benchmark_exponential(0.2)
+
+
+def test_windows_are_ordered_and_count_every_member(atmosphere):
+    objs = [_low(1, 200e3), _low(2, 220e3)]
+    r = catalog.reentry(objs, atmosphere, n=20, horizon=dt.timedelta(days=10), groups=4)
+    assert r.members == 20 and r.groups == 4
+    assert (r.decayed_fraction == 1).all()
+    assert (r.epoch_q025 <= r.epoch_median).all() and (r.epoch_median <= r.epoch_q975).all()
+    assert (r.epoch_q975 > r.epoch_q025).all()
+    assert r.epoch_median[0] < r.epoch_median[1]  # the lower object comes down first
+    rows = r.rows()
+    assert rows[0]["norad_id"] == 1 and rows[0]["epoch_median"].endswith("Z")
+
+
+def test_drag_uncertainty_widens_the_window(atmosphere):
+    obj = [_low(1, 200e3)]
+    narrow = catalog.reentry(obj, atmosphere, n=20, horizon=10 * 86400.0, groups=1)
+    wide = catalog.reentry(obj, atmosphere, n=20, horizon=10 * 86400.0, drag_sigma=0.4)
+    span = lambda r: r.epoch_q975[0] - r.epoch_q025[0]  # noqa: E731
+    assert span(wide) > span(narrow)
+
+
+def test_nat_beyond_the_horizon(atmosphere):
+    r = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, horizon=3600.0, groups=2)
+    assert r.decayed_fraction[0] == 0
+    assert np.isnat(r.epoch_median[0]) and np.isnat(r.epoch_q025[0]) and np.isnat(r.epoch_q975[0])
+    with pytest.raises(ValueError, match="horizon"):
+        catalog.reentry([_low(1, 200e3)], atmosphere, horizon=-1.0)
+    with pytest.raises(TypeError, match="horizon"):
+        catalog.reentry([_low(1, 200e3)], atmosphere, horizon="soon")
+
+
+def test_cli_reentry_prints_and_writes(tmp_path, capsys):
+    out = tmp_path / "re"
+    code = main(
+        ["reentry", str(SAMPLE), "--horizon", "2", "--members", "10", "--model",
+         "exponential", "--out", str(out)]
+    )  # fmt: skip
+    assert code == 0
+    text = (out / "reentry.csv").read_text().splitlines()
+    assert text[0].startswith("norad_id,name,epoch_q025,epoch_median,epoch_q975")
+    assert len(text) == 1 + len(catalog.load(SAMPLE))
+    assert "members each" in capsys.readouterr().out
+    assert (out / "manifest.json").is_file()
