@@ -31,6 +31,9 @@ __all__ = [
     "geodetic_to_fixed",
     "gmst",
     "inertial_to_fixed",
+    "jacchia_roberts_geodetic",
+    "jb2008_core",
+    "jb2008_geodetic",
     "monte_carlo",
     "propagate",
     "rtn_basis",
@@ -152,3 +155,18 @@ def geodetic_to_fixed(lla: _F64) -> _F64:
 
 def rtn_basis(positions: _F64, velocities: _F64) -> _F64:
     """RTN bases (n, 3, 3), rows R, T, N."""
+
+def jb2008_core(amjd: _F64, geometry: _F64, indices: _F64) -> tuple[_F64, _F64, _F64]:
+    """JB2008 as the reference routine: amjd (n,), geometry (n, 5) [Sun RA, Sun Dec,
+    point RA, latitude rad, altitude km], indices (n, 9) -> (Tinf K, T K, rho kg/m^3)."""
+
+def jb2008_geodetic(
+    amjd: _F64, lat: _F64, lon: _F64, alt: _F64, indices: _F64
+) -> tuple[_F64, _F64, _F64]:
+    """JB2008 at MJD (UTC), geodetic lat/lon deg, alt m -> (Tinf K, T K, rho kg/m^3)."""
+
+def jacchia_roberts_geodetic(
+    mjd: _F64, lat: _F64, lon: _F64, alt: _F64, drivers: _F64
+) -> tuple[_F64, _F64, _F64]:
+    """Jacchia-Roberts 1971 at MJD (UTC), lat/lon deg, alt m (>= 90 km), drivers (n, 3)
+    [F10.7, F10.7a, Kp] -> (Tinf K, T K, rho kg/m^3)."""

@@ -110,8 +110,10 @@ def build_parser() -> argparse.ArgumentParser:
         "Monte Carlo method comparison (Fig. 4), the three-model ensembles for the four "
         "space-weather cases (Fig. 5) and CCSP vs Monte Carlo (Fig. 6). Writes PNG figures, "
         "summary.json and summary.md to --out. The paper's ML density models are replaced "
-        "by NRLMSIS 2.1 (reference), NRLMSIS 2.0 and NRLMSISE-00 with a documented "
-        "uncertainty model. A full run takes about two minutes on 2 cores.",
+        "by three model families, each with a documented uncertainty model: NRLMSIS 2.1 "
+        "(reference), JB2008 (when its index files are found: RHOPROP_JB2008_DATA or "
+        "'rhoprop data refresh') and Jacchia-Roberts 1971; without JB2008 indices, "
+        "NRLMSISE-00 takes its place. A full run takes about two minutes on 2 cores.",
     )
     paper.add_argument(
         "--quick",

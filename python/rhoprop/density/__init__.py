@@ -3,6 +3,9 @@ thermospheric density (kg/m^3) and an atmosphere the Rust core evaluates.
 
 - :class:`Msis`: NRLMSIS 2.1 / 2.0 / NRLMSISE-00 through pymsis, with
   :class:`DriverUncertainty` (default) or :class:`RelativeSigma`.
+- :class:`Jb2008`: JB2008 in the Rust core, from SET's index files (:class:`Jb2008Indices`),
+  with :class:`ActivitySigma`.
+- :class:`JacchiaRoberts`: Jacchia-Roberts 1971 in the Rust core from the bundled record.
 - :class:`Exponential`: the analytic benchmark atmosphere.
 - :class:`Gridded`: a user grid (arrays or an xarray Dataset).
 - :class:`PcaRom`: a PCA reduced-order model as HASDM-ML outputs it.
@@ -18,11 +21,16 @@ from .exponential import Exponential
 from .field import DensityField, FieldResolution
 from .function import FromFunction
 from .gridded import Gridded
+from .jacchia_roberts import JR_SIGMA, JacchiaRoberts
+from .jb2008 import JB2008_SIGMA, ActivitySigma, Jb2008, Jb2008Indices
 from .model import DensityModel, SampledModel, as_atmosphere
 from .msis import DriverUncertainty, Msis, RelativeSigma
 from .pcarom import PcaRom
 
 __all__ = [
+    "JB2008_SIGMA",
+    "JR_SIGMA",
+    "ActivitySigma",
     "DensityField",
     "DensityModel",
     "DriverUncertainty",
@@ -30,6 +38,9 @@ __all__ = [
     "FieldResolution",
     "FromFunction",
     "Gridded",
+    "JacchiaRoberts",
+    "Jb2008",
+    "Jb2008Indices",
     "Msis",
     "PcaRom",
     "RelativeSigma",

@@ -68,6 +68,8 @@ def run_paper(
     print(comparison.table())
 
     _stage("Ensembles for the four space-weather cases (paper Fig. 5)", start)
+    model_names, model_reason, _ = scenarios.model_choice()
+    print(f"models: {', '.join(model_names)}: {model_reason}")
     ensembles = case_ensembles(n=members, duration=duration, record=record)
     with folder.path("ensembles.png") as tmp:
         ensemble_figure(ensembles, tmp)
@@ -98,6 +100,11 @@ def run_paper(
             {"a": a, "b": b, "measured": m, "long_time_theory": t}
             for a, b, m, t in comparison.ratios()
         ],
+        "models": {
+            "names": list(model_names),
+            "reference": scenarios.REFERENCE_MODEL,
+            "why": model_reason,
+        },
         "cases": {
             case: {"epoch": str(scenarios.CASE_EPOCHS[case]) + "Z", **ens.summary()}
             for case, ens in ensembles.items()
@@ -122,7 +129,9 @@ def run_paper(
         "summary.md",
         f"# rhoprop paper study\n\n{members} members per Monte Carlo run, {days} days.\n\n"
         f"## Method comparison (Fig. 4)\n\n{comparison.table()}\n\n"
-        f"## Ensembles (Fig. 5): along-track at {days} days\n\n{case_table}\n\n"
+        f"## Ensembles (Fig. 5): along-track at {days} days\n\n"
+        f"Models: {', '.join(model_names)} (reference {scenarios.REFERENCE_MODEL}): "
+        f"{model_reason}.\n\n{case_table}\n\n"
         f"## CCSP vs Monte Carlo (Fig. 6)\n\n{versus.table()}\n",
     )
     manifest = folder.finish()

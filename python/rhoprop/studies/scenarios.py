@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..density import DensityModel, Exponential, Msis
+from ..density import DensityModel, Exponential, JacchiaRoberts, Jb2008, Jb2008Indices, Msis
 from ..propagation import OrbitState, Spacecraft
 from ..spaceweather import SpaceWeather
 from ..time import EpochLike
@@ -39,9 +39,39 @@ def benchmark_exponential(rel_sigma: float = 0.0) -> Exponential:
     return Exponential.benchmark(rel_sigma)
 
 
-#: Names of the three default models; the first is the reference (Cd_ref = 3.0912).
-DEFAULT_MODELS = ("NRLMSIS 2.1", "NRLMSIS 2.0", "NRLMSISE-00")
+#: The default families: NRLMSIS 2.1 (reference, Cd_ref = 3.0912), JB2008 and
+#: Jacchia-Roberts 1971; without JB2008 index files NRLMSISE-00 takes JB2008's place.
+DEFAULT_MODELS = ("NRLMSIS 2.1", "JB2008", "Jacchia-Roberts 1971")
+FALLBACK_MODELS = ("NRLMSIS 2.1", "Jacchia-Roberts 1971", "NRLMSISE-00")
 REFERENCE_MODEL = DEFAULT_MODELS[0]
+#: Years over which the simulated cases average the geomagnetic drivers (ap/Kp from the
+#: CelesTrak record, dTc from the JB2008 file, clipped to the files' span).
+MEAN_YEARS = ("2000-01-01", "2019-12-31")
+
+
+def model_choice() -> tuple[tuple[str, ...], str, Jb2008Indices | None]:
+    """(model names, why these, JB2008 indices or None): the three families when JB2008
+    index files are found ($RHOPROP_JB2008_DATA, then the user cache), else the offline
+    fallback, with the reason in words."""
+    try:
+        indices = Jb2008Indices.locate()
+    except (OSError, ValueError) as error:
+        return FALLBACK_MODELS, f"JB2008 index files unusable ({error}); " + _FALLBACK, None
+    if indices is None:
+        return (
+            FALLBACK_MODELS,
+            "JB2008 index files not found ($RHOPROP_JB2008_DATA unset and none in the user "
+            "cache; see rp.density.Jb2008Indices.refresh); " + _FALLBACK,
+            None,
+        )
+    first, last = indices.span
+    return (
+        DEFAULT_MODELS,
+        "three model families: NRLMSIS 2.1 (reference, stand-in for MSIS-UQ), JB2008 "
+        f"(stand-in for HASDM-ML; indices {indices.solfsmy.parent}, {first} to {last}) and "
+        "Jacchia-Roberts 1971",
+        indices,
+    )
 
 
 def case_space_weather(case: str, record: SpaceWeather | None = None) -> SpaceWeather:
@@ -53,17 +83,32 @@ def case_space_weather(case: str, record: SpaceWeather | None = None) -> SpaceWe
     return record.mean_geomagnetic() if case.endswith("-simulated") else record
 
 
+_FALLBACK = (
+    "running NRLMSIS 2.1 (reference), Jacchia-Roberts 1971 and NRLMSISE-00 (NRLMSISE-00 is "
+    "the NRLMSIS family again, so only two families are distinct)"
+)
+
+
 def case_models(case: str, record: SpaceWeather | None = None) -> dict[str, DensityModel]:
-    """The paper's three stand-in models for a case: NRLMSIS 2.1 (reference), NRLMSIS 2.0
-    and NRLMSISE-00, all with the default driver uncertainty. Note: NRLMSIS 2.0 and 2.1
-    give identical mass densities (2.1 changed only nitric oxide), so they are the same
-    component twice; see docs/conventions.md."""
+    """The paper's three stand-in models for a case, reference first (see
+    :func:`model_choice`): NRLMSIS 2.1 (driver uncertainty), JB2008 and Jacchia-Roberts
+    1971 (activity-dependent uncertainty) when JB2008 index files are available, else
+    NRLMSIS 2.1, Jacchia-Roberts 1971 and NRLMSISE-00. The simulated cases hold each
+    family's geomagnetic driver at its long-term mean (ap/Kp over 2000-2019 from the
+    record; dTc over the JB2008 file's years within 2000-2019). NRLMSIS 2.0 (equal to 2.1
+    in mass density) is out of the default; use ``Msis("2.0")`` explicitly."""
     sw = case_space_weather(case, record)
-    return {
-        "NRLMSIS 2.1": Msis("2.1", space_weather=sw),
-        "NRLMSIS 2.0": Msis("2.0", space_weather=sw),
-        "NRLMSISE-00": Msis("00", space_weather=sw),
-    }
+    names, _, indices = model_choice()
+    models: dict[str, DensityModel] = {"NRLMSIS 2.1": Msis("2.1", space_weather=sw)}
+    for name in names[1:]:
+        if name == "JB2008" and indices is not None:
+            dtc = indices.mean_dtc(*MEAN_YEARS) if case.endswith("-simulated") else None
+            models[name] = Jb2008(indices, dtc=dtc)
+        elif name == "Jacchia-Roberts 1971":
+            models[name] = JacchiaRoberts(sw)
+        elif name == "NRLMSISE-00":
+            models[name] = Msis("00", space_weather=sw)
+    return models
 
 
 #: Labels of the paper's five kappa processes (the keys of ``studies.METHODS``).

@@ -9,6 +9,7 @@ mod density;
 mod errors;
 mod frames;
 mod long_call;
+mod models;
 mod montecarlo;
 mod propagation;
 
@@ -36,6 +37,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::rtn_basis, m)?)?;
+    models::register(m)?;
     constants::register(m)?;
     Ok(())
 }

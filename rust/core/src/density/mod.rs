@@ -4,6 +4,8 @@
 
 mod exponential;
 mod gridded;
+pub mod jacchia_roberts;
+pub mod jb2008;
 
 pub use exponential::Exponential;
 pub use gridded::GriddedField;

@@ -44,7 +44,7 @@ fn adams_coefficients() -> ([f64; ABM_STEPS], [f64; ABM_STEPS + 1]) {
         gs[i] = if i == 0 { 1.0 } else { -b };
     }
     let binom = |n: usize, r: usize| (0..r).fold(1.0, |c, q| c * (n - q) as f64 / (q + 1) as f64);
-    let sign = |j: usize| if j % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = |j: usize| if j.is_multiple_of(2) { 1.0 } else { -1.0 };
     let ab = std::array::from_fn(|j| sign(j) * (j..k).map(|i| g[i] * binom(i, j)).sum::<f64>());
     let am = std::array::from_fn(|j| sign(j) * (j..=k).map(|i| gs[i] * binom(i, j)).sum::<f64>());
     (ab, am)

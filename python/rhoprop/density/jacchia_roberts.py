@@ -1,0 +1,129 @@
+"""Jacchia-Roberts 1971 through the Rust core, driven by the bundled CelesTrak record
+(works offline), with an uncertainty model growing with Kp.
+
+Drivers: F10.7 and its 81-day centred mean as the NRLMSIS drivers of the record take them
+(:meth:`~rhoprop.SpaceWeather.drivers`), and the 3-hourly Kp of the interval containing
+t - 3 h (the usual lag of Jacchia's geomagnetic term, as GMAT and GTDS apply it).
+The core evaluates heights >= 90 km (Roberts' closed forms; note the reference
+formulation's jump at 100 km, docs/density-models.md).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import asdict
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from ..errors import OutsideRecordError
+from ..spaceweather import SpaceWeather
+from ._inputs import broadcast_inputs
+from .field import FieldResolution, resolution_arg
+from .jb2008 import ActivitySigma, modified_julian_date
+from .model import SampledModel
+
+#: Jacchia-Roberts' default: 15 % quiet, 30 % in storms, full at Kp = 7 (sources in
+#: docs/density-models.md).
+JR_SIGMA = ActivitySigma(quiet=0.15, storm=0.30, full_at=7.0)
+_KP_LAG = np.timedelta64(3, "h")
+_CADENCE = np.timedelta64(3, "h")
+
+
+class JacchiaRoberts(SampledModel):
+    """Jacchia-Roberts 1971 mean density with :class:`ActivitySigma` in Kp.
+
+    Args:
+        space_weather: the record giving F10.7, F10.7a and Kp (default: the bundled
+            CelesTrak record; a :meth:`~rhoprop.SpaceWeather.mean_geomagnetic` record holds
+            Kp at its long-term mean).
+        uncertainty: :class:`ActivitySigma` in Kp (default :data:`JR_SIGMA`).
+        resolution: grid spacing of the sampled field (see :class:`FieldResolution`).
+
+    Example:
+        >>> import numpy as np, rhoprop as rp
+        >>> m = rp.density.JacchiaRoberts()
+        >>> mean, std = m.mean_std(np.datetime64("2002-09-07T12:00"), 10.0, 20.0, 400e3)
+    """
+
+    #: Lowest altitude the model accepts, m.
+    FLOOR = 90e3
+
+    def __init__(
+        self,
+        space_weather: SpaceWeather | None = None,
+        uncertainty: ActivitySigma | None = None,
+        *,
+        resolution: FieldResolution | None = None,
+    ) -> None:
+        self.space_weather = SpaceWeather() if space_weather is None else space_weather
+        self.uncertainty = JR_SIGMA if uncertainty is None else uncertainty
+        if not isinstance(self.uncertainty, ActivitySigma):
+            raise TypeError("uncertainty must be an ActivitySigma")
+        self.resolution = resolution_arg(resolution)
+
+    def __repr__(self) -> str:
+        return f"JacchiaRoberts(uncertainty={self.uncertainty!r})"
+
+    def drivers(self, times: np.ndarray) -> np.ndarray:
+        """(n, 3) F10.7, F10.7a (sfu) and Kp (of t - 3 h) at UTC ``times``."""
+        t = np.asarray(times, dtype="datetime64[ns]").ravel()
+        d = self.space_weather.drivers(t)
+        lagged = t - _KP_LAG
+        day = lagged.astype("datetime64[D]")
+        sw = self.space_weather
+        row = np.searchsorted(sw.date, day)
+        bad = (row >= len(sw.date)) | (sw.date[np.minimum(row, len(sw.date) - 1)] != day)
+        if bad.any():
+            raise OutsideRecordError(f"no Kp for {lagged[bad][0]} in the space-weather record")
+        slot = ((lagged - day).astype("timedelta64[h]").astype(int)) // 3
+        kp = sw.kp[row, slot]
+        if not np.isfinite(kp).all():
+            raise OutsideRecordError(
+                f"Kp missing at {lagged[~np.isfinite(kp)][0]} in the space-weather record"
+            )
+        return np.column_stack([d.f107, d.f107a, kp])
+
+    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
+        geodetic ``lat``/``lon`` (deg) and ``alt`` (m, >= 90 km), broadcast together."""
+        t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
+        shape = la.shape
+        t, la, lo, al = (np.ascontiguousarray(a.ravel()) for a in (t, la, lo, al))
+        if len(t) == 0:
+            return np.zeros(shape), np.zeros(shape)
+        below = al < self.FLOOR
+        if below.any():
+            raise ValueError(f"alt = {al[below][0]} m is below Jacchia-Roberts' floor of 90 km")
+        dr = self.drivers(t)
+        _, _, rho = _core.jacchia_roberts_geodetic(modified_julian_date(t), la, lo, al, dr)
+        sigma = self.uncertainty.relative(dr[:, 2]) * rho
+        return rho.reshape(shape), sigma.reshape(shape)
+
+    def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
+        first = start.astype("datetime64[h]") - start.astype("datetime64[h]").astype(int) % 3
+        steps = np.arange(first, end + _CADENCE, _CADENCE).astype("datetime64[ns]")
+        return steps[(steps > start) & (steps < end)]
+
+    def _grid_values(
+        self,
+        epochs: np.ndarray,
+        left: np.ndarray,
+        alt: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`SampledModel._grid_values`, a node marked ``left`` sampled 1 µs
+        before its epoch (the drivers before a jump)."""
+        before = epochs - np.where(left, np.timedelta64(1, "us"), np.timedelta64(0, "us"))
+        return super()._grid_values(before, left, alt, lat, lon)
+
+    def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
+        blocks = np.arange(start - _CADENCE, end + 2 * _CADENCE, _CADENCE).astype("datetime64[ns]")
+        digest = hashlib.sha256(np.ascontiguousarray(self.drivers(blocks)).tobytes())
+        return {
+            "model": "jacchia-roberts-1971",
+            "uncertainty": asdict(self.uncertainty),
+            "drivers": digest.hexdigest(),
+        }

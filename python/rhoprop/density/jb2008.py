@@ -1,0 +1,448 @@
+"""JB2008 (Jacchia-Bowman 2008) through the Rust core, with its index files and an
+uncertainty model that grows with geomagnetic activity.
+
+The solar indices come from Space Environment Technologies' ``SOLFSMY.TXT`` (daily F10,
+S10, M10, Y10 and their 81-day centred means) and the storm temperature from
+``DTCFILE.TXT`` (hourly dTc, K). rhoprop never ships them: pass the two paths to
+:class:`Jb2008Indices`, or put both in a directory named by ``$RHOPROP_JB2008_DATA``, or
+download them into the user cache with :meth:`Jb2008Indices.refresh`.
+
+Conventions of the reference driver (Bowman 2008, SET release), matched exactly:
+
+* F10/S10 and their means are taken from the record of the day containing t - 1 day, M10
+  from t - 2 days, Y10 from t - 5 days; a time at exactly 00:00 UTC belongs to the
+  previous calendar day (see :data:`MIDNIGHT_BELONGS_TO_PREVIOUS_DAY`).
+* dTc sits on the hour; the value at t is interpolated linearly between hours and then
+  rounded to an integer kelvin (half up).
+* The Sun's right ascension/declination and the Greenwich right ascension are the
+  reference driver's (Astronomical Almanac low-precision Sun; THETA series in days since
+  1950), computed in the core; the point's right ascension is Greenwich angle +
+  longitude, and the geodetic latitude is the model latitude, as in the driver.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+import urllib.request
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _core, _validate
+from ..cache import cache_dir
+from ..errors import OutsideRecordError
+from ._inputs import broadcast_inputs
+from .field import FieldResolution, resolution_arg
+from .model import SampledModel
+
+#: Where :meth:`Jb2008Indices.refresh` downloads the current files from (SET).
+SOLFSMY_URL = "https://sol.spacenvironment.net/JB2008/indices/SOLFSMY.TXT"
+DTCFILE_URL = "https://sol.spacenvironment.net/JB2008/indices/DTCFILE.TXT"
+#: Environment variable naming a directory holding SOLFSMY.TXT and DTCFILE.TXT.
+ENV_VAR = "RHOPROP_JB2008_DATA"
+#: Sub-directory of the user cache that :meth:`Jb2008Indices.refresh` writes.
+CACHE_SUBDIR = "jb2008"
+FILES = ("SOLFSMY.TXT", "DTCFILE.TXT")
+#: The index lag rule at 00:00 UTC (see the module docstring).
+MIDNIGHT_BELONGS_TO_PREVIOUS_DAY = True
+#: Lags of F10/S10, M10 and Y10, days.
+LAGS = {"F10": 1, "S10": 1, "M10": 2, "Y10": 5}
+#: Modified Julian date of the Unix epoch.
+_MJD_UNIX = 40587.0
+_NS_PER_DAY = 86_400 * 10**9
+_DAY = np.timedelta64(1, "D")
+
+
+class Jb2008FileError(ValueError):
+    """An index file is missing or malformed; the message names the file and line."""
+
+
+def _read_solfsmy(path: Path) -> tuple[np.datetime64, np.ndarray]:
+    """(first day, (n, 8) F10, F81c, S10, S81c, M10, M81c, Y10, Y81c) of a SOLFSMY file;
+    days must follow one another without gaps."""
+    if not path.is_file():
+        raise FileNotFoundError(f"JB2008 solar index file not found: {path}")
+    rows: list[list[float]] = []
+    first: np.datetime64 | None = None
+    expect: np.datetime64 | None = None
+    with open(path, encoding="ascii", errors="replace") as f:
+        for lineno, line in enumerate(f, 1):
+            if not line.strip() or line.lstrip().startswith("#"):
+                continue
+            parts = line.split()
+            try:
+                year, doy = int(parts[0]), int(parts[1])
+                values = [float(v) for v in parts[3:11]]
+                if len(values) != 8 or not 1 <= doy <= 366:
+                    raise ValueError
+            except (ValueError, IndexError):
+                raise Jb2008FileError(
+                    f"{path}, line {lineno}: not a SOLFSMY record "
+                    f"(YYYY DDD JulianDay F10 F81c S10 S81c M10 M81c Y10 Y81c): {line.rstrip()!r}"
+                ) from None
+            day = np.datetime64(f"{year:04d}-01-01") + np.timedelta64(doy - 1, "D")
+            if expect is not None and day != expect:
+                raise Jb2008FileError(
+                    f"{path}, line {lineno}: day {day} follows {expect - _DAY}; "
+                    "the file must have one record per day without gaps"
+                )
+            if first is None:
+                first = day
+            expect = day + _DAY
+            rows.append(values)
+    if first is None:
+        raise Jb2008FileError(f"{path}: no SOLFSMY records")
+    return first, np.array(rows)
+
+
+def _read_dtcfile(path: Path) -> tuple[np.datetime64, np.ndarray]:
+    """(first hour, hourly dTc K) of a DTCFILE; days must follow one another."""
+    if not path.is_file():
+        raise FileNotFoundError(f"JB2008 dTc file not found: {path}")
+    values: list[list[float]] = []
+    first: np.datetime64 | None = None
+    expect: np.datetime64 | None = None
+    with open(path, encoding="ascii", errors="replace") as f:
+        for lineno, line in enumerate(f, 1):
+            if not line.strip() or line.lstrip().startswith("#"):
+                continue
+            parts = line.split()
+            try:
+                if parts[0] != "DTC":
+                    raise ValueError
+                year, doy = int(parts[1]), int(parts[2])
+                hours = [float(v) for v in parts[3:27]]
+                if len(hours) != 24 or not 1 <= doy <= 366:
+                    raise ValueError
+            except (ValueError, IndexError):
+                raise Jb2008FileError(
+                    f"{path}, line {lineno}: not a DTCFILE record "
+                    f"(DTC YYYY DDD and 24 hourly values): {line.rstrip()!r}"
+                ) from None
+            day = np.datetime64(f"{year:04d}-01-01") + np.timedelta64(doy - 1, "D")
+            if expect is not None and day != expect:
+                raise Jb2008FileError(
+                    f"{path}, line {lineno}: day {day} follows {expect - _DAY}; "
+                    "the file must have one record per day without gaps"
+                )
+            if first is None:
+                first = day
+            expect = day + _DAY
+            values.append(hours)
+    if first is None:
+        raise Jb2008FileError(f"{path}: no DTC records")
+    return first.astype("datetime64[h]"), np.array(values).ravel()
+
+
+class Jb2008Indices:
+    """JB2008 drivers read from Space Environment Technologies' ``SOLFSMY.TXT`` and
+    ``DTCFILE.TXT``.
+
+    Args:
+        solfsmy: path of ``SOLFSMY.TXT`` (daily F10, S10, M10, Y10 and 81-day means, sfu).
+        dtcfile: path of ``DTCFILE.TXT`` (hourly dTc, K).
+
+    Raises FileNotFoundError for a missing file and ValueError naming the file and line
+    for a malformed one. :meth:`at` raises :class:`~rhoprop.OutsideRecordError` naming the
+    files' span for a time they do not cover.
+    """
+
+    def __init__(self, solfsmy: str | os.PathLike[str], dtcfile: str | os.PathLike[str]) -> None:
+        self.solfsmy = Path(solfsmy)
+        self.dtcfile = Path(dtcfile)
+        self._sol_first, self._sol = _read_solfsmy(self.solfsmy)
+        self._dtc_first, self._dtc = _read_dtcfile(self.dtcfile)
+
+    def __repr__(self) -> str:
+        first, last = self.span
+        return f"Jb2008Indices({str(self.solfsmy)!r}, {str(self.dtcfile)!r}; {first} to {last})"
+
+    # -- where the files come from ------------------------------------------------------
+
+    @classmethod
+    def locate(cls) -> Jb2008Indices | None:
+        """The files in ``$RHOPROP_JB2008_DATA`` if set, else in the user cache
+        (``cache_dir()/jb2008``, written by :meth:`refresh`), else None."""
+        env = os.environ.get(ENV_VAR)
+        if env:
+            directory = Path(env).expanduser()
+            missing = [name for name in FILES if not (directory / name).is_file()]
+            if missing:
+                raise FileNotFoundError(
+                    f"${ENV_VAR}={env} must be a directory holding {' and '.join(FILES)}; "
+                    f"missing {', '.join(missing)}"
+                )
+            return cls(directory / FILES[0], directory / FILES[1])
+        directory = cache_dir() / CACHE_SUBDIR
+        if all((directory / name).is_file() for name in FILES):
+            return cls(directory / FILES[0], directory / FILES[1])
+        return None
+
+    @classmethod
+    def default(cls) -> Jb2008Indices:
+        """:meth:`locate`, raising FileNotFoundError that says how to get the files."""
+        found = cls.locate()
+        if found is None:
+            raise FileNotFoundError(
+                "JB2008 needs Space Environment Technologies' SOLFSMY.TXT and DTCFILE.TXT: "
+                f"set ${ENV_VAR} to a directory holding both, pass "
+                "rp.density.Jb2008Indices(solfsmy, dtcfile), or run "
+                "rp.density.Jb2008Indices.refresh() online to download them into "
+                f"{cache_dir() / CACHE_SUBDIR}"
+            )
+        return found
+
+    @classmethod
+    def refresh(
+        cls,
+        solfsmy_url: str = SOLFSMY_URL,
+        dtcfile_url: str = DTCFILE_URL,
+        directory: str | os.PathLike[str] | None = None,
+        timeout: float = 60.0,
+    ) -> Jb2008Indices:
+        """Downloads the current files (any ``urllib`` URL, e.g. ``file://``) into
+        ``directory`` (default: the user cache, ``cache_dir()/jb2008``) and returns them
+        read. Each file is parsed before it replaces the cached copy and is written
+        atomically, so a failed download never clobbers good files. ``timeout`` in s."""
+        target = Path(directory) if directory is not None else cache_dir() / CACHE_SUBDIR
+        target.mkdir(parents=True, exist_ok=True)
+        parts: list[Path] = []
+        try:
+            for url, name, reader in (
+                (solfsmy_url, FILES[0], _read_solfsmy),
+                (dtcfile_url, FILES[1], _read_dtcfile),
+            ):
+                request = urllib.request.Request(url, headers={"User-Agent": "rhoprop"})
+                with urllib.request.urlopen(request, timeout=timeout) as response:
+                    data = response.read()
+                handle, tmp = tempfile.mkstemp(dir=target, prefix=f".{name}-", suffix=".part")
+                part = Path(tmp)
+                parts.append(part)
+                with os.fdopen(handle, "wb") as out:
+                    out.write(data)
+                reader(part)
+            for part, name in zip(parts, FILES, strict=True):
+                os.replace(part, target / name)
+        finally:
+            for part in parts:
+                part.unlink(missing_ok=True)
+        return cls(target / FILES[0], target / FILES[1])
+
+    # -- queries ---------------------------------------------------------------------------
+
+    @property
+    def span(self) -> tuple[np.datetime64, np.datetime64]:
+        """(first, last) UTC epochs (``datetime64[ns]``) at which every index is defined
+        with the reference's lags (5 days after the first solar record, to the last dTc
+        hour and one day after the last solar record)."""
+        n_sol = len(self._sol)
+        # With the midnight rule a lagged time at exactly 00:00 takes the day before, so
+        # the first valid time is just after the first record's day + 5 days and the last
+        # is 00:00 two days after the last record; without it, the other way round.
+        one = np.timedelta64(1, "ns")
+        first_sol = (self._sol_first + np.timedelta64(5, "D")).astype("datetime64[ns]")
+        last_sol = (self._sol_first + np.timedelta64(n_sol + 1, "D")).astype("datetime64[ns]")
+        if MIDNIGHT_BELONGS_TO_PREVIOUS_DAY:
+            first_sol = first_sol + one
+        else:
+            last_sol = last_sol - np.timedelta64(1, "D") - one
+        first_dtc = self._dtc_first.astype("datetime64[ns]")
+        last_dtc = (self._dtc_first + np.timedelta64(len(self._dtc) - 1, "h")).astype(
+            "datetime64[ns]"
+        )
+        return max(first_sol, first_dtc), min(last_sol, last_dtc)
+
+    def at(self, times: Any) -> np.ndarray:
+        """The nine JB2008 inputs (n, 9) at UTC ``times`` (n,) datetime64: F10, F10B, S10,
+        S10B, M10, M10B, Y10, Y10B (sfu, lagged) and dTc (K, interpolated and rounded)."""
+        t = np.asarray(times, dtype="datetime64[ns]").ravel()
+        if len(t) == 0:
+            return np.zeros((0, 9))
+        first, last = self.span
+        outside = (t < first) | (t > last)
+        if outside.any():
+            raise OutsideRecordError(
+                f"time {t[outside][0]} is outside the JB2008 index files' span "
+                f"{first} to {last} ({self.solfsmy.name}, {self.dtcfile.name})"
+            )
+        ns = (t - self._sol_first.astype("datetime64[ns]")).astype(np.int64)
+        out = np.empty((len(t), 9))
+        for lag, cols in ((1, (0, 1, 2, 3)), (2, (4, 5)), (5, (6, 7))):
+            shifted = ns - lag * _NS_PER_DAY
+            if MIDNIGHT_BELONGS_TO_PREVIOUS_DAY:
+                row = -((-shifted) // _NS_PER_DAY) - 1
+            else:
+                row = shifted // _NS_PER_DAY
+            out[:, cols] = self._sol[row][:, cols]
+        hours = (t - self._dtc_first.astype("datetime64[ns]")).astype(np.int64) / 3.6e12
+        k = np.minimum(np.floor(hours).astype(np.int64), len(self._dtc) - 2)
+        frac = hours - k
+        value = self._dtc[k] + frac * (self._dtc[k + 1] - self._dtc[k])
+        out[:, 8] = np.floor(value + 0.5)
+        return out
+
+    def mean_dtc(self, first: Any, last: Any) -> float:
+        """Mean hourly dTc (K) over the days ``first`` to ``last`` (inclusive, UTC dates),
+        clipped to the file's span."""
+        a = int(np.datetime64(first, "h").astype(np.int64)) - int(self._dtc_first.astype(np.int64))
+        b = int((np.datetime64(last, "D") + _DAY).astype("datetime64[h]").astype(np.int64)) - int(
+            self._dtc_first.astype(np.int64)
+        )
+        a, b = max(a, 0), min(b, len(self._dtc))
+        if b <= a:
+            raise OutsideRecordError(
+                f"{first} to {last} does not overlap the dTc file's span ({self.dtcfile})"
+            )
+        return float(self._dtc[a:b].mean())
+
+    def digest(self, start: np.datetime64, end: np.datetime64) -> str:
+        """SHA-256 of the index values covering [start - 6 days, end + 1 day]."""
+        a = (start.astype("datetime64[D]") - self._sol_first).astype(int) - 6
+        b = (end.astype("datetime64[D]") - self._sol_first).astype(int) + 2
+        h0 = (start.astype("datetime64[h]") - self._dtc_first).astype(int) - 2
+        h1 = (end.astype("datetime64[h]") - self._dtc_first).astype(int) + 3
+        digest = hashlib.sha256()
+        digest.update(np.ascontiguousarray(self._sol[max(a, 0) : max(b, 0)]).tobytes())
+        digest.update(np.ascontiguousarray(self._dtc[max(h0, 0) : max(h1, 0)]).tobytes())
+        return digest.hexdigest()
+
+
+def modified_julian_date(times: np.ndarray) -> np.ndarray:
+    """Modified Julian date (UTC, days; leap seconds not counted, as the reference) of
+    ``datetime64`` times."""
+    ns = np.asarray(times, dtype="datetime64[ns]").astype(np.int64)
+    whole, rest = np.divmod(ns, _NS_PER_DAY)
+    mjd: np.ndarray = (whole + _MJD_UNIX) + rest / _NS_PER_DAY
+    return mjd
+
+
+@dataclass(frozen=True)
+class ActivitySigma:
+    """Relative 1-sigma density error growing with geomagnetic activity:
+    sigma/mean = ``quiet`` + (``storm`` - ``quiet``) * clip(activity / ``full_at``, 0, 1),
+    with activity the family's own geomagnetic driver (dTc in K for JB2008, Kp for
+    Jacchia-Roberts). Defaults and sources: docs/density-models.md."""
+
+    quiet: float
+    storm: float
+    full_at: float
+
+    def __post_init__(self) -> None:
+        for name in ("quiet", "storm", "full_at"):
+            value = _validate.real(name, getattr(self, name))
+            if value < 0:
+                raise ValueError(f"{name} must be >= 0, got {value}")
+        if self.full_at <= 0:
+            raise ValueError(f"full_at must be > 0, got {self.full_at}")
+
+    def relative(self, activity: np.ndarray) -> np.ndarray:
+        """sigma/mean at the given activity."""
+        w = np.clip(np.asarray(activity, dtype=float) / self.full_at, 0.0, 1.0)
+        rel: np.ndarray = self.quiet + (self.storm - self.quiet) * w
+        return rel
+
+
+#: JB2008's default: 12 % quiet, 27 % in storms (Bruinsma & Boniface 2021: std of
+#: observed/model over 28 storms), full at dTc = 150 K (Kp ~ 7, a strong storm).
+JB2008_SIGMA = ActivitySigma(quiet=0.12, storm=0.27, full_at=150.0)
+
+
+class Jb2008(SampledModel):
+    """JB2008 mean density (the model's own output) with :class:`ActivitySigma`.
+
+    Args:
+        indices: the index files (:class:`Jb2008Indices`); None looks in
+            ``$RHOPROP_JB2008_DATA``, then the user cache (FileNotFoundError saying how to
+            get them if neither has them).
+        uncertainty: :class:`ActivitySigma` in dTc (default :data:`JB2008_SIGMA`).
+        dtc: None (observed dTc) or a constant dTc (K) used at every time, e.g. its
+            long-term mean for the paper's cases III/IV.
+        resolution: grid spacing of the sampled field (see :class:`FieldResolution`).
+
+    Example:
+        Needs the index files (``$RHOPROP_JB2008_DATA`` or the cache)::
+
+            import numpy as np, rhoprop as rp
+            m = rp.density.Jb2008()
+            mean, std = m.mean_std(np.datetime64("2002-09-07T12:00"), 10.0, 20.0, 400e3)
+    """
+
+    #: Lowest altitude the model accepts, m.
+    FLOOR = 90e3
+
+    def __init__(
+        self,
+        indices: Jb2008Indices | None = None,
+        uncertainty: ActivitySigma | None = None,
+        *,
+        dtc: float | None = None,
+        resolution: FieldResolution | None = None,
+    ) -> None:
+        self.indices = Jb2008Indices.default() if indices is None else indices
+        if not isinstance(self.indices, Jb2008Indices):
+            raise TypeError("indices must be a Jb2008Indices or None")
+        self.uncertainty = JB2008_SIGMA if uncertainty is None else uncertainty
+        if not isinstance(self.uncertainty, ActivitySigma):
+            raise TypeError("uncertainty must be an ActivitySigma")
+        self.dtc = None if dtc is None else _validate.real("dtc", dtc)
+        self.resolution = resolution_arg(resolution)
+
+    def __repr__(self) -> str:
+        extra = "" if self.dtc is None else f", dtc={self.dtc:g}"
+        return f"Jb2008(uncertainty={self.uncertainty!r}{extra})"
+
+    def drivers(self, times: np.ndarray) -> np.ndarray:
+        """The (n, 9) inputs at ``times`` (with ``dtc`` substituted when set)."""
+        ix = self.indices.at(times)
+        if self.dtc is not None:
+            ix[:, 8] = self.dtc
+        return ix
+
+    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
+        geodetic ``lat``/``lon`` (deg) and ``alt`` (m, >= 90 km), broadcast together."""
+        t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
+        shape = la.shape
+        t, la, lo, al = (np.ascontiguousarray(a.ravel()) for a in (t, la, lo, al))
+        if len(t) == 0:
+            return np.zeros(shape), np.zeros(shape)
+        below = al < self.FLOOR
+        if below.any():
+            raise ValueError(f"alt = {al[below][0]} m is below JB2008's floor of 90 km")
+        ix = self.drivers(t)
+        _, _, rho = _core.jb2008_geodetic(modified_julian_date(t), la, lo, al, ix)
+        sigma = self.uncertainty.relative(ix[:, 8]) * rho
+        return rho.reshape(shape), sigma.reshape(shape)
+
+    def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
+        days = np.arange(
+            start.astype("datetime64[D]"), end.astype("datetime64[D]") + 2, _DAY
+        ).astype("datetime64[ns]")
+        return days[(days > start) & (days < end)]
+
+    def _grid_values(
+        self,
+        epochs: np.ndarray,
+        left: np.ndarray,
+        alt: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`SampledModel._grid_values`, with a node marked ``left`` sampled 1 ns
+        before its epoch (the day's indices before a 00:00 jump) and every other node 1 ns
+        after (the indices in force over the interval that starts there)."""
+        shift = np.where(left, -1, 1).astype("timedelta64[ns]")
+        return super()._grid_values(epochs + shift, left, alt, lat, lon)
+
+    def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
+        return {
+            "model": "jb2008",
+            "uncertainty": asdict(self.uncertainty),
+            "dtc": self.dtc,
+            "indices": self.indices.digest(start, end),
+            "lags": "midnight-previous" if MIDNIGHT_BELONGS_TO_PREVIOUS_DAY else "midnight-same",
+        }

@@ -1,0 +1,183 @@
+"""JB2008 against the reference Fortran (shared data, read through RHOPROP_TEST_DATA):
+432 direct calls of the core routine to 1e-6 relative, and the two 7,714-point grids of
+the reference driver to their printed precision (5 significant digits, ~2e-4)."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+from rhoprop import _core
+from rhoprop.density.jb2008 import modified_julian_date
+
+COLUMNS = ("F10", "F10B", "S10", "S10B", "M10", "M10B", "Y10", "Y10B", "DSTDTC")
+#: Epochs of the two grid files (headers: 2017 196 19 6 19.500; 2009 138 7 19 56.500).
+GRIDS = {
+    "JB2008_AUTO_OUTPUT_01.DAT": "2017-07-15T19:06:19.500",
+    "JB2008_AUTO_OUTPUT_02.DAT": "2009-05-18T07:19:56.500",
+}
+
+
+@pytest.fixture(scope="module")
+def jb_dir(test_data: Path) -> Path:
+    return test_data / "jb2008"
+
+
+@pytest.fixture(scope="module")
+def indices(jb_dir: Path) -> rp.density.Jb2008Indices:
+    return rp.density.Jb2008Indices(jb_dir / "SOLFSMY.TXT", jb_dir / "DTCFILE.TXT")
+
+
+def test_core_matches_432_reference_calls(jb_dir: Path) -> None:
+    d = np.genfromtxt(jb_dir / "jb2008_fortran_core_cases.csv", delimiter=",", names=True)
+    assert len(d) == 432
+    geometry = np.column_stack(
+        [d[k] for k in ("sun_ra_rad", "sun_dec_rad", "sat_ra_rad", "sat_lat_rad", "alt_km")]
+    )
+    ix = np.column_stack([d[k] for k in COLUMNS])
+    tinf, temp, rho = _core.jb2008_core(d["AMJD"], geometry, ix)
+    np.testing.assert_allclose(rho, d["rho_kg_m3"], rtol=1e-6)
+    np.testing.assert_allclose(tinf, d["tinf_K"], rtol=1e-9)
+    np.testing.assert_allclose(temp, d["temp_K"], rtol=1e-9)
+
+
+def _grid(path: Path) -> np.ndarray:
+    lines = path.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("#"))
+    return np.array([line.split() for line in lines[start + 1 :] if line.strip()], float)
+
+
+@pytest.mark.parametrize("name", sorted(GRIDS))
+def test_model_matches_reference_grids(
+    jb_dir: Path, indices: rp.density.Jb2008Indices, name: str
+) -> None:
+    grid = _grid(jb_dir / name)
+    assert grid.shape == (7714, 6)
+    epoch = np.datetime64(GRIDS[name], "ns")
+    alt_km, lon, lat, tinf_ref, temp_ref, rho_ref = grid.T
+    model = rp.density.Jb2008(indices)
+    mean, std = model.mean_std(epoch, lat, lon, alt_km * 1e3)
+    np.testing.assert_allclose(mean, rho_ref, rtol=2e-4)
+    assert (std > 0).all()
+    # Temperatures are printed to 0.1 K.
+    t = np.full(len(grid), epoch)
+    tinf, temp, _ = _core.jb2008_geodetic(
+        modified_julian_date(t), lat, lon, alt_km * 1e3, indices.at(t)
+    )
+    np.testing.assert_allclose(tinf, tinf_ref, atol=0.051)
+    np.testing.assert_allclose(temp, temp_ref, atol=0.051)
+
+
+def test_indices_match_the_reference_driver(
+    test_data: Path, indices: rp.density.Jb2008Indices
+) -> None:
+    meta = json.loads((test_data / "reference" / "density_reference_values.json").read_text())
+    for name, epoch in GRIDS.items():
+        used = meta["jb2008"][name]["indices_used"]
+        got = indices.at(np.array([np.datetime64(epoch, "ns")]))[0]
+        np.testing.assert_array_equal(got, [used[k] for k in COLUMNS])
+
+
+def test_index_lags_and_midnight_rule(indices: rp.density.Jb2008Indices) -> None:
+    sol = indices._sol
+    first = indices._sol_first
+    t = np.array(["2009-12-02T00:00", "2009-12-02T00:00:01"], dtype="datetime64[ns]")
+    row = (np.datetime64("2009-12-02") - first).astype(int)
+    got = indices.at(t)
+    # 00:00 belongs to the previous day: F10 of t - 1 day -> 2009-11-30 at 00:00.
+    assert got[0, 0] == sol[row - 2, 0] and got[1, 0] == sol[row - 1, 0]
+    assert got[0, 4] == sol[row - 3, 4] and got[1, 4] == sol[row - 2, 4]
+    assert got[0, 6] == sol[row - 6, 6] and got[1, 6] == sol[row - 5, 6]
+    # dTc interpolated between hours then rounded: 2009-336 has 0 at 12 h, 17 at 13 h.
+    t = np.array(["2009-12-02T12:00", "2009-12-02T12:29", "2009-12-02T12:31"], "datetime64[ns]")
+    np.testing.assert_array_equal(indices.at(t)[:, 8], [0.0, 8.0, 9.0])
+
+
+def test_outside_span_names_the_span(indices: rp.density.Jb2008Indices) -> None:
+    with pytest.raises(rp.OutsideRecordError, match="outside the JB2008 index files' span"):
+        indices.at(np.array(["2019-01-01"], dtype="datetime64[ns]"))
+    first, last = indices.span
+    # 1997-001 is the first record: Y10 (5-day lag) exists from just after 1997-01-06.
+    assert first == np.datetime64("1997-01-06T00:00:00.000000001")
+    got = indices.at(np.array([first, last]))
+    np.testing.assert_array_equal(got[0, 6:8], indices._sol[0, 6:8])
+    assert np.isfinite(got).all()
+    with pytest.raises(rp.OutsideRecordError, match="1997-01-06"):
+        indices.at(np.array([first - np.timedelta64(1, "ns")]))
+
+
+def test_file_errors_name_file_and_line(tmp_path: Path, jb_dir: Path) -> None:
+    with pytest.raises(FileNotFoundError, match="SOLFSMY"):
+        rp.density.Jb2008Indices(tmp_path / "SOLFSMY.TXT", jb_dir / "DTCFILE.TXT")
+    bad = tmp_path / "SOLFSMY.TXT"
+    lines = (jb_dir / "SOLFSMY.TXT").read_text().splitlines()[:10]
+    lines[7] = "  1997   4   2450453.0  72.x"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=r"SOLFSMY.TXT, line 8"):
+        rp.density.Jb2008Indices(bad, jb_dir / "DTCFILE.TXT")
+    dtc = tmp_path / "DTCFILE.TXT"
+    dtc.write_text("DTC 1997   1   31  50\n")
+    with pytest.raises(ValueError, match=r"DTCFILE.TXT, line 1"):
+        rp.density.Jb2008Indices(jb_dir / "SOLFSMY.TXT", dtc)
+
+
+def test_locate_env_cache_and_refresh(
+    tmp_path: Path, jb_dir: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("RHOPROP_JB2008_DATA", str(jb_dir))
+    found = rp.density.Jb2008Indices.locate()
+    assert found is not None and found.solfsmy.parent == jb_dir
+    monkeypatch.setenv("RHOPROP_JB2008_DATA", str(tmp_path))
+    with pytest.raises(FileNotFoundError, match="RHOPROP_JB2008_DATA"):
+        rp.density.Jb2008Indices.locate()
+    monkeypatch.delenv("RHOPROP_JB2008_DATA")
+    monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path / "cache"))
+    assert rp.density.Jb2008Indices.locate() is None
+    with pytest.raises(FileNotFoundError, match="refresh"):
+        rp.density.Jb2008()
+    got = rp.density.Jb2008Indices.refresh(
+        (jb_dir / "SOLFSMY.TXT").as_uri(), (jb_dir / "DTCFILE.TXT").as_uri()
+    )
+    assert got.solfsmy == tmp_path / "cache" / "jb2008" / "SOLFSMY.TXT"
+    again = rp.density.Jb2008Indices.locate()
+    assert again is not None and again.span == got.span
+    assert not [p for p in os.listdir(tmp_path / "cache" / "jb2008") if p.endswith(".part")]
+
+
+def test_bad_input_raises_naming_the_argument(indices: rp.density.Jb2008Indices) -> None:
+    m = rp.density.Jb2008(indices)
+    t = np.datetime64("2010-01-01T00:00")
+    with pytest.raises(ValueError, match="alt"):
+        m.mean_std(t, 0.0, 0.0, 80e3)
+    with pytest.raises(ValueError, match="lat"):
+        m.mean_std(t, 91.0, 0.0, 400e3)
+    with pytest.raises(ValueError, match="lon"):
+        m.mean_std(t, 0.0, np.nan, 400e3)
+    geometry = np.array([[0.0, 0.0, 0.0, 0.0, 80.0]])
+    with pytest.raises(ValueError, match="altitude"):
+        _core.jb2008_core(np.array([55000.0]), geometry, np.full((1, 9), 100.0))
+    with pytest.raises(ValueError, match="latitude"):
+        _core.jb2008_geodetic(
+            np.array([55000.0]),
+            np.array([95.0]),
+            np.zeros(1),
+            np.array([4e5]),
+            np.full((1, 9), 100.0),
+        )
+
+
+def test_sigma_grows_with_dtc_and_field_samples(indices: rp.density.Jb2008Indices) -> None:
+    quiet = rp.density.Jb2008(indices, dtc=0.0)
+    storm = rp.density.Jb2008(indices, dtc=300.0)
+    t = np.datetime64("2003-10-29T12:00")
+    mq, sq = quiet.mean_std(t, 0.0, 0.0, 400e3)
+    ms, ss = storm.mean_std(t, 0.0, 0.0, 400e3)
+    assert ms > 1.5 * mq
+    assert sq / mq == pytest.approx(0.12) and ss / ms == pytest.approx(0.27)
+    field = quiet.field("2003-10-29T00:00", "2003-10-29T06:00", altitude_range=(380e3, 420e3))
+    assert np.isfinite(field.ln_mean).all()
