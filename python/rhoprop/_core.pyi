@@ -103,6 +103,7 @@ def propagate(
     step: float | None,
     rtol: float | None,
     floor_altitude: float,
+    zonal_degree: int = 2,
 ) -> tuple[_F64, _F64, float | None, int, int]:
     """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
 
@@ -117,6 +118,7 @@ def ccsp(
     perturbation: str,
     step: float,
     floor_altitude: float,
+    zonal_degree: int = 2,
 ) -> dict[str, _F64]:
     """CCSP filter: times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6)."""
 
@@ -137,6 +139,7 @@ def monte_carlo(
     record_density: bool,
     threads: int | None,
     progress: Callable[[int], object] | None,
+    zonal_degree: int = 2,
 ) -> dict[str, Any]:
     """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
     (n,), decay_times (n,), step (s)."""

@@ -45,6 +45,7 @@ def _catalog(args: argparse.Namespace) -> int:
         command=args.command_line,
         fit=args.fit,
         initial_covariance=args.initial_covariance,
+        zonal_degree=args.zonal_degree,
     )
     return 0
 
@@ -198,6 +199,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="initial covariance: 'object' (default: published TLE accuracy by regime, plus "
         "the fit's with --fit), 'tle', 'paper' (near-zero, 1 mm / 1 um/s) or a text file "
         "with a 6x6 inertial covariance in m^2, m^2/s, m^2/s^2",
+    )
+    cat.add_argument(
+        "--zonal-degree",
+        type=int,
+        default=2,
+        choices=range(2, 7),
+        metavar="N",
+        help="highest zonal harmonic of the gravity field: 2 (default, J2 only, the paper's "
+        "model) to 6 (J2..J6, EGM2008)",
     )
     _overwrite(cat)
     cat.set_defaults(run=_catalog)

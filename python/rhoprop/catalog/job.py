@@ -100,6 +100,7 @@ def run_catalog_file(
     command: str | None = None,
     fit: bool = False,
     initial_covariance: str | None = None,
+    zonal_degree: int = 2,
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -113,7 +114,8 @@ def run_catalog_file(
     propagation) or get suffixed OEM names (``"suffix"``). ``fit``: fit state and Cd*A/m
     to each element set first (``load(fit=True)``). ``initial_covariance``: see
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
-    the fit's with ``fit``). Returns the paths written."""
+    the fit's with ``fit``). ``zonal_degree``: 2 (J2 only, default) to 6 (J2..J6).
+    Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
     atmosphere = model_by_name(model)
     cat = load(
@@ -144,6 +146,7 @@ def run_catalog_file(
         output_step=output_step,
         errors="record" if skip_bad else "raise",
         initial_covariance=covariance,
+        zonal_degree=zonal_degree,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory

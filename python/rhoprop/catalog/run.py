@@ -26,7 +26,7 @@ from ..propagation import (
     propagate,
 )
 from ..propagation.kappa import GaussMarkov, KappaProcess
-from ..propagation.propagate import FIELD_MARGIN
+from ..propagation.propagate import FIELD_MARGIN, zonal_degree_argument
 from ..time import (
     EpochLike,
     add_seconds,
@@ -217,6 +217,7 @@ def _propagate_object(
             float(offsets[-1]),
             method="rk8",
             floor_altitude=cfg["floor_altitude"],
+            zonal_degree=cfg["zonal_degree"],
         )
         decay = mean.decayed_at
         k = int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
@@ -245,6 +246,7 @@ def _propagate_object(
             initial_covariance=initial,
             progress=check,
             floor_altitude=cfg["floor_altitude"],
+            zonal_degree=cfg["zonal_degree"],
         )
         decay = mc.mean_orbit.decayed_at
         m = mc.moments()
@@ -300,6 +302,7 @@ def _ccsp_outputs(
             update_times=_update_times(offsets[:k], cfg["update_interval"]),
             initial_covariance=initial,
             floor_altitude=cfg["floor_altitude"],
+            zonal_degree=cfg["zonal_degree"],
         )
 
     k, why = len(offsets), ""
@@ -465,6 +468,7 @@ def propagate_catalog(
     progress: bool = True,
     errors: str = "raise",
     initial_covariance: Any = None,
+    zonal_degree: int = 2,
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -495,6 +499,8 @@ def propagate_catalog(
             (docs/catalog-realism.md); a (6, 6) matrix (m^2, m^2/s, m^2/s^2, inertial) for
             every object; or a callable object -> matrix. What it includes is in
             ``covariance_note`` (and the OEM and summary).
+        zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
+            only, the paper's model; up to 6 adds J3..J6 (EGM2008).
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -535,6 +541,7 @@ def propagate_catalog(
         "floor_altitude": floor,
         "errors": errors,
         "initial_covariance": initial_covariance,
+        "zonal_degree": zonal_degree_argument(zonal_degree),
     }
     notes = [f"{_initial_covariance(o, initial_covariance)[1]}; {PROPAGATED_NOTE}" for o in objs]
     epochs = common_epochs(objs, end64, step)

@@ -40,6 +40,9 @@ MAX_STEP_FRACTION = 1.0 / 20.0
 #: Most integration steps (or output/update times) one run may take: the core's own limit,
 #: checked here before anything is allocated.
 MAX_STEPS = _core.MAX_STEPS
+#: Highest zonal degree the dynamics include (J2..J6); 2, the default, is J2 only (the
+#: paper's model).
+MAX_ZONAL_DEGREE = 6
 #: Default limit on the memory of a run's results, bytes (8 GiB).
 DEFAULT_MAX_MEMORY = 8 * 2**30
 #: How far below the floor altitude a widened density field reaches, m: sigma points and
@@ -106,6 +109,19 @@ def span_of(duration: Any, times: np.ndarray | None, name: str) -> float:
                 f"give one of them (duration may be left out when {name} is given)"
             )
     return end
+
+
+def zonal_degree_argument(value: Any) -> int:
+    """``value`` as the zonal degree of a run: an integer from 2 (J2 only) to
+    :data:`MAX_ZONAL_DEGREE` (J2..J6); anything else is a TypeError or ValueError."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"zonal_degree must be an integer, got {value!r}")
+    if not 2 <= value <= MAX_ZONAL_DEGREE:
+        raise ValueError(
+            f"zonal_degree = {value} is invalid: it must be 2 (J2 only, the paper's model) "
+            f"to {MAX_ZONAL_DEGREE} (J2..J{MAX_ZONAL_DEGREE})"
+        )
+    return int(value)
 
 
 def check_model(model: Any) -> None:
@@ -235,8 +251,10 @@ def propagate(
     step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     density: DensityModel | None = None,
+    zonal_degree: int = 2,
 ) -> Trajectory:
-    """Propagates one orbit with two-body + J2 + drag at the mean density.
+    """Propagates one orbit with two-body + J2 (optionally up to J6) + drag at the mean
+    density.
 
     Args:
         state: initial :class:`OrbitState`.
@@ -255,6 +273,9 @@ def propagate(
             :data:`DEFAULT_STEP`; at most 1/20 of the orbital period); for ``"dop853"`` an
             optional largest step.
         floor_altitude: geodetic altitude below which the object counts as decayed, m.
+        zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
+            only, the paper's model; 3 to 6 add J3..J6 (EGM2008), which move the paper's orbit
+            by 1.6 km in a day.
 
     Returns:
         :class:`Trajectory` at the output times (shorter if the object decayed; its
@@ -288,6 +309,7 @@ def propagate(
     elif step is not None:
         step = _validate.positive("step", step)
     floor = _validate.real("floor_altitude", floor_altitude)
+    degree = zonal_degree_argument(zonal_degree)
     times = output_grid(span, output_step)
     epoch = ut1_seconds(state.epoch)
     tol = DEFAULT_RTOL if rtol is None and method == "dop853" else rtol
@@ -303,6 +325,7 @@ def propagate(
             step,
             tol,
             floor,
+            degree,
         )
 
     return trajectory_from_core(state.epoch, run_in_field(model, state, span, floor, run))

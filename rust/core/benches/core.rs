@@ -45,6 +45,15 @@ fn benches(c: &mut Criterion) {
         b.iter(|| d4.eval(black_box(60.0), black_box(&y4), &mut dy4).unwrap())
     });
 
+    let mut d4j6 = Dynamics::<_, 4>::new(&atm, 8.4e7, [drag; 4]);
+    d4j6.zonal_degree = 6;
+    c.bench_function("rhs/exponential/4 members/J6", |b| {
+        b.iter(|| {
+            d4j6.eval(black_box(60.0), black_box(&y4), &mut dy4)
+                .unwrap()
+        })
+    });
+
     let mut stepper1 = FixedStepper::<1>::default();
     c.bench_function("rk8 step/exponential/1 member", |b| {
         let mut y = batch::<1>();
@@ -116,6 +125,7 @@ fn runs(c: &mut Criterion) {
         y0: PAPER,
         drag: 3.0912 * 0.0015,
         floor_altitude: 120e3,
+        zonal_degree: 2,
     };
 
     let mut group = c.benchmark_group("monte_carlo");

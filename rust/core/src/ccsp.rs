@@ -317,6 +317,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
         }
         let problem = &cfg.problem;
         let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, [problem.drag; W]);
+        dynamics.zonal_degree = problem.zonal_degree;
         dynamics.perturbation = cfg.perturbation;
         dynamics.kappa = kappa;
         let mut watch = FloorWatch {
@@ -384,6 +385,7 @@ mod tests {
             y0: [ra, 0.0, 0.0, 0.0, va, 0.0],
             drag: 3.0912 * 0.0015,
             floor_altitude: 120e3,
+            zonal_degree: 2,
         };
         let mut p0 = [[0.0; 6]; 6];
         for i in 0..6 {
@@ -437,6 +439,7 @@ mod tests {
                 ],
                 drag: 3.0912 * 0.0015,
                 floor_altitude: 120e3,
+                zonal_degree: 2,
             },
             p0,
             update_times: vec![3600.0, 7200.0],

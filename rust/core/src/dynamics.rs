@@ -1,9 +1,10 @@
-//! Equations of motion: two-body + J2 + drag with a co-rotating atmosphere, evaluated for
-//! a batch of `W` members at once, held structure-of-arrays (`state[component][lane]`).
+//! Equations of motion: two-body + J2 (optionally the zonals up to J6) + drag with a
+//! co-rotating atmosphere, evaluated for a batch of `W` members at once, held
+//! structure-of-arrays (`state[component][lane]`).
 //! One trajectory is a batch of one. This is the one RHS that every integrator, member and
 //! sigma point uses.
 
-use crate::constants::{J2, MU, OMEGA_EARTH, R_EARTH};
+use crate::constants::{J2, J3, J4, J5, J6, MU, OMEGA_EARTH, R_EARTH};
 use crate::density::Atmosphere;
 use crate::error::CoreError;
 use crate::frames::EarthRotation;
@@ -35,11 +36,20 @@ pub enum Perturbation {
     Lognormal,
 }
 
-/// Two-body + J2 + drag for a batch of members sharing one epoch and atmosphere.
+/// Highest zonal degree the dynamics can include (J2..J6).
+pub const MAX_ZONAL_DEGREE: u8 = 6;
+/// Unnormalised zonal coefficients by degree (0 and 1 unused).
+const ZONALS: [f64; 7] = [0.0, 0.0, J2, J3, J4, J5, J6];
+
+/// Two-body + J2 (+ J3..J6 on request) + drag for a batch of members sharing one epoch
+/// and atmosphere.
 pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     atmosphere: &'a A,
     /// Epoch of t = 0, seconds since J2000 (UT1).
     epoch: f64,
+    /// Highest zonal harmonic in the gravity field: 2 (J2 only, the paper's model and the
+    /// default) up to [`MAX_ZONAL_DEGREE`]; validated in [`crate::problem::Problem`].
+    pub zonal_degree: u8,
     /// Drag parameter Cd * A / m per lane, m^2/kg (0 switches drag off in that lane).
     pub drag: [f64; W],
     /// Normalised density offset per lane on the current node segment (0 = mean density).
@@ -60,6 +70,7 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
         Self {
             atmosphere,
             epoch,
+            zonal_degree: 2,
             drag,
             kappa: KappaLanes::zero(),
             perturbation: Perturbation::Additive,
@@ -80,6 +91,63 @@ impl<A: Atmosphere + ?Sized, const W: usize> Dynamics<'_, A, W> {
             .mean_sigma(ut1, [y[0][l], y[1][l], y[2][l]], &rot)?;
         Ok(perturb(mean, sigma, self.kappa.at(l, t), self.perturbation).0)
     }
+}
+
+/// Acceleration (m/s^2) of the zonal harmonics of degree 3..=`degree` (at most
+/// [`MAX_ZONAL_DEGREE`]) at inertial position (x, y, z), m; see [`zonal_lanes`].
+pub fn zonal_acceleration(x: f64, y: f64, z: f64, degree: u8) -> [f64; 3] {
+    zonal_lanes::<1>(degree, &[x], &[y], &[z]).map(|c| c[0])
+}
+
+/// Zonal accelerations of degree 3..=`degree` (at most [`MAX_ZONAL_DEGREE`]) for `W`
+/// positions at once, `[component][lane]`: the gradient of
+/// -mu/r sum_n J_n (Re/r)^n P_n(s), s = z/r, which is
+/// a = mu/r^2 sum_n J_n (Re/r)^n [P'_{n+1}(s) (x, y, z)/r - P'_n(s) e_z],
+/// with P_n and its derivative by the Legendre recursions (lanes innermost, so the
+/// arithmetic vectorises across members).
+#[inline(always)]
+pub fn zonal_lanes<const W: usize>(
+    degree: u8,
+    x: &[f64; W],
+    y: &[f64; W],
+    z: &[f64; W],
+) -> [[f64; W]; 3] {
+    let (mut inv_r, mut s, mut q) = ([0.0; W], [0.0; W], [0.0; W]);
+    for l in 0..W {
+        inv_r[l] = 1.0 / (x[l] * x[l] + y[l] * y[l] + z[l] * z[l]).sqrt();
+        s[l] = z[l] * inv_r[l];
+        q[l] = R_EARTH * inv_r[l];
+    }
+    // P_{n-1}, P_n and P'_n, starting at n = 2; (Re/r)^n.
+    let mut p_prev = s;
+    let mut p = s.map(|s| 1.5 * s * s - 0.5);
+    let mut dp = s.map(|s| 3.0 * s);
+    let mut qn: [f64; W] = std::array::from_fn(|l| q[l] * q[l]);
+    let (mut radial, mut polar) = ([0.0; W], [0.0; W]);
+    for n in 3..=usize::from(degree.min(MAX_ZONAL_DEGREE)) {
+        let nf = n as f64;
+        let (a, b) = ((2.0 * nf - 1.0) / nf, (nf - 1.0) / nf);
+        for l in 0..W {
+            // P'_n = s P'_{n-1} + n P_{n-1}; P_n = ((2n - 1) s P_{n-1} - (n - 1) P_{n-2}) / n.
+            dp[l] = s[l] * dp[l] + nf * p[l];
+            let p_next = a * s[l] * p[l] - b * p_prev[l];
+            p_prev[l] = p[l];
+            p[l] = p_next;
+            qn[l] *= q[l];
+            let dp_next = s[l] * dp[l] + (nf + 1.0) * p[l];
+            radial[l] += ZONALS[n] * qn[l] * dp_next;
+            polar[l] += ZONALS[n] * qn[l] * dp[l];
+        }
+    }
+    let mut out = [[0.0; W]; 3];
+    for l in 0..W {
+        let k = MU * inv_r[l] * inv_r[l];
+        let kr = k * radial[l] * inv_r[l];
+        out[0][l] = kr * x[l];
+        out[1][l] = kr * y[l];
+        out[2][l] = kr * z[l] - k * polar[l];
+    }
+    out
 }
 
 /// Density from mean, sigma and kappa; the flag tells whether it was clipped at zero.
@@ -180,6 +248,16 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             dy[4][l] += f * vr[1];
             dy[5][l] += f * vr[2];
         }
+        // Higher zonals only on request, decided once per call after the rest, so that the
+        // J2-only path is unchanged.
+        if self.zonal_degree > 2 {
+            let a = zonal_lanes(self.zonal_degree, &y[0], &y[1], &y[2]);
+            for c in 0..3 {
+                for l in 0..W {
+                    dy[3 + c][l] += a[c][l];
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -222,6 +300,69 @@ mod tests {
             );
         }
         assert_eq!(dy[0][0], 1.0);
+    }
+
+    /// Legendre polynomial P_n(s) written out for n <= 6 (independent of the recursion).
+    fn legendre(n: usize, s: f64) -> f64 {
+        let s2 = s * s;
+        match n {
+            2 => (3.0 * s2 - 1.0) / 2.0,
+            3 => (5.0 * s2 - 3.0) * s / 2.0,
+            4 => ((35.0 * s2 - 30.0) * s2 + 3.0) / 8.0,
+            5 => ((63.0 * s2 - 70.0) * s2 + 15.0) * s / 8.0,
+            6 => (((231.0 * s2 - 315.0) * s2 + 105.0) * s2 - 5.0) / 16.0,
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn zonals_match_the_potential_gradient() {
+        // U = mu/r [1 - sum_{n=2}^{N} J_n (Re/r)^n P_n(z/r)]; the acceleration of degree N
+        // minus that of degree 2 is the gradient of the J3..JN terms (central differences).
+        let atm = Exponential::new(1e-12, 400e3, 60e3, 0.0).unwrap();
+        let points = [
+            [3782900.7, -5441600.6, -1420075.1],
+            [-2.0e6, 3.0e6, 5.9e6],
+            [6.9e6, 1.0e5, 1.0e3],
+            [1.0e6, -1.5e6, -6.8e6],
+            [4.0e6, 4.0e6, 3.0e6],
+        ];
+        for degree in 3..=MAX_ZONAL_DEGREE {
+            let u = |q: [f64; 3]| {
+                let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                let s = q[2] / r;
+                (3..=usize::from(degree))
+                    .map(|n| -MU / r * ZONALS[n] * (R_EARTH / r).powi(n as i32) * legendre(n, s))
+                    .sum::<f64>()
+            };
+            for p in points {
+                let y = one([p[0], p[1], p[2], 0.0, 0.0, 0.0]);
+                let (mut with, mut j2) = ([[0.0]; 6], [[0.0]; 6]);
+                let mut dynm = Dynamics::new(&atm, 0.0, [0.0]);
+                dynm.eval(0.0, &y, &mut j2).unwrap();
+                dynm.zonal_degree = degree;
+                dynm.eval(0.0, &y, &mut with).unwrap();
+                let a = zonal_acceleration(p[0], p[1], p[2], degree);
+                let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                assert!(norm > 1e-7, "degree {degree}: {norm}");
+                for i in 0..3 {
+                    let h = 10.0;
+                    let (mut qp, mut qm) = (p, p);
+                    qp[i] += h;
+                    qm[i] -= h;
+                    let grad = (u(qp) - u(qm)) / (2.0 * h);
+                    assert!(
+                        (a[i] - grad).abs() < 1e-8 * norm,
+                        "degree {degree} axis {i}: {} vs {grad}",
+                        a[i]
+                    );
+                    let added = with[3 + i][0] - j2[3 + i][0];
+                    assert!((added - a[i]).abs() < 1e-12 * j2[3 + i][0].abs().max(1.0));
+                }
+            }
+        }
+        // Degree 2 adds nothing.
+        assert_eq!(zonal_acceleration(7e6, 1e5, 2e5, 2), [0.0; 3]);
     }
 
     #[test]

@@ -223,6 +223,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
         let mut dynamics =
             Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, [cfg.problem.drag; W]);
         dynamics.perturbation = cfg.perturbation;
+        dynamics.zonal_degree = cfg.problem.zonal_degree;
         let spacing = cfg.kappa.node_spacing(h);
         let mut kappa = KappaLanes::<W> {
             t0: 0.0,
@@ -442,6 +443,7 @@ mod tests {
                 y0: PAPER,
                 drag: 3.0912 * 0.0015,
                 floor_altitude: 120e3,
+                zonal_degree: 2,
             },
             initial_factor: None,
             kappa,

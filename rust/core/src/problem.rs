@@ -1,6 +1,8 @@
-//! What every run starts from: epoch, initial state, drag parameter and decay floor,
+//! What every run starts from: epoch, initial state, drag parameter, decay floor and
+//! zonal degree,
 //! validated once here for `propagate`, the Monte Carlo engine and the CCSP filter alike.
 
+use crate::dynamics::MAX_ZONAL_DEGREE;
 use crate::error::{finite, positive, CoreError};
 use crate::frames::altitude;
 
@@ -18,15 +20,26 @@ pub struct Problem {
     pub drag: f64,
     /// Geodetic altitude below which the object counts as decayed, m.
     pub floor_altitude: f64,
+    /// Highest zonal harmonic of the gravity field: 2 (J2 only, the paper's model) up to
+    /// [`MAX_ZONAL_DEGREE`] (J2..J6).
+    pub zonal_degree: u8,
 }
 
 impl Problem {
     /// Checks a finite epoch, a positive drag parameter, a finite floor and an initial
-    /// state that is finite and above both the surface and the floor.
+    /// state that is finite and above both the surface and the floor, and a zonal degree
+    /// in 2..=[`MAX_ZONAL_DEGREE`].
     pub fn validate(&self) -> Result<(), CoreError> {
         finite("epoch", self.epoch)?;
         positive("drag parameter Cd*A/m", self.drag)?;
         finite("floor_altitude", self.floor_altitude)?;
+        if !(2..=MAX_ZONAL_DEGREE).contains(&self.zonal_degree) {
+            return Err(CoreError::invalid(
+                "zonal_degree",
+                f64::from(self.zonal_degree),
+                format!("it must be 2 (J2 only) to {MAX_ZONAL_DEGREE} (J2..J{MAX_ZONAL_DEGREE})"),
+            ));
+        }
         check_state(self.epoch, &self.y0, self.floor_altitude)
     }
 }
@@ -79,6 +92,7 @@ mod tests {
         ],
         drag: 3.0912 * 0.0015,
         floor_altitude: DEFAULT_FLOOR_ALTITUDE,
+        zonal_degree: 2,
     };
 
     #[test]
@@ -97,5 +111,10 @@ mod tests {
             bad(|p| p.y0 = [1e6, 0.0, 0.0, 0.0, 7e3, 0.0]).contains("below the Earth's surface")
         );
         assert!(bad(|p| p.floor_altitude = 450e3).contains("decay floor altitude of 450000 m"));
+        assert!(bad(|p| p.zonal_degree = 7).starts_with("zonal_degree = 7 is invalid"));
+        assert!(bad(|p| p.zonal_degree = 1).contains("2 (J2 only) to 6"));
+        let mut j6 = PAPER;
+        j6.zonal_degree = 6;
+        assert!(j6.validate().is_ok());
     }
 }

@@ -91,6 +91,7 @@ pub fn propagate<A: Atmosphere + ?Sized>(
 ) -> Result<Trajectory, CoreError> {
     problem.validate()?;
     let mut dynamics = Dynamics::<A, 1>::new(atmosphere, problem.epoch, [problem.drag]);
+    dynamics.zonal_degree = problem.zonal_degree;
     let mut y: State<1> = problem.y0.map(|c| [c]);
     let mut observer = Observer {
         epoch: problem.epoch,
@@ -160,6 +161,7 @@ mod tests {
             y0,
             drag,
             floor_altitude,
+            zonal_degree: 2,
         };
         propagate(atm, &problem, times, method, &Progress::default())
     }
@@ -402,6 +404,7 @@ mod tests {
             y0: PAPER,
             drag: DRAG,
             floor_altitude: DEFAULT_FLOOR_ALTITUDE,
+            zonal_degree: 2,
         };
         let p = Progress::default();
         p.cancel.store(true, Ordering::Relaxed);

@@ -16,7 +16,7 @@ use rhoprop_core::problem::Problem;
 /// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), nt = updates + 1.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
-    scaling, perturbation, step, floor_altitude))]
+    scaling, perturbation, step, floor_altitude, zonal_degree = 2))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -30,6 +30,7 @@ pub fn ccsp<'py>(
     perturbation: &str,
     step: f64,
     floor_altitude: f64,
+    zonal_degree: u8,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
@@ -40,6 +41,7 @@ pub fn ccsp<'py>(
             y0: fixed::<6>("state", &state)?,
             drag,
             floor_altitude,
+            zonal_degree,
         },
         p0,
         update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),

@@ -23,7 +23,8 @@ const MAX_THREADS: usize = 1024;
 /// clipped (n,), decay_times (n,), step.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, output_times, kappa, perturbation, method,
-    step, members, seed, initial_covariance, floor_altitude, record_density, threads, progress))]
+    step, members, seed, initial_covariance, floor_altitude, record_density, threads, progress,
+    zonal_degree = 2))]
 #[allow(clippy::too_many_arguments)]
 pub fn monte_carlo<'py>(
     py: Python<'py>,
@@ -43,6 +44,7 @@ pub fn monte_carlo<'py>(
     record_density: bool,
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
+    zonal_degree: u8,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
@@ -68,6 +70,7 @@ pub fn monte_carlo<'py>(
             y0: fixed::<6>("state", &state)?,
             drag,
             floor_altitude,
+            zonal_degree,
         },
         initial_factor,
         kappa: KappaProcess::from_spec(&kappa.0, kappa.1, kappa.2).map_err(to_py)?,

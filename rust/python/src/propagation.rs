@@ -21,7 +21,8 @@ type PropagateOut<'py> = (
 
 /// Propagates one state; see `rhoprop.propagate` for the documented Python API.
 #[pyfunction]
-#[pyo3(signature = (atmosphere, epoch, state, drag, output_times, method, step, rtol, floor_altitude))]
+#[pyo3(signature = (atmosphere, epoch, state, drag, output_times, method, step, rtol, floor_altitude,
+    zonal_degree = 2))]
 #[allow(clippy::too_many_arguments)]
 pub fn propagate<'py>(
     py: Python<'py>,
@@ -34,6 +35,7 @@ pub fn propagate<'py>(
     step: Option<f64>,
     rtol: Option<f64>,
     floor_altitude: f64,
+    zonal_degree: u8,
 ) -> PyResult<PropagateOut<'py>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let problem = Problem {
@@ -41,6 +43,7 @@ pub fn propagate<'py>(
         y0: fixed::<6>("state", &state)?,
         drag,
         floor_altitude,
+        zonal_degree,
     };
     let outputs = vector("output_times", &output_times)?.to_vec();
     let need_step =
