@@ -13,10 +13,12 @@ written (both with a :class:`~rhoprop.errors.CacheWarning`) and stays under a si
 
 from __future__ import annotations
 
+import collections
 import hashlib
 import itertools
 import json
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -286,6 +288,10 @@ def sample_field(
     shape = (len(nodes), len(alt), len(lat), len(lon))
     # One thread computes a field the others of this process wait for and then read.
     with entry_lock(path):
+        recent = _RECENT.get(blob)
+        if recent is not None and recent[0] == _stamp(path):
+            _RECENT.move_to_end(blob)
+            return recent[1]
         saved = load_entry(path)
         if saved is not None and _entry_matches(saved, blob, shape):
             ln_mean, rel_sigma = saved["ln_mean"], saved["rel_sigma"]
@@ -294,7 +300,41 @@ def sample_field(
                 offsets_to_epochs(t0, nodes), left, alt, lat, lon
             )
             store_entry(path, {"ln_mean": ln_mean, "rel_sigma": rel_sigma, "key": np.array(blob)})
-    return DensityField.from_arrays(t0, nodes, alt, lat, lon, ln_mean, rel_sigma)
+        field = DensityField.from_arrays(t0, nodes, alt, lat, lon, ln_mean, rel_sigma)
+        stamp = _stamp(path)
+        if stamp is not None:
+            _remember(blob, stamp, field)
+    return field
+
+
+#: The fields this process read or wrote last, by cache key, with the stamp (mtime, size)
+#: of their disk entry: a rerun over the same window (a catalog run after run) skips
+#: reading, checking and copying a possibly large file while that entry is unchanged.
+#: Fields are immutable, so sharing them is safe.
+_RECENT: collections.OrderedDict[str, tuple[tuple[int, int], DensityField]] = (
+    collections.OrderedDict()
+)
+#: Bounds of that memory: entries and bytes (ln_mean and rel_sigma).
+RECENT_FIELDS = 4
+RECENT_BYTES = 2**30
+
+
+def _stamp(path: Path) -> tuple[int, int] | None:
+    """(mtime in ns, size) of a cache entry, or None when there is none."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return (st.st_mtime_ns, st.st_size)
+
+
+def _remember(key: str, stamp: tuple[int, int], field: DensityField) -> None:
+    _RECENT[key] = (stamp, field)
+    while len(_RECENT) > RECENT_FIELDS or (
+        len(_RECENT) > 1
+        and sum(f.ln_mean.nbytes + f.rel_sigma.nbytes for _, f in _RECENT.values()) > RECENT_BYTES
+    ):
+        _RECENT.popitem(last=False)
 
 
 #: Version of the cached field format (2: with checksum and key); part of the key, so

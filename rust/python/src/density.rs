@@ -80,9 +80,14 @@ impl PyGridded {
             )));
         }
         let nlon = a.shape()[3];
-        // Iterating the views yields logical row-major order whatever the strides.
-        let ln_mean: Vec<f64> = a.iter().copied().collect();
-        let rel_sigma: Vec<f64> = b.iter().copied().collect();
+        // A C-contiguous array is copied in one go; otherwise iterating the view yields the
+        // logical row-major order whatever the strides.
+        let ln_mean: Vec<f64> = a
+            .as_slice()
+            .map_or_else(|| a.iter().copied().collect(), <[f64]>::to_vec);
+        let rel_sigma: Vec<f64> = b
+            .as_slice()
+            .map_or_else(|| b.iter().copied().collect(), <[f64]>::to_vec);
         GriddedField::new(
             epoch, time, altitude, latitude, lon0, nlon, ln_mean, rel_sigma,
         )
