@@ -26,6 +26,7 @@ import hashlib
 import os
 import tempfile
 import urllib.request
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -61,11 +62,16 @@ class Jb2008FileError(ValueError):
     """An index file is missing or malformed; the message names the file and line."""
 
 
-def _read_solfsmy(path: Path) -> tuple[np.datetime64, np.ndarray]:
-    """(first day, (n, 8) F10, F81c, S10, S81c, M10, M81c, Y10, Y81c) of a SOLFSMY file;
-    days must follow one another without gaps."""
-    if not path.is_file():
-        raise FileNotFoundError(f"JB2008 solar index file not found: {path}")
+def _read_daily(
+    path: Path,
+    what: str,
+    layout: str,
+    parse: Callable[[list[str]], tuple[int, int, list[float]]],
+) -> tuple[np.datetime64, np.ndarray]:
+    """(first day, one row of values per day) of an index file whose records are parsed
+    by ``parse(fields) -> (year, day of year, values)`` (ValueError or IndexError for a
+    malformed one); days must follow one another without gaps. Errors name the file and
+    the line."""
     rows: list[list[float]] = []
     first: np.datetime64 | None = None
     expect: np.datetime64 | None = None
@@ -73,16 +79,13 @@ def _read_solfsmy(path: Path) -> tuple[np.datetime64, np.ndarray]:
         for lineno, line in enumerate(f, 1):
             if not line.strip() or line.lstrip().startswith("#"):
                 continue
-            parts = line.split()
             try:
-                year, doy = int(parts[0]), int(parts[1])
-                values = [float(v) for v in parts[3:11]]
-                if len(values) != 8 or not 1 <= doy <= 366:
+                year, doy, values = parse(line.split())
+                if not 1 <= doy <= 366:
                     raise ValueError
             except (ValueError, IndexError):
                 raise Jb2008FileError(
-                    f"{path}, line {lineno}: not a SOLFSMY record "
-                    f"(YYYY DDD JulianDay F10 F81c S10 S81c M10 M81c Y10 Y81c): {line.rstrip()!r}"
+                    f"{path}, line {lineno}: not a {what} record ({layout}): {line.rstrip()!r}"
                 ) from None
             day = np.datetime64(f"{year:04d}-01-01") + np.timedelta64(doy - 1, "D")
             if expect is not None and day != expect:
@@ -95,47 +98,39 @@ def _read_solfsmy(path: Path) -> tuple[np.datetime64, np.ndarray]:
             expect = day + _DAY
             rows.append(values)
     if first is None:
-        raise Jb2008FileError(f"{path}: no SOLFSMY records")
+        raise Jb2008FileError(f"{path}: no {what} records")
     return first, np.array(rows)
+
+
+def _solfsmy_record(parts: list[str]) -> tuple[int, int, list[float]]:
+    values = [float(v) for v in parts[3:11]]
+    if len(values) != 8:
+        raise ValueError
+    return int(parts[0]), int(parts[1]), values
+
+
+def _dtc_record(parts: list[str]) -> tuple[int, int, list[float]]:
+    hours = [float(v) for v in parts[3:27]]
+    if parts[0] != "DTC" or len(hours) != 24:
+        raise ValueError
+    return int(parts[1]), int(parts[2]), hours
+
+
+def _read_solfsmy(path: Path) -> tuple[np.datetime64, np.ndarray]:
+    """(first day, (n, 8) F10, F81c, S10, S81c, M10, M81c, Y10, Y81c) of a SOLFSMY file;
+    days must follow one another without gaps."""
+    if not path.is_file():
+        raise FileNotFoundError(f"JB2008 solar index file not found: {path}")
+    layout = "YYYY DDD JulianDay F10 F81c S10 S81c M10 M81c Y10 Y81c"
+    return _read_daily(path, "SOLFSMY", layout, _solfsmy_record)
 
 
 def _read_dtcfile(path: Path) -> tuple[np.datetime64, np.ndarray]:
     """(first hour, hourly dTc K) of a DTCFILE; days must follow one another."""
     if not path.is_file():
         raise FileNotFoundError(f"JB2008 dTc file not found: {path}")
-    values: list[list[float]] = []
-    first: np.datetime64 | None = None
-    expect: np.datetime64 | None = None
-    with open(path, encoding="ascii", errors="replace") as f:
-        for lineno, line in enumerate(f, 1):
-            if not line.strip() or line.lstrip().startswith("#"):
-                continue
-            parts = line.split()
-            try:
-                if parts[0] != "DTC":
-                    raise ValueError
-                year, doy = int(parts[1]), int(parts[2])
-                hours = [float(v) for v in parts[3:27]]
-                if len(hours) != 24 or not 1 <= doy <= 366:
-                    raise ValueError
-            except (ValueError, IndexError):
-                raise Jb2008FileError(
-                    f"{path}, line {lineno}: not a DTCFILE record "
-                    f"(DTC YYYY DDD and 24 hourly values): {line.rstrip()!r}"
-                ) from None
-            day = np.datetime64(f"{year:04d}-01-01") + np.timedelta64(doy - 1, "D")
-            if expect is not None and day != expect:
-                raise Jb2008FileError(
-                    f"{path}, line {lineno}: day {day} follows {expect - _DAY}; "
-                    "the file must have one record per day without gaps"
-                )
-            if first is None:
-                first = day
-            expect = day + _DAY
-            values.append(hours)
-    if first is None:
-        raise Jb2008FileError(f"{path}: no DTC records")
-    return first.astype("datetime64[h]"), np.array(values).ravel()
+    first, values = _read_daily(path, "DTCFILE", "DTC YYYY DDD and 24 hourly values", _dtc_record)
+    return first.astype("datetime64[h]"), values.ravel()
 
 
 class Jb2008Indices:
