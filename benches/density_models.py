@@ -23,7 +23,7 @@ import rhoprop as rp
 from machine import describe, info
 from rhoprop import _core
 from rhoprop.density import altitude_band
-from rhoprop.density.jb2008 import modified_julian_date
+from rhoprop.density.point_model import modified_julian_date
 
 
 def _best(f: Any, repeat: int) -> float:

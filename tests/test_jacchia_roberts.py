@@ -13,7 +13,7 @@ import pytest
 
 import rhoprop as rp
 from rhoprop import _core
-from rhoprop.density.jb2008 import modified_julian_date
+from rhoprop.density.point_model import modified_julian_date
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import pytest
 
 import rhoprop as rp
 from rhoprop import _core
-from rhoprop.density.jb2008 import modified_julian_date
+from rhoprop.density.point_model import modified_julian_date
 
 COLUMNS = ("F10", "F10B", "S10", "S10B", "M10", "M10B", "Y10", "Y10B", "DSTDTC")
 #: Epochs of the two grid files (headers: 2017 196 19 6 19.500; 2009 138 7 19 56.500).

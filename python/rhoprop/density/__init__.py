@@ -22,10 +22,11 @@ from .field import DensityField, FieldResolution
 from .function import FromFunction
 from .gridded import Gridded
 from .jacchia_roberts import JR_SIGMA, JacchiaRoberts
-from .jb2008 import JB2008_SIGMA, ActivitySigma, Jb2008, Jb2008Indices
+from .jb2008 import JB2008_SIGMA, Jb2008, Jb2008Indices
 from .model import DensityModel, SampledModel, as_atmosphere
 from .msis import DriverUncertainty, Msis, RelativeSigma
 from .pcarom import PcaRom
+from .point_model import ActivitySigma
 
 __all__ = [
     "JB2008_SIGMA",

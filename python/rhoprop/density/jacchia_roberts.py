@@ -19,10 +19,8 @@ import numpy as np
 from .. import _core
 from ..errors import OutsideRecordError
 from ..spaceweather import SpaceWeather
-from ._inputs import broadcast_inputs
 from .field import FieldResolution, resolution_arg
-from .jb2008 import ActivitySigma, modified_julian_date
-from .model import SampledModel
+from .point_model import ActivitySigma, PointModel
 
 #: Jacchia-Roberts' default: 15 % quiet, 30 % in storms, full at Kp = 7 (sources in
 #: docs/density-models.md).
@@ -31,7 +29,7 @@ _KP_LAG = np.timedelta64(3, "h")
 _CADENCE = np.timedelta64(3, "h")
 
 
-class JacchiaRoberts(SampledModel):
+class JacchiaRoberts(PointModel):
     """Jacchia-Roberts 1971 mean density with :class:`ActivitySigma` in Kp.
 
     Args:
@@ -47,8 +45,7 @@ class JacchiaRoberts(SampledModel):
         >>> mean, std = m.mean_std(np.datetime64("2002-09-07T12:00"), 10.0, 20.0, 400e3)
     """
 
-    #: Lowest altitude the model accepts, m.
-    FLOOR = 90e3
+    NAME = "Jacchia-Roberts"
 
     def __init__(
         self,
@@ -85,21 +82,18 @@ class JacchiaRoberts(SampledModel):
             )
         return np.column_stack([d.f107, d.f107a, kp])
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
-        geodetic ``lat``/``lon`` (deg) and ``alt`` (m, >= 90 km), broadcast together."""
-        t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
-        shape = la.shape
-        t, la, lo, al = (np.ascontiguousarray(a.ravel()) for a in (t, la, lo, al))
-        if len(t) == 0:
-            return np.zeros(shape), np.zeros(shape)
-        below = al < self.FLOOR
-        if below.any():
-            raise ValueError(f"alt = {al[below][0]} m is below Jacchia-Roberts' floor of 90 km")
-        dr = self.drivers(t)
-        _, _, rho = _core.jacchia_roberts_geodetic(modified_julian_date(t), la, lo, al, dr)
-        sigma = self.uncertainty.relative(dr[:, 2]) * rho
-        return rho.reshape(shape), sigma.reshape(shape)
+    def _evaluate(
+        self,
+        mjd: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+        alt: np.ndarray,
+        drivers: np.ndarray,
+    ) -> np.ndarray:
+        return np.asarray(_core.jacchia_roberts_geodetic(mjd, lat, lon, alt, drivers)[2])
+
+    def _activity(self, drivers: np.ndarray) -> np.ndarray:
+        return drivers[:, 2]  # Kp
 
     def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
         first = start.astype("datetime64[h]") - start.astype("datetime64[h]").astype(int) % 3

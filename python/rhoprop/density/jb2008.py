@@ -27,7 +27,7 @@ import os
 import tempfile
 import urllib.request
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -36,9 +36,8 @@ import numpy as np
 from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
-from ._inputs import broadcast_inputs
 from .field import FieldResolution, resolution_arg
-from .model import SampledModel
+from .point_model import ActivitySigma, PointModel
 
 #: Where :meth:`Jb2008Indices.refresh` downloads the current files from (SET).
 SOLFSMY_URL = "https://sol.spacenvironment.net/JB2008/indices/SOLFSMY.TXT"
@@ -53,7 +52,6 @@ MIDNIGHT_BELONGS_TO_PREVIOUS_DAY = True
 #: Lags of F10/S10, M10 and Y10, days.
 LAGS = {"F10": 1, "S10": 1, "M10": 2, "Y10": 5}
 #: Modified Julian date of the Unix epoch.
-_MJD_UNIX = 40587.0
 _NS_PER_DAY = 86_400 * 10**9
 _DAY = np.timedelta64(1, "D")
 
@@ -306,47 +304,12 @@ class Jb2008Indices:
         return digest.hexdigest()
 
 
-def modified_julian_date(times: np.ndarray) -> np.ndarray:
-    """Modified Julian date (UTC, days; leap seconds not counted, as the reference) of
-    ``datetime64`` times."""
-    ns = np.asarray(times, dtype="datetime64[ns]").astype(np.int64)
-    whole, rest = np.divmod(ns, _NS_PER_DAY)
-    mjd: np.ndarray = (whole + _MJD_UNIX) + rest / _NS_PER_DAY
-    return mjd
-
-
-@dataclass(frozen=True)
-class ActivitySigma:
-    """Relative 1-sigma density error growing with geomagnetic activity:
-    sigma/mean = ``quiet`` + (``storm`` - ``quiet``) * clip(activity / ``full_at``, 0, 1),
-    with activity the family's own geomagnetic driver (dTc in K for JB2008, Kp for
-    Jacchia-Roberts). Defaults and sources: docs/density-models.md."""
-
-    quiet: float
-    storm: float
-    full_at: float
-
-    def __post_init__(self) -> None:
-        for name in ("quiet", "storm", "full_at"):
-            value = _validate.real(name, getattr(self, name))
-            if value < 0:
-                raise ValueError(f"{name} must be >= 0, got {value}")
-        if self.full_at <= 0:
-            raise ValueError(f"full_at must be > 0, got {self.full_at}")
-
-    def relative(self, activity: np.ndarray) -> np.ndarray:
-        """sigma/mean at the given activity."""
-        w = np.clip(np.asarray(activity, dtype=float) / self.full_at, 0.0, 1.0)
-        rel: np.ndarray = self.quiet + (self.storm - self.quiet) * w
-        return rel
-
-
 #: JB2008's default: 12 % quiet, 27 % in storms (Bruinsma & Boniface 2021: std of
 #: observed/model over 28 storms), full at dTc = 150 K (Kp ~ 7, a strong storm).
 JB2008_SIGMA = ActivitySigma(quiet=0.12, storm=0.27, full_at=150.0)
 
 
-class Jb2008(SampledModel):
+class Jb2008(PointModel):
     """JB2008 mean density (the model's own output) with :class:`ActivitySigma`.
 
     Args:
@@ -366,8 +329,7 @@ class Jb2008(SampledModel):
             mean, std = m.mean_std(np.datetime64("2002-09-07T12:00"), 10.0, 20.0, 400e3)
     """
 
-    #: Lowest altitude the model accepts, m.
-    FLOOR = 90e3
+    NAME = "JB2008"
 
     def __init__(
         self,
@@ -397,21 +359,18 @@ class Jb2008(SampledModel):
             ix[:, 8] = self.dtc
         return ix
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
-        geodetic ``lat``/``lon`` (deg) and ``alt`` (m, >= 90 km), broadcast together."""
-        t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
-        shape = la.shape
-        t, la, lo, al = (np.ascontiguousarray(a.ravel()) for a in (t, la, lo, al))
-        if len(t) == 0:
-            return np.zeros(shape), np.zeros(shape)
-        below = al < self.FLOOR
-        if below.any():
-            raise ValueError(f"alt = {al[below][0]} m is below JB2008's floor of 90 km")
-        ix = self.drivers(t)
-        _, _, rho = _core.jb2008_geodetic(modified_julian_date(t), la, lo, al, ix)
-        sigma = self.uncertainty.relative(ix[:, 8]) * rho
-        return rho.reshape(shape), sigma.reshape(shape)
+    def _evaluate(
+        self,
+        mjd: np.ndarray,
+        lat: np.ndarray,
+        lon: np.ndarray,
+        alt: np.ndarray,
+        drivers: np.ndarray,
+    ) -> np.ndarray:
+        return np.asarray(_core.jb2008_geodetic(mjd, lat, lon, alt, drivers)[2])
+
+    def _activity(self, drivers: np.ndarray) -> np.ndarray:
+        return drivers[:, 8]  # dTc, K
 
     def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
         days = np.arange(
