@@ -63,6 +63,23 @@ fn triple<'py>(py: Python<'py>, out: &[Jb2008Output]) -> Triple<'py> {
     )
 }
 
+/// Views of named point arrays (times, latitudes, longitudes, altitudes), all of the first
+/// one's length.
+fn points<'a, 'py>(
+    arrays: [(&str, &'a PyReadonlyArray1<'py, f64>); 4],
+) -> PyResult<[ArrayView1<'a, f64>; 4]> {
+    let views = [
+        vector(arrays[0].0, arrays[0].1)?,
+        vector(arrays[1].0, arrays[1].1)?,
+        vector(arrays[2].0, arrays[2].1)?,
+        vector(arrays[3].0, arrays[3].1)?,
+    ];
+    for (k, v) in views.iter().enumerate().skip(1) {
+        check_len(arrays[k].0, v.len(), views[0].len())?;
+    }
+    Ok(views)
+}
+
 /// The JB2008 routine called as the reference is: modified Julian dates ``amjd`` (n,),
 /// ``geometry`` (n, 5) = Sun right ascension, Sun declination, point right ascension,
 /// point latitude (rad) and altitude (km), ``indices`` (n, 9) = F10, F10B, S10, S10B, M10,
@@ -107,15 +124,7 @@ pub fn jb2008_geodetic<'py>(
     alt: PyReadonlyArray1<'py, f64>,
     indices: PyReadonlyArray2<'py, f64>,
 ) -> PyResult<Triple<'py>> {
-    let t = vector("amjd", &amjd)?;
-    let (la, lo, al): (ArrayView1<f64>, ArrayView1<f64>, ArrayView1<f64>) = (
-        vector("lat", &lat)?,
-        vector("lon", &lon)?,
-        vector("alt", &alt)?,
-    );
-    check_len("lat", la.len(), t.len())?;
-    check_len("lon", lo.len(), t.len())?;
-    check_len("alt", al.len(), t.len())?;
+    let [t, la, lo, al] = points([("amjd", &amjd), ("lat", &lat), ("lon", &lon), ("alt", &alt)])?;
     let ix = rows("indices", &indices, 9)?;
     check_len("indices", ix.nrows(), t.len())?;
     let out = par_eval(py, t.len(), |i| {
@@ -137,15 +146,7 @@ pub fn jacchia_roberts_geodetic<'py>(
     alt: PyReadonlyArray1<'py, f64>,
     drivers: PyReadonlyArray2<'py, f64>,
 ) -> PyResult<Triple<'py>> {
-    let t = vector("mjd", &mjd)?;
-    let (la, lo, al) = (
-        vector("lat", &lat)?,
-        vector("lon", &lon)?,
-        vector("alt", &alt)?,
-    );
-    check_len("lat", la.len(), t.len())?;
-    check_len("lon", lo.len(), t.len())?;
-    check_len("alt", al.len(), t.len())?;
+    let [t, la, lo, al] = points([("mjd", &mjd), ("lat", &lat), ("lon", &lon), ("alt", &alt)])?;
     let d = rows("drivers", &drivers, 3)?;
     check_len("drivers", d.nrows(), t.len())?;
     let out = par_eval(py, t.len(), |i| {
