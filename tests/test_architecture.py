@@ -34,10 +34,11 @@ STAGES = {
     "propagation": 3,
     "ensemble": 4,
     "catalog": 5,
-    "studies": 6,
-    "cli": 7,
-    "__main__": 8,
-    "__init__": 8,
+    "conjunction": 6,
+    "studies": 7,
+    "cli": 8,
+    "__main__": 9,
+    "__init__": 9,
 }
 
 
@@ -134,8 +135,8 @@ def test_no_import_cycles():
 def test_heavy_parts_load_lazily():
     code = (
         "import sys, rhoprop as rp; rp.propagate; "
-        "heavy = [m for m in ('rhoprop.catalog', 'rhoprop.studies', 'matplotlib', 'sgp4', "
-        "'pyarrow', 'distributed') if m in sys.modules]; print(heavy)"
+        "heavy = [m for m in ('rhoprop.catalog', 'rhoprop.conjunction', 'rhoprop.studies', "
+        "'matplotlib', 'sgp4', 'pyarrow', 'distributed') if m in sys.modules]; print(heavy)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

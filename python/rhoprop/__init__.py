@@ -3,8 +3,8 @@ thermospheric density. Rust core, numpy in and out; SI units (m, m/s, s, kg/m^3)
 
 The package is laid out by stage of the data flow, each importing only from stages
 below it (docs/architecture.md): time, frames, constants, errors -> spaceweather ->
-density -> propagation -> ensemble -> catalog -> studies -> cli. The catalog, the studies
-and the ``io``/``scenarios`` aliases load on first use.
+density -> propagation -> ensemble -> catalog -> conjunction -> studies -> cli. The catalog,
+the conjunction tools, the studies and the ``io``/``scenarios`` aliases load on first use.
 """
 
 from __future__ import annotations
@@ -40,13 +40,14 @@ from .spaceweather import SpaceWeather
 from .time import seconds_since_j2000, to_datetime64
 
 if TYPE_CHECKING:
-    from . import catalog, studies
+    from . import catalog, conjunction, studies
     from .catalog import export as io
     from .studies import scenarios
 
 #: Heavy or optional parts, imported on first attribute access (PEP 562).
 _LAZY = {
     "catalog": "rhoprop.catalog",
+    "conjunction": "rhoprop.conjunction",
     "studies": "rhoprop.studies",
     "io": "rhoprop.catalog.export",
     "scenarios": "rhoprop.studies.scenarios",
@@ -84,6 +85,7 @@ __all__ = [
     "__version__",
     "catalog",
     "ccsp",
+    "conjunction",
     "debias_drag_coefficient",
     "density",
     "ensemble",
