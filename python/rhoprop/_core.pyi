@@ -12,6 +12,7 @@ _F64 = npt.NDArray[np.float64]
 
 __all__ = [
     "DEFAULT_FLOOR_ALTITUDE",
+    "HARD_BODY_SHAPES",
     "J2",
     "KAPPA_KINDS",
     "MAX_STEPS",
@@ -35,6 +36,8 @@ __all__ = [
     "jb2008_core",
     "jb2008_geodetic",
     "monte_carlo",
+    "pc_2d",
+    "pc_pairs",
     "propagate",
     "rtn_basis",
     "simd_path",
@@ -52,6 +55,8 @@ DEFAULT_FLOOR_ALTITUDE: float
 MAX_STEPS: int
 # Names of the kappa processes: the first item of monte_carlo's kappa spec.
 KAPPA_KINDS: tuple[str, ...]
+# Names of the hard-body shapes pc_2d accepts.
+HARD_BODY_SHAPES: tuple[str, ...]
 
 def simd_path() -> str:
     """Instruction set of the batch kernels on this CPU: "avx2+fma" or "portable"."""
@@ -173,3 +178,24 @@ def jacchia_roberts_geodetic(
 ) -> tuple[_F64, _F64, _F64]:
     """Jacchia-Roberts 1971 at MJD (UTC), lat/lon deg, alt m (>= 90 km), drivers (n, 3)
     [F10.7, F10.7a, Kp] -> (Tinf K, T K, rho kg/m^3)."""
+
+def pc_2d(
+    r1: _F64,
+    v1: _F64,
+    cov1: _F64,
+    r2: _F64,
+    v2: _F64,
+    cov2: _F64,
+    hard_body_radius: float,
+    shape: str,
+    npd: str,
+) -> tuple[float, float, float, _F64, bool, _F64, _F64]:
+    """Short-encounter 2-D Pc: inertial r (3,) m, v (3,) m/s, position covariances
+    (3, 3) m^2 -> (pc, miss distance m, relative speed m/s, covariance integrated (2, 2)
+    m^2, repaired, projected covariance (2, 2) m^2, encounter axes (3, 3) rows x, y, z)."""
+
+def pc_pairs(
+    members1: _F64, members2: _F64, hard_body_radius: float
+) -> tuple[int, int, float, float]:
+    """Monte Carlo Pc over all pairs of member states (n1, 6), (n2, 6) (m, m/s) ->
+    (hits, pairs, pc, variance)."""

@@ -15,6 +15,7 @@
 //! - [`simd`]: the batch lane width and the runtime instruction-set dispatch;
 //! - [`progress`]: progress and cancellation of long calls;
 //! - [`propagate`], [`montecarlo`], [`ccsp`]: the three runs the binding exposes;
+//! - [`conjunction`]: probability of collision (2-D Gaussian Pc, Monte Carlo pair count);
 //! - [`error`]: what can go wrong, with messages fit for the user.
 
 // Structure-of-arrays lane loops index several arrays in lockstep; iterator rewrites of
@@ -22,6 +23,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod ccsp;
+pub mod conjunction;
 pub mod constants;
 pub mod decay;
 pub mod density;

@@ -4,6 +4,7 @@
 
 mod arrays;
 mod ccsp;
+mod conjunction;
 mod constants;
 mod density;
 mod errors;
@@ -38,6 +39,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::geodetic_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::rtn_basis, m)?)?;
     models::register(m)?;
+    conjunction::register(m)?;
     constants::register(m)?;
     Ok(())
 }

@@ -1,0 +1,118 @@
+//! Probability of collision: the 2-D Gaussian Pc and the Monte Carlo pair count.
+
+use crate::arrays::{fixed, rows};
+use crate::errors::to_py;
+use crate::long_call::long_call;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+use rhoprop_core::conjunction::{self, HardBodyShape, NpdPolicy};
+
+/// A (3, 3) matrix, row-major.
+fn matrix3(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<[[f64; 3]; 3]> {
+    let v = a.as_array();
+    if v.shape() != [3, 3] {
+        return Err(PyValueError::new_err(format!(
+            "{name} must have shape (3, 3), got {:?}",
+            v.shape()
+        )));
+    }
+    Ok(std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]])))
+}
+
+fn array2<const R: usize, const C: usize>(m: &[[f64; C]; R]) -> Array2<f64> {
+    Array2::from_shape_fn((R, C), |(i, j)| m[i][j])
+}
+
+/// (pc, miss distance m, relative speed m/s, encounter covariance used (2, 2) m^2,
+/// repaired, projected covariance before repair (2, 2) m^2, encounter axes (3, 3)).
+type Pc2dOut<'py> = (
+    f64,
+    f64,
+    f64,
+    Bound<'py, PyArray2<f64>>,
+    bool,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+/// Short-encounter 2-D Pc of two objects at TCA; see `rhoprop.conjunction.pc_2d` for the
+/// documented API. Inertial r (3,) m, v (3,) m/s, position covariances (3, 3) m^2.
+/// Returns (pc, miss_distance, relative_speed, covariance (2, 2), repaired,
+/// projected_covariance (2, 2), axes (3, 3) rows x, y, z).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub fn pc_2d<'py>(
+    py: Python<'py>,
+    r1: PyReadonlyArray1<'py, f64>,
+    v1: PyReadonlyArray1<'py, f64>,
+    cov1: PyReadonlyArray2<'py, f64>,
+    r2: PyReadonlyArray1<'py, f64>,
+    v2: PyReadonlyArray1<'py, f64>,
+    cov2: PyReadonlyArray2<'py, f64>,
+    hard_body_radius: f64,
+    shape: &str,
+    npd: &str,
+) -> PyResult<Pc2dOut<'py>> {
+    let shape = HardBodyShape::from_name(shape).map_err(to_py)?;
+    let npd = NpdPolicy::from_name(npd).map_err(to_py)?;
+    let out = conjunction::pc_2d(
+        fixed::<3>("r1", &r1)?,
+        fixed::<3>("v1", &v1)?,
+        &matrix3("cov1", &cov1)?,
+        fixed::<3>("r2", &r2)?,
+        fixed::<3>("v2", &v2)?,
+        &matrix3("cov2", &cov2)?,
+        hard_body_radius,
+        shape,
+        npd,
+    )
+    .map_err(to_py)?;
+    Ok((
+        out.pc,
+        out.encounter.miss_distance,
+        out.encounter.relative_speed,
+        array2(&out.covariance).into_pyarray(py),
+        out.repaired,
+        array2(&out.encounter.covariance).into_pyarray(py),
+        array2(&out.encounter.axes).into_pyarray(py),
+    ))
+}
+
+/// Monte Carlo Pc over all pairs of member states (n1, 6) and (n2, 6) (m, m/s): the
+/// fraction of pairs whose straight-line relative motion passes within the hard-body
+/// radius. Returns (hits, pairs, pc, variance). Runs with the GIL released; Ctrl-C
+/// cancels it.
+#[pyfunction]
+pub fn pc_pairs(
+    py: Python<'_>,
+    members1: PyReadonlyArray2<'_, f64>,
+    members2: PyReadonlyArray2<'_, f64>,
+    hard_body_radius: f64,
+) -> PyResult<(u64, u64, f64, f64)> {
+    let to_rows = |name: &str, a: &PyReadonlyArray2<'_, f64>| -> PyResult<Vec<[f64; 6]>> {
+        let v = rows(name, a, 6)?;
+        Ok((0..v.nrows())
+            .map(|i| std::array::from_fn(|k| v[[i, k]]))
+            .collect())
+    };
+    let m1 = to_rows("members1", &members1)?;
+    let m2 = to_rows("members2", &members2)?;
+    let out = long_call(py, None, |p| {
+        conjunction::pc_pairs(&m1, &m2, hard_body_radius, p)
+    })?;
+    Ok((out.hits, out.pairs, out.pc, out.variance))
+}
+
+/// Registers the conjunction functions (one line in `lib.rs`).
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(pc_2d, m)?)?;
+    m.add_function(wrap_pyfunction!(pc_pairs, m)?)?;
+    m.add(
+        "HARD_BODY_SHAPES",
+        PyTuple::new(m.py(), HardBodyShape::NAMES)?,
+    )?;
+    Ok(())
+}
