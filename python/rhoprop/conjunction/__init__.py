@@ -3,4 +3,33 @@ objects (``approach``), the probability of collision for Gaussian states, Gaussi
 mixtures and Monte Carlo members (``probability``), and CCSDS conjunction data messages
 (``cdm``). Positions m, velocities m/s, covariances m^2, hard-body radius m."""
 
-__all__: list[str] = []
+from .approach import CloseApproach, ScreeningResult, closest_approach, screen
+from .cdm import CdmObject, ConjunctionMessage, read_cdm, write_cdm
+from .probability import (
+    MixturePcResult,
+    MonteCarloPcResult,
+    PcResult,
+    pc_2d,
+    pc_mixture,
+    pc_monte_carlo,
+)
+from .with_density import DensityPc, density_pc
+
+__all__: list[str] = [
+    "CdmObject",
+    "CloseApproach",
+    "ConjunctionMessage",
+    "DensityPc",
+    "MixturePcResult",
+    "MonteCarloPcResult",
+    "PcResult",
+    "ScreeningResult",
+    "closest_approach",
+    "density_pc",
+    "pc_2d",
+    "pc_mixture",
+    "pc_monte_carlo",
+    "read_cdm",
+    "screen",
+    "write_cdm",
+]

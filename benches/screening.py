@@ -1,0 +1,131 @@
+"""Close-approach screening throughput: one LEO primary against the real CelesTrak
+snapshot of 2023-11-13 (``$RHOPROP_TEST_DATA/catalogs``; objects with B* <= 0 cannot be
+loaded without a fit and are left out) over 3 days, with ``rp.conjunction.screen``.
+Prints the counts after each stage, the time per stage (thread-seconds: the stages run
+interleaved, object by object, on the worker threads) and objects per second per stage
+(objects entering the stage / (thread-seconds / threads)) and for the whole screen
+(secondaries / wall-clock time). Writes ``benches/results/screening.json``.
+
+Run:  RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py
+      [--norad 25544] [--days 3] [--distance 5000] [--model exponential|msis]
+"""
+
+from __future__ import annotations
+
+import argparse
+import gzip
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import rhoprop as rp
+from machine import describe, info
+from rhoprop import catalog
+from rhoprop.conjunction import screen
+from rhoprop.conjunction.approach import STAGES
+
+#: The stage each count feeds, and the timing that measures it.
+RATES = (
+    ("radial", "secondaries", "radial"),
+    ("propagation", "radial", "propagation"),
+    ("coarse grid", "propagated", "coarse_grid"),
+    ("interpolated", "coarse_grid", "interpolated"),
+    ("refinement", "interpolated", "refinement"),
+)
+
+
+def main() -> None:
+    print(describe())
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--norad", type=int, action="append", help="primary (default ISS 25544)")
+    parser.add_argument("--days", type=float, default=3.0)
+    parser.add_argument("--distance", type=float, default=5e3, help="screening distance, m")
+    parser.add_argument("--model", choices=("exponential", "msis"), default="exponential")
+    parser.add_argument("--threads", type=int, default=None)
+    parser.add_argument(
+        "--data",
+        default=os.environ.get("RHOPROP_TEST_DATA", str(Path(__file__).parents[2] / "shared/data")),
+        help="reference data directory (default $RHOPROP_TEST_DATA or ../shared/data)",
+    )
+    args = parser.parse_args()
+    snapshot = Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz"
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "active.tle"
+        path.write_text(gzip.open(snapshot, "rt").read())
+        t0 = time.perf_counter()
+        cat = catalog.load(path, errors="skip")
+        load = time.perf_counter() - t0
+    print(f"{len(cat)} objects loaded in {load:.2f} s ({len(cat.skipped)} skipped: B* <= 0)")
+    start = max(o.state.epoch for o in cat)
+    end = start + np.timedelta64(int(args.days * 86400), "s")
+    model = rp.density.Exponential.benchmark() if args.model == "exponential" else rp.density.Msis()
+    runs = []
+    for norad in args.norad or [25544]:
+        prim = next(o for o in cat if o.norad_id == norad)
+        others = [o for o in cat if o.norad_id != norad]
+        res = screen(
+            prim,
+            others,
+            model,
+            start=start,
+            end=end,
+            distance=args.distance,
+            threads=args.threads,
+            progress=False,
+        )
+        print(
+            f"\nprimary {prim.name} ({norad}), {start} + {args.days:g} days, distance "
+            f"{args.distance:g} m, {args.model}, grid {res.grid_step:g} s, {res.threads} threads"
+        )
+        print("counts: " + ", ".join(f"{s} {res.counts[s]}" for s in STAGES))
+        rates = {}
+        for label, fed, timing in RATES:
+            seconds = res.timings[timing]
+            n = res.counts[fed]
+            wall = seconds / (1 if timing == "radial" else res.threads)
+            rate = n / wall if wall > 0 else float("inf")
+            rates[label] = rate
+            print(
+                f"  {label:<13} {n:>6} objects in {seconds:7.2f} thread-s -> "
+                f"{rate:>10,.0f} objects/s"
+            )
+        print(
+            f"  primary (field, propagation) {res.timings['primary']:.2f} s; survivors' "
+            f"density fields {res.timings['field']:.2f} s"
+        )
+        total = res.counts["secondaries"] / res.wall
+        print(
+            f"  whole screen  {res.counts['secondaries']} objects in {res.wall:.2f} s -> "
+            f"{total:,.0f} objects/s; {len(res.events)} events"
+        )
+        for e in res.events[:10]:
+            print(
+                f"    {e.tca} {e.name2:<24} miss {e.miss_distance:8.1f} m  "
+                f"v_rel {e.relative_speed:8.1f} m/s"
+            )
+        runs.append(
+            {
+                "primary": norad,
+                "name": prim.name,
+                "days": args.days,
+                "distance": args.distance,
+                "model": args.model,
+                "counts": res.counts,
+                "timings": res.timings,
+                "wall": res.wall,
+                "threads": res.threads,
+                "objects_per_second": rates,
+                "whole_objects_per_second": total,
+                "events": len(res.events),
+            }
+        )
+    out = Path(__file__).parent / "results" / "screening.json"
+    out.write_text(json.dumps({"machine": info(), "runs": runs}, indent=2, default=str) + "\n")
+
+
+if __name__ == "__main__":
+    main()
