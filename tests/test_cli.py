@@ -6,6 +6,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from rhoprop.cli import main
 
 
@@ -34,10 +36,19 @@ def test_paper_quick_prints_methods_that_agree(capsys, tmp_path):
     assert (tmp_path / "method_comparison.png").stat().st_size > 10_000
     assert (tmp_path / "ccsp_vs_monte_carlo.png").stat().st_size > 10_000
     assert len(summary["ccsp_vs_monte_carlo"]) == 3
+    # The conjunction study: one row per model's mean; the mixture is the weighted sum.
+    conj = summary["conjunction"]
+    assert len(conj["rows"]) == 3
+    for row in conj["rows"]:
+        pcs = list(row["pc_models"].values())
+        assert row["pc_mixture"] == pytest.approx(sum(pcs) / 3, rel=1e-12)
+        lo, hi = row["pc_monte_carlo_interval"]
+        assert 0 <= lo <= row["pc_monte_carlo"] <= hi <= 1
     # Every file went through a temporary name and is listed in the manifest.
     manifest = json.loads((tmp_path / "manifest.json").read_text())
     assert manifest["complete"] and sorted(manifest["files"]) == [
         "ccsp_vs_monte_carlo.png",
+        "conjunction.png",
         "ensembles.png",
         "method_comparison.png",
         "summary.json",

@@ -84,6 +84,21 @@ def _run(args: argparse.Namespace) -> int:
     )
 
 
+def _conjunction(args: argparse.Namespace) -> int:
+    from .studies.conjunction import assess_cdm
+
+    assess_cdm(
+        args.file,
+        hard_body_radius=args.hbr,
+        lead_time=args.lead,
+        method=args.method,
+        members=args.members or 200,
+        drag_parameters=tuple(args.drag) if args.drag else (None, None),
+        json_path=args.json,
+    )
+    return 0
+
+
 def _overwrite(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--overwrite",
@@ -236,6 +251,37 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _overwrite(reentry)
     reentry.set_defaults(run=_reentry)
+    conj = sub.add_parser(
+        "conjunction",
+        help="a CDM's Pc with density-model uncertainty added",
+        description="Read a CCSDS conjunction data message (KVN or XML; needs the "
+        "ccsds-ndm package: pip install 'rhoprop[cdm]'), propagate both objects from "
+        "--lead before TCA through the default density-model families (Cd debiased per "
+        "model) and print the Pc from the message's own covariances, from each model and "
+        "from their mixture.",
+    )
+    conj.add_argument("file", help="CDM file (KVN or XML)")
+    conj.add_argument(
+        "--hbr", type=float, default=None, help="hard-body radius, m (default: the CDM's)"
+    )
+    conj.add_argument(
+        "--lead",
+        type=float,
+        default=None,
+        help="s before TCA the density uncertainty starts (default: TCA - CREATION_DATE)",
+    )
+    conj.add_argument("--method", choices=("ccsp", "monte_carlo"), default="ccsp")
+    conj.add_argument("--members", type=int, default=None, help="Monte Carlo members (200)")
+    conj.add_argument(
+        "--drag",
+        type=float,
+        nargs=2,
+        metavar=("BETA1", "BETA2"),
+        default=None,
+        help="Cd*A/m of the two objects, m^2/kg (default: the CDM's CD_AREA_OVER_MASS)",
+    )
+    conj.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    conj.set_defaults(run=_conjunction)
     data = sub.add_parser("data", help="manage data files (space weather, JB2008 indices)")
     data_sub = data.add_subparsers(dest="data_command", metavar="ACTION")
     refresh = data_sub.add_parser(

@@ -91,18 +91,26 @@ _FALLBACK = (
 
 def case_models(case: str, record: SpaceWeather | None = None) -> dict[str, DensityModel]:
     """The paper's three stand-in models for a case, reference first (see
-    :func:`model_choice`): NRLMSIS 2.1 (driver uncertainty), JB2008 and Jacchia-Roberts
-    1971 (activity-dependent uncertainty) when JB2008 index files are available, else
-    NRLMSIS 2.1, Jacchia-Roberts 1971 and NRLMSISE-00. The simulated cases hold each
+    :func:`model_choice` and :func:`default_models`). The simulated cases hold each
     family's geomagnetic driver at its long-term mean (ap/Kp over 2000-2019 from the
-    record; dTc over the JB2008 file's years within 2000-2019). NRLMSIS 2.0 (equal to 2.1
-    in mass density) is out of the default; use ``Msis("2.0")`` explicitly."""
-    sw = case_space_weather(case, record)
+    record; dTc over the JB2008 file's years within 2000-2019)."""
+    return default_models(case_space_weather(case, record), mean_dtc=case.endswith("-simulated"))
+
+
+def default_models(
+    record: SpaceWeather | None = None, *, mean_dtc: bool = False
+) -> dict[str, DensityModel]:
+    """The default model families on ``record``, reference first: NRLMSIS 2.1 (driver
+    uncertainty), JB2008 and Jacchia-Roberts 1971 (activity-dependent uncertainty) when
+    JB2008 index files are available, else NRLMSIS 2.1, Jacchia-Roberts 1971 and
+    NRLMSISE-00. ``mean_dtc`` holds JB2008's dTc at its 2000-2019 mean. NRLMSIS 2.0 (equal
+    to 2.1 in mass density) is out of the default; use ``Msis("2.0")`` explicitly."""
+    sw = record if record is not None else SpaceWeather()
     names, _, indices = model_choice()
     models: dict[str, DensityModel] = {"NRLMSIS 2.1": Msis("2.1", space_weather=sw)}
     for name in names[1:]:
         if name == "JB2008" and indices is not None:
-            dtc = indices.mean_dtc(*MEAN_YEARS) if case.endswith("-simulated") else None
+            dtc = indices.mean_dtc(*MEAN_YEARS) if mean_dtc else None
             models[name] = Jb2008(indices, dtc=dtc)
         elif name == "Jacchia-Roberts 1971":
             models[name] = JacchiaRoberts(sw)
