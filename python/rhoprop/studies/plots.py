@@ -227,7 +227,7 @@ def conjunction_figure(self: ConjunctionStudy, path: str | Path) -> Path:
     ax.set_xlabel("secondary's offset along the encounter-plane track axis [km]")
     ax.set_ylabel("probability of collision")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="center left")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3)
     ax.set_title(
         f"Pc per density model vs the mixture: HBR {self.hard_body_radius:g} m, crossing "
         f"{self.crossing_angle:g} deg ({self.relative_speed / 1e3:.1f} km/s), secondary "
