@@ -373,3 +373,19 @@ def test_dask_survives_a_worker_dying_mid_run(local_result):
     assert killed_while_running
     np.testing.assert_array_equal(out["r"].mean, local_result.mean)
     np.testing.assert_array_equal(out["r"].covariance, local_result.covariance)
+
+
+def test_load_reads_gzip_compressed_catalogs(test_data, tmp_path):
+    import gzip
+
+    src = test_data / "catalogs" / "celestrak_active_20231113.txt.gz"
+    plain = tmp_path / "active.txt"
+    plain.write_bytes(gzip.decompress(src.read_bytes()))
+    a = rp.catalog.load(src, errors="skip")
+    b = rp.catalog.load(plain, errors="skip")
+    assert len(a) == len(b) > 1000 and len(a.skipped) == len(b.skipped)
+    assert [o.norad_id for o in a] == [o.norad_id for o in b]
+    damaged = tmp_path / "damaged.txt.gz"
+    damaged.write_bytes(src.read_bytes()[:500])
+    with pytest.raises(ValueError, match="damaged gzip"):
+        rp.catalog.load(damaged)

@@ -238,7 +238,7 @@ def load(
     threads: int | None = None,
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
-    serves them), detected by content.
+    serves them), detected by content, plain or gzip-compressed.
 
     Every object gets an initial ``covariance``: the published accuracy of TLE-derived
     states for its regime (:mod:`rhoprop.catalog.covariance`), and a ``covariance_note``
@@ -274,6 +274,13 @@ def load(
         raise ValueError("fit=True needs a density model: load(path, fit=True, model=...)")
     p = Path(path)
     raw = p.read_bytes()
+    if raw[:2] == b"\x1f\x8b":  # gzip, as catalog archives are often stored
+        import gzip
+
+        try:
+            raw = gzip.decompress(raw)
+        except (OSError, EOFError) as err:
+            raise ValueError(f"{p.name}: damaged gzip file ({err})") from err
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as err:
