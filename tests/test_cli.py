@@ -36,6 +36,11 @@ def test_paper_quick_prints_methods_that_agree(capsys, tmp_path):
     assert (tmp_path / "method_comparison.png").stat().st_size > 10_000
     assert (tmp_path / "ccsp_vs_monte_carlo.png").stat().st_size > 10_000
     assert len(summary["ccsp_vs_monte_carlo"]) == 3
+    # What produced the numbers is recorded.
+    import rhoprop
+
+    assert summary["software"]["rhoprop"] == rhoprop.__version__
+    assert summary["seed"] == 0 and "ccsp_update_interval_s" in summary["kappa"]
     # The conjunction study: one row per model's mean; the mixture is the weighted sum.
     conj = summary["conjunction"]
     assert len(conj["rows"]) == 3

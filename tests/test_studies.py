@@ -41,5 +41,8 @@ def test_ccsp_vs_monte_carlo_on_analytic_models(tmp_path):
     # The CCSP spread is ~1.5x the Gauss-Markov 18 min Monte Carlo (DESIGN.md section 6).
     ratio = c.ccsp_std[keys[0]] / c.mc_along[keys[0]].std(ddof=1)
     assert 1.2 < ratio < 1.9, ratio
+    # The figure states the long-time ratio: sqrt(2 dt / (2 tau)), tau = 1080 s / ln 2.
+    assert c.expected_ratio() == pytest.approx(np.sqrt(3600.0 / (1080.0 / np.log(2))), rel=1e-12)
+    assert c.members == 200 and c.update_interval == 3600.0
     assert "| CCSP/MC std |" in c.table()
     assert c.figure(tmp_path / "fig6.png").stat().st_size > 10_000

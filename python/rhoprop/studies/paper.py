@@ -26,6 +26,8 @@ METHODS: dict[str, kappa.KappaProcess] = {
     "gauss_markov_18min": kappa.GaussMarkov(1080.0),
     "gauss_markov_180min": kappa.GaussMarkov(10800.0),
 }
+#: The Monte Carlo process of the paper's Fig. 5 and 6 (frozen, shared as a default).
+_GAUSS_MARKOV_18MIN = kappa.GaussMarkov(1080.0)
 #: Ratios of 3-day along-track std and their long-time values, sqrt(D1 / D2).
 RATIOS = [
     ("gauss_markov_180min", "gauss_markov_18min"),
@@ -45,12 +47,14 @@ class MethodComparison:
         traces: per method, (times s, densities (5, nt) kg/m^3) of the first five members
             over the first 3 h; ``mean_trace`` the mean density along the mean orbit.
         along_track_std: 3-day along-track standard deviation per method, m.
+        model: label of the density model.
     """
 
     results: dict[str, MonteCarloResult]
     traces: dict[str, tuple[np.ndarray, np.ndarray]]
     mean_trace: dict[str, np.ndarray]
     along_track_std: dict[str, float]
+    model: str = ""
 
     def ratios(self) -> list[tuple[str, str, float, float]]:
         """(method a, method b, measured std_a / std_b, long-time theory sqrt(D_a / D_b))."""
@@ -149,7 +153,7 @@ def method_comparison(
         assert trace.densities is not None  # record_density=True
         traces[key] = (trace.times, trace.densities)
         mean_trace[key] = _mean_density(model, trace)
-    return MethodComparison(results, traces, mean_trace, stds)
+    return MethodComparison(results, traces, mean_trace, stds, model_label(model))
 
 
 def _mean_density(model: Any, result: MonteCarloResult) -> np.ndarray:
@@ -173,7 +177,8 @@ class CcspComparison:
     """Results of :func:`ccsp_vs_monte_carlo`: per configuration (label), the Monte Carlo
     along-track errors at the end (of the members still flying) and the CCSP along-track
     mean and std, all relative to
-    the reference mean orbit (reference model, Cd_ref), m; the Cd used; run times, s."""
+    the reference mean orbit (reference model, Cd_ref), m; the Cd used; run times, s;
+    the CCSP update interval, s, and the Monte Carlo's kappa process and member count."""
 
     mc_along: dict[str, np.ndarray]
     ccsp_mean: dict[str, float]
@@ -181,6 +186,17 @@ class CcspComparison:
     cd: dict[str, float]
     seconds: dict[str, tuple[float, float]]
     duration: float
+    update_interval: float = 3600.0
+    mc_kappa: kappa.KappaProcess = _GAUSS_MARKOV_18MIN
+    members: int = 0
+
+    def expected_ratio(self) -> float:
+        """CCSP/Monte Carlo along-track std expected at long times: the CCSP is the
+        linearised covariance of kappa piecewise constant over each update interval with
+        correlation 1/3 between intervals (docs/conventions.md), so the ratio is
+        sqrt(D_ccsp / D_mc) of the two processes' correlation times."""
+        equivalent = kappa.PiecewiseConstant(self.update_interval, 1.0 / 3.0)
+        return float(np.sqrt(equivalent.correlation_time() / self.mc_kappa.correlation_time()))
 
     def table(self) -> str:
         """Markdown table: Cd, MC and CCSP along-track mean/std, their ratio, timings."""
@@ -261,7 +277,17 @@ def ccsp_vs_monte_carlo(
         cstd[label] = float(cc.along_track_std[-1])
         cds[label] = cd
         seconds[label] = (t1 - t0, t2 - t1)
-    return CcspComparison(along, cmean, cstd, cds, seconds, float(duration))
+    return CcspComparison(
+        along,
+        cmean,
+        cstd,
+        cds,
+        seconds,
+        float(duration),
+        update_interval=float(update_interval),
+        mc_kappa=_GAUSS_MARKOV_18MIN,
+        members=n,
+    )
 
 
 def case_ensembles(

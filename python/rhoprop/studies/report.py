@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -18,7 +19,7 @@ from ..spaceweather import SpaceWeather
 from . import scenarios
 from .conjunction import ConjunctionStudy, conjunction_study, most_disputed
 from .paper import case_ensembles, ccsp_vs_monte_carlo, method_comparison
-from .plots import ensemble_figure
+from .plots import days_text, ensemble_figure
 
 
 def _stage(title: str, start: float) -> None:
@@ -101,7 +102,9 @@ def run_paper(
     figures.append(out / "ccsp_vs_monte_carlo.png")
     print(versus.table())
 
+    settings = _settings(members, duration, record)
     summary = {
+        **settings,
         "members": members,
         "duration_s": duration,
         "method_comparison": comparison.along_track_std,
@@ -137,7 +140,9 @@ def run_paper(
     days = f"{duration / 86400:g}"
     folder.write_text(
         "summary.md",
-        f"# rhoprop paper study\n\n{members} members per Monte Carlo run, {days} days.\n\n"
+        f"# rhoprop paper study\n\n{members} members per Monte Carlo run, "
+        f"{days_text(duration)}.\n\n"
+        f"{_settings_text(settings)}\n\n"
         f"## Method comparison (Fig. 4)\n\n{comparison.table()}\n\n"
         f"## Ensembles (Fig. 5): along-track at {days} days\n\n"
         f"Models: {', '.join(model_names)} (reference {scenarios.REFERENCE_MODEL}): "
@@ -152,6 +157,60 @@ def run_paper(
     for path in written:
         print(f"  wrote {path}")
     return written
+
+
+def _settings(members: int, duration: float, record: SpaceWeather) -> dict[str, Any]:
+    """What produced the numbers: versions, seeds, processes, models, state."""
+    from importlib import metadata
+
+    from .. import __version__
+    from .._core import simd_path
+    from .paper import METHODS
+
+    def version(package: str) -> str:
+        try:
+            return metadata.version(package)
+        except metadata.PackageNotFoundError:
+            return "not installed"
+
+    state, craft = scenarios.paper_state(), scenarios.paper_spacecraft()
+    return {
+        "software": {
+            "rhoprop": __version__,
+            "simd_path": simd_path(),
+            **{p: version(p) for p in ("numpy", "pymsis", "spaceweather", "matplotlib")},
+        },
+        "seed": 0,
+        "space_weather": record.source,
+        "spacecraft": {"cd_ref": craft.cd, "area_to_mass_m2_kg": craft.area_to_mass},
+        "initial_state_case_i": {
+            "epoch": str(state.epoch) + "Z",
+            "position_m": [float(x) for x in state.position],
+            "velocity_m_s": [float(x) for x in state.velocity],
+        },
+        "kappa": {
+            "method_comparison": {k: repr(v) for k, v in METHODS.items()},
+            "ensembles_and_ccsp_comparison_monte_carlo": "GaussMarkov(half_life=1080.0)",
+            "ccsp_update_interval_s": 3600.0,
+            "perturbation": "additive (rho = mean + kappa sigma)",
+        },
+        "integrator": "RK8, 180 s step (White 10 s: RK4 at 10 s); J2 only",
+        "members": members,
+        "duration_s": duration,
+    }
+
+
+def _settings_text(settings: dict[str, Any]) -> str:
+    sw = settings["software"]
+    versions = ", ".join(f"{k} {v}" for k, v in sw.items() if k != "simd_path")
+    return (
+        f"Settings: {versions}; SIMD path {sw['simd_path']}; seed {settings['seed']}; "
+        f"integrator {settings['integrator']}; Monte Carlo kappa "
+        f"{settings['kappa']['ensembles_and_ccsp_comparison_monte_carlo']} (ensembles, Fig. 6), "
+        f"CCSP update interval {settings['kappa']['ccsp_update_interval_s']:g} s; space "
+        f"weather {settings['space_weather']}; Cd_ref {settings['spacecraft']['cd_ref']}, A/m "
+        f"{settings['spacecraft']['area_to_mass_m2_kg']:g} m^2/kg."
+    )
 
 
 def _conjunction_text(conj: ConjunctionStudy) -> str:
