@@ -159,3 +159,18 @@ def test_example_scenario_is_valid():
 
     sc = load_scenario(Path(__file__).parents[1] / "examples" / "scenario.toml")
     assert sc["reference"] == "NRLMSIS 2.1" and sc["options"]["n"] == 500
+
+
+def test_example_scenario_switches_method_with_one_word(tmp_path):
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "examples" / "scenario.toml").read_text()
+    path = tmp_path / "ccsp.toml"
+    path.write_text(text.replace('kind = "monte_carlo"', 'kind = "ccsp"'))
+    sc = load_scenario(path)
+    assert sc["method"] == "ccsp"
+    assert sc["options"] == {"perturbation": "additive", "update_interval": 3600.0}
+    # The sub-tables are checked for their own method's keys.
+    path.write_text(text.replace("update_interval = 3600.0", "members = 3"))
+    with pytest.raises(ScenarioError, match=r"method\.ccsp has unknown key"):
+        load_scenario(path)

@@ -125,6 +125,19 @@ def ccsp_comparison_figure(self: CcspComparison, path: str | Path) -> Path:
     return out
 
 
+def method_text(ens: EnsembleResult) -> str:
+    """'Monte Carlo, Gauss-Markov 18 min, 1000 members' or 'CCSP, update 60 min'."""
+    result = ens.results[ens.reference]
+    process = getattr(result, "kappa", None)
+    if process is not None:
+        n = np.asarray(getattr(result, "positions", np.empty((0,)))).shape[0]
+        return f"Monte Carlo, {kappa_text(process)}, {n} members per model"
+    steps = np.diff(np.asarray(result.times))
+    if len(steps) and np.allclose(steps[:-1], steps[0]):
+        return f"CCSP, update {steps[0] / 60:g} min"
+    return "CCSP"
+
+
 def kappa_text(process: object) -> str:
     """'Gauss-Markov 18 min', 'White 10 s', ... for titles."""
     kind = str(getattr(process, "kind", type(process).__name__))
@@ -225,7 +238,7 @@ def ensemble_figure(ensembles: dict[str, EnsembleResult], path: str | Path) -> P
         ax.legend(fontsize=8)
     for ax in axes.ravel()[len(cases) :]:
         ax.set_visible(False)
-    fig.suptitle("Ensemble along-track PDFs (Monte Carlo, Gauss-Markov 18 min)")
+    fig.suptitle(f"Ensemble along-track PDFs ({method_text(ensembles[cases[0]])})")
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)

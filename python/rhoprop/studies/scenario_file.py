@@ -162,32 +162,9 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
 
     me = _table(doc, "method")
     kind = _get(me, "method", "kind", str, "monte_carlo")
-    options: dict[str, Any] = {}
-    if kind == "monte_carlo":
-        _unknown(me, "method", {"kind", "members", "seed", "output_step", "kappa", "perturbation"})
-        options["n"] = _get(me, "method", "members", int, 1000)
-        options["seed"] = _get(me, "method", "seed", int, 0)
-        options["output_step"] = _get(me, "method", "output_step", float, 3600.0)
-        options["perturbation"] = _get(me, "method", "perturbation", str, "additive")
-        if "kappa" in me:
-            kp = _get(me, "method", "kappa", dict)
-            ktype = _get(kp, "method.kappa", "type", str)
-            if ktype not in KAPPA_TYPES:
-                raise ScenarioError(
-                    f"method.kappa.type must be one of {sorted(KAPPA_TYPES)}, got {ktype!r}"
-                )
-            cls, params = KAPPA_TYPES[ktype]
-            _unknown(kp, "method.kappa", params | {"type"})
-            try:
-                options["kappa"] = cls(**{k: float(kp[k]) for k in params if k in kp})
-            except (ValueError, TypeError) as err:
-                raise ScenarioError(f"method.kappa: {err}") from err
-    elif kind == "ccsp":
-        _unknown(me, "method", {"kind", "update_interval", "perturbation"})
-        options["update_interval"] = _get(me, "method", "update_interval", float, 3600.0)
-        options["perturbation"] = _get(me, "method", "perturbation", str, "additive")
-    else:
+    if kind not in ("monte_carlo", "ccsp"):
         raise ScenarioError(f"method.kind must be 'monte_carlo' or 'ccsp', got {kind!r}")
+    options = _method_options(me, kind)
     outp = doc.get("output", {})
     if not isinstance(outp, dict):
         raise ScenarioError("[output] must be a table")
@@ -204,6 +181,56 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
         "duration": duration,
         "options": options,
     }
+
+
+#: Settings of each method; the other method's settings may stay in the file (so switching
+#: ``kind`` is a one-word change) and are then ignored.
+METHOD_KEYS = {
+    "monte_carlo": {"members", "seed", "output_step", "kappa", "perturbation"},
+    "ccsp": {"update_interval", "perturbation"},
+}
+
+
+def _method_options(me: dict[str, Any], kind: str) -> dict[str, Any]:
+    """Options of ``kind`` from ``[method]``: its own keys at the top of the table or in
+    a ``[method.monte_carlo]`` / ``[method.ccsp]`` sub-table; the other method's keys and
+    sub-table are ignored (its sub-table's keys are still checked)."""
+    other = "ccsp" if kind == "monte_carlo" else "monte_carlo"
+    _unknown(
+        me,
+        "method",
+        {"kind", "monte_carlo", "ccsp"} | METHOD_KEYS["monte_carlo"] | METHOD_KEYS["ccsp"],
+    )
+    table = {k: v for k, v in me.items() if k in METHOD_KEYS[kind]}
+    where = "method"
+    if kind in me:
+        sub = _get(me, "method", kind, dict)
+        _unknown(sub, f"method.{kind}", METHOD_KEYS[kind])
+        table.update(sub)
+        where = f"method.{kind}"
+    if other in me:  # unused, but checked: a typo there should not wait for the switch
+        _unknown(_get(me, "method", other, dict), f"method.{other}", METHOD_KEYS[other])
+    options: dict[str, Any] = {"perturbation": _get(table, where, "perturbation", str, "additive")}
+    if kind == "ccsp":
+        options["update_interval"] = _get(table, where, "update_interval", float, 3600.0)
+        return options
+    options["n"] = _get(table, where, "members", int, 1000)
+    options["seed"] = _get(table, where, "seed", int, 0)
+    options["output_step"] = _get(table, where, "output_step", float, 3600.0)
+    if "kappa" in table:
+        kp = _get(table, where, "kappa", dict)
+        ktype = _get(kp, f"{where}.kappa", "type", str)
+        if ktype not in KAPPA_TYPES:
+            raise ScenarioError(
+                f"{where}.kappa.type must be one of {sorted(KAPPA_TYPES)}, got {ktype!r}"
+            )
+        cls, params = KAPPA_TYPES[ktype]
+        _unknown(kp, f"{where}.kappa", params | {"type"})
+        try:
+            options["kappa"] = cls(**{k: float(kp[k]) for k in params if k in kp})
+        except (ValueError, TypeError) as err:
+            raise ScenarioError(f"{where}.kappa: {err}") from err
+    return options
 
 
 def _output_directory(scenario: Path, value: str) -> Path:
