@@ -36,6 +36,7 @@ STAGES = {
     "catalog": 5,
     "conjunction": 6,
     "studies": 7,
+    "plot": 7,
     "cli": 8,
     "__main__": 9,
     "__init__": 9,
@@ -136,7 +137,8 @@ def test_heavy_parts_load_lazily():
     code = (
         "import sys, rhoprop as rp; rp.propagate; "
         "heavy = [m for m in ('rhoprop.catalog', 'rhoprop.conjunction', 'rhoprop.studies', "
-        "'matplotlib', 'sgp4', 'pyarrow', 'distributed') if m in sys.modules]; print(heavy)"
+        "'matplotlib', 'sgp4', 'pyarrow', 'distributed', 'xarray', 'pandas') if m in sys.modules]; "
+        "print(heavy)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

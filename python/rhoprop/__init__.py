@@ -40,7 +40,7 @@ from .spaceweather import SpaceWeather
 from .time import seconds_since_j2000, to_datetime64
 
 if TYPE_CHECKING:
-    from . import catalog, conjunction, studies
+    from . import catalog, conjunction, plot, studies
     from .catalog import export as io
     from .studies import scenarios
 
@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 _LAZY = {
     "catalog": "rhoprop.catalog",
     "conjunction": "rhoprop.conjunction",
+    "plot": "rhoprop.plot",
     "studies": "rhoprop.studies",
     "io": "rhoprop.catalog.export",
     "scenarios": "rhoprop.studies.scenarios",
@@ -93,6 +94,7 @@ __all__ = [
     "io",
     "kappa",
     "monte_carlo",
+    "plot",
     "propagate",
     "scenarios",
     "seconds_since_j2000",

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..plot import ensemble_pdf
 from .scenarios import LABELS
 
 if TYPE_CHECKING:
@@ -161,20 +162,6 @@ def days_text(seconds: float) -> str:
     return "1 day" if days == 1 else f"{days:g} days"
 
 
-def _member_along_track(ens: EnsembleResult, name: str) -> np.ndarray | None:
-    """Along-track offsets (m) of a Monte Carlo model's members from the reference mean
-    orbit at the last output, in its RTN frame (None for a CCSP result)."""
-    from ..frames import rtn_basis
-
-    positions = getattr(ens.results[name], "positions", None)
-    if positions is None:
-        return None
-    ref_p = ens.reference_positions[-1]
-    basis = rtn_basis(ref_p[None], ens.reference_velocities[-1][None])[0]
-    at = (np.asarray(positions)[:, -1] - ref_p) @ basis[1]
-    return np.asarray(at[np.isfinite(at)])
-
-
 def ensemble_figure(ensembles: dict[str, EnsembleResult], path: str | Path) -> Path:
     """Along-track PDFs per case: each model's members as a histogram under its fitted
     normal (dashed), the mixture (bold) and the mixture's modes (triangles); titles give
@@ -188,54 +175,20 @@ def ensemble_figure(ensembles: dict[str, EnsembleResult], path: str | Path) -> P
     axes = fig.subplots(rows, cols, squeeze=False)
     for ax, case in zip(axes.ravel(), cases, strict=False):
         ens = ensembles[case]
-        mix = ens.along_track_mixture()
-        means = ens.component_means[-1, :, 1]
-        stds = np.sqrt(ens.component_covariances[-1, :, 1, 1])
-        lo, hi = (means - 4 * stds).min(), (means + 4 * stds).max()
-        x = np.linspace(lo, hi, 1200)
-        members = 0
-        for i, name in enumerate(ens.names):
-            color = f"C{i}"
-            samples = _member_along_track(ens, name)
-            if samples is not None and len(samples) > 1:
-                members = max(members, len(samples))
-                ax.hist(
-                    samples / 1e3,
-                    bins=40,
-                    range=(lo / 1e3, hi / 1e3),
-                    density=True,
-                    color=color,
-                    alpha=0.25,
-                )
-            ax.plot(
-                x / 1e3,
-                _normal(x, means[i], stds[i]) * 1e3,
-                "--",
-                color=color,
-                lw=1.5,
-                label=f"{name} (Cd {ens.cd[name]:.3f})",
-            )
-        ax.plot(x / 1e3, mix.pdf(x) * 1e3, "k", lw=2.6, label="mixture")
-        modes = np.asarray(mix.modes()).reshape(-1)
-        ax.plot(
-            modes / 1e3,
-            mix.pdf(modes) * 1e3,
-            "kv",
-            ms=9,
-            label=f"mixture mode{'s' if len(modes) != 1 else ''} ({len(modes)})",
+        ensemble_pdf(ens, ax=ax)
+        members = max(
+            (
+                np.asarray(getattr(r, "positions", np.empty(0))).shape[0]
+                for r in ens.results.values()
+            ),
+            default=0,
         )
         epoch = str(ens.results[ens.reference].epoch)[:16].replace("T", " ")
         count = f", {members} members per model" if members else ""
-        ax.set_title(
-            f"{case} ({epoch} UTC){count}\n{', '.join(ens.names)}",
-            fontsize=9,
-        )
+        ax.set_title(f"{case} ({epoch} UTC){count}\n{', '.join(ens.names)}", fontsize=9)
         ax.set_xlabel(
             f"along-track after {days_text(ens.times[-1])} vs the {ens.reference} mean orbit [km]"
         )
-        ax.set_ylabel("PDF [1/km]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
     for ax in axes.ravel()[len(cases) :]:
         ax.set_visible(False)
     fig.suptitle(f"Ensemble along-track PDFs ({method_text(ensembles[cases[0]])})")

@@ -163,7 +163,7 @@ def _settings(members: int, duration: float, record: SpaceWeather) -> dict[str, 
     """What produced the numbers: versions, seeds, processes, models, state."""
     from importlib import metadata
 
-    from .. import __version__
+    from .._version import __version__
     from .._core import simd_path
     from .paper import METHODS
 
