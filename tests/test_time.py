@@ -366,6 +366,78 @@ def test_from_jd_against_astropy_and_sgp4():
     assert abs(epoch - rt.to_datetime64(sat_epoch_datetime(sat))) <= np.timedelta64(1, "us")
 
 
+def test_astropy_formats_and_scales_match_astropys_own_utc():
+    time = pytest.importorskip("astropy.time")
+    rng = np.random.default_rng(17)
+    mjd = rng.uniform(41317.0, 62000.0, 500)  # 1972 .. 2028
+    for scale in ("utc", "tai", "tt", "tcg", "tcb", "tdb"):
+        t = time.Time(mjd, format="mjd", scale=scale)
+        np.testing.assert_array_equal(rt.to_datetime64_array(t), t.utc.datetime64, err_msg=scale)
+    for fmt, values in (
+        ("gps", rng.uniform(0.0, 1.3e9, 50)),  # TAI seconds since 1980-01-06
+        ("unix", rng.uniform(0.0, 1.8e9, 50)),
+        ("cxcsec", rng.uniform(0.0, 6e8, 50)),  # TT seconds since 1998
+        ("decimalyear", rng.uniform(1975.0, 2020.0, 50)),
+        ("jd", rng.uniform(2441317.5, 2462000.5, 50)),
+    ):
+        t = time.Time(values, format=fmt)
+        np.testing.assert_array_equal(rt.to_datetime64_array(t), t.utc.datetime64, err_msg=fmt)
+    # UT1 from the IERS tables astropy ships (offline), 2-D shapes kept.
+    ut1 = time.Time("2002-09-07T01:00:00", scale="ut1")
+    assert rt.to_datetime64(ut1) == ut1.utc.datetime64
+    grid = time.Time([["2002-09-07T01:00", "2003-01-01"], ["2004-02-29T12:00", "2017-01-01"]])
+    out = rt.to_datetime64_array(grid)
+    assert out.shape == (2, 2)
+    np.testing.assert_array_equal(out, grid.datetime64)
+    # A scale that has no UTC is a ValueError naming the argument.
+    with pytest.raises(ValueError, match="start: an astropy Time of scale 'local'"):
+        rt.to_datetime64(time.Time(51544.5, format="mjd", scale="local"), "start")
+
+
+def test_astropy_time_goes_wherever_an_epoch_does():
+    time = pytest.importorskip("astropy.time")
+    tt = time.Time("2002-09-07T01:01:04.184", scale="tt")  # 01:00:00 UTC
+    state = rp.OrbitState(tt, [7e6, 0, 0], [0, 7.5e3, 0])
+    assert state.epoch == ns("2002-09-07T01:00:00")
+    end = time.Time(2452525.5, format="jd", scale="tai")  # 2002-09-08T00:00:00 TAI
+    assert rt.seconds_between(tt, end) == pytest.approx(23 * 3600.0 - 32.0, abs=1e-6)
+
+
+def test_from_jd_against_pyerfa():
+    erfa = pytest.importorskip("erfa")
+    rng = np.random.default_rng(3)
+    whole = np.floor(rng.uniform(2441317.5, 2462000.5, 400)) + 0.5  # midnights, 1972..2028
+    frac = rng.uniform(0.0, 1.0, 400)
+
+    def calendar(scale, d1, d2):
+        iy, im, iday, hmsf = erfa.d2dtf(scale, 9, d1, d2)
+        return np.array(
+            [
+                np.datetime64(f"{y:04d}-{m:02d}-{d:02d}", "ns")
+                + np.timedelta64(int(h[0]) * 3600 + int(h[1]) * 60 + int(h[2]), "s")
+                + np.timedelta64(int(h[3]), "ns")
+                for y, m, d, h in zip(iy, im, iday, hmsf, strict=True)
+            ]
+        )
+
+    # TT and TAI Julian dates: ERFA's own chain TT -> TAI -> UTC, to the nanosecond (its
+    # stretched UTC quasi-JD and calendar agree with each other on leap-second days too).
+    # Some dates just before a leap second (TAI - UTC steps there) are added.
+    steps = np.array([2457754.5, 2457204.5, 2454832.5]) - 1.0  # days before 2017/2015/2009
+    whole_tt, frac_tt = np.concatenate([whole, steps]), np.concatenate([frac, [0.9999] * 3])
+    utc1, utc2 = erfa.taiutc(*erfa.tttai(whole_tt, frac_tt))
+    got = rt.from_jd(whole_tt, frac_tt, scale="tt")
+    assert np.abs((got - calendar("UTC", utc1, utc2)) / np.timedelta64(1, "ns")).max() <= 2
+    utc1, utc2 = erfa.taiutc(whole, frac)
+    got = rt.from_jd(whole, frac, scale="tai")
+    assert np.abs((got - calendar("UTC", utc1, utc2)) / np.timedelta64(1, "ns")).max() <= 2
+    # UTC Julian dates: 86400-s days, as ERFA's on every day without a leap second.
+    days = np.array([rt.is_leap_second_day(d) for d in rt.from_jd(whole)])
+    got = rt.from_jd(whole[~days], frac[~days])
+    expected = calendar("UTC", whole[~days], frac[~days])
+    assert np.abs((got - expected) / np.timedelta64(1, "ns")).max() <= 2  # ns: rounding
+
+
 # -- through the package ---------------------------------------------------------------
 
 

@@ -265,7 +265,13 @@ def _from_datetime(value: _dt.datetime | _dt.date, name: str) -> np.datetime64:
 
 def _from_time(value: Any, name: str) -> NDArray[np.datetime64]:
     """astropy Time (any scale and shape) -> datetime64[ns] UTC array of its shape."""
-    utc = value.utc
+    try:
+        utc = value.utc
+    except Exception as err:  # e.g. scale 'local', or UT1 beyond the IERS tables
+        raise ValueError(
+            f"{name}: an astropy Time of scale {getattr(value, 'scale', '?')!r} that cannot "
+            f"be converted to UTC ({type(err).__name__}: {err})"
+        ) from err
     return _jd_to_datetime64(np.asarray(utc.jd1, float), np.asarray(utc.jd2, float), name)
 
 

@@ -10,7 +10,7 @@ import os
 import re
 import threading
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +27,13 @@ from ..propagation import (
 )
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..propagation.propagate import FIELD_MARGIN, zonal_degree_argument
+from ..propagation.results import (
+    dataset_attrs,
+    epoch_coords,
+    label_coords,
+    moment_vars,
+    optional_import,
+)
 from ..time import (
     EpochLike,
     add_seconds,
@@ -37,6 +44,13 @@ from ..time import (
 )
 from .covariance import paper_covariance
 from .elements import CatalogObject
+
+if TYPE_CHECKING:
+    import pandas
+    import xarray
+
+#: The ``frame`` attribute of catalog datasets: states come from SGP4.
+CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
 
 #: Status of an object in a :class:`CatalogResult`.
 STATUSES = ("propagated", "decayed", "shortened", "failed")
@@ -82,6 +96,83 @@ class CatalogResult:
     reason: np.ndarray
     covariance_note: np.ndarray | None = None
 
+    def to_xarray(self) -> xarray.Dataset:
+        """The run as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
+
+        Dims ``object`` (0 .. n-1, with ``norad_id`` and ``name`` coordinates), ``epoch``
+        (the common output epochs, datetime64[ns] UTC, with ``elapsed`` s since the
+        first), ``state``/``state2`` (x ... vz), ``rtn``/``rtn2`` (R, T, N; RTN of each
+        object's mean). Variables per object and epoch: ``mean``, ``covariance``,
+        ``rtn_covariance``, ``along_track_std`` (NaN where not ``valid``), ``valid``;
+        per object: ``status``, ``reason``, ``decay_epoch`` (NaT: none),
+        ``decay_fraction``, ``drag_parameter`` (m^2/kg), ``object_epoch`` and
+        ``covariance_note``. Attributes: frame (TEME), units, method, rhoprop version.
+        """
+        xr = optional_import("xarray", "CatalogResult.to_xarray()")
+        times = to_seconds(self.epochs, self.epochs[0])
+        data = moment_vars(("object", "epoch"), self.mean, self.covariance, CATALOG_FRAME)
+        n = len(self.objects)
+        notes = self.covariance_note if self.covariance_note is not None else [""] * n
+        data.update(
+            {
+                "valid": (("object", "epoch"), np.asarray(self.valid, dtype=bool)),
+                "status": ("object", _strings([str(v) for v in self.status])),
+                "reason": ("object", _strings([str(v) for v in self.reason])),
+                "decay_epoch": (
+                    "object",
+                    np.asarray(self.decay_epoch, dtype="datetime64[ns]"),
+                    {"long_name": "decay epoch of the mean orbit (NaT: none)"},
+                ),
+                "decay_fraction": (
+                    "object",
+                    np.asarray(self.decay_fraction, dtype=float),
+                    {
+                        "units": "1",
+                        "long_name": "fraction of Monte Carlo members decayed by the end",
+                    },
+                ),
+                "drag_parameter": (
+                    "object",
+                    np.array([o.drag_parameter for o in self.objects], dtype=float),
+                    {"units": "m^2/kg", "long_name": "Cd A/m"},
+                ),
+                "object_epoch": (
+                    "object",
+                    np.array([o.state.epoch for o in self.objects], dtype="datetime64[ns]"),
+                    {"long_name": "epoch of the object's initial state"},
+                ),
+                "covariance_note": ("object", _strings([str(v) for v in notes])),
+            }
+        )
+        ds: xarray.Dataset = xr.Dataset(
+            data,
+            coords={
+                "object": ("object", np.arange(n)),
+                "norad_id": ("object", np.array([o.norad_id for o in self.objects])),
+                "name": ("object", _strings([o.name for o in self.objects])),
+                **epoch_coords(self.epochs, times),
+                **label_coords("state", "state2", "rtn", "rtn2"),
+            },
+            attrs=dataset_attrs(
+                "CatalogResult",
+                CATALOG_FRAME,
+                rtn_frame="RTN of each object's mean state",
+                method=self.method,
+            ),
+        )
+        return ds
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """The per-object summary (:func:`rhoprop.io.summary_table`: NORAD id, name,
+        epoch, status and reason, last valid and decay epochs, RTN 1-sigma at the last
+        valid output in m, what the covariance includes) as a ``pandas.DataFrame``, one
+        row per object in input order (needs pandas, e.g. the ``[xarray]`` extra)."""
+        pd = optional_import("pandas", "CatalogResult.to_pandas()")
+        from .export import summary_table
+
+        frame: pandas.DataFrame = pd.DataFrame(summary_table(self))
+        return frame
+
 
 #: What the covariance of a catalog run includes beside the initial covariance.
 PROPAGATED_NOTE = (
@@ -92,6 +183,13 @@ PROPAGATED_NOTE = (
 
 
 _PAPER_NOTE = "initial covariance: the paper's near-zero 1 mm, 1 um/s (Monte Carlo: none)"
+
+
+def _strings(values: list[str]) -> np.ndarray:
+    """Text per object as an object array (variable-length strings in netCDF)."""
+    out = np.empty(len(values), dtype=object)
+    out[:] = values
+    return out
 
 
 def _initial_covariance(obj: CatalogObject, choice: Any) -> tuple[np.ndarray | None, str]:

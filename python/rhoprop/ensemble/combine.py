@@ -5,7 +5,7 @@ RTN frame of the reference model's mean orbit."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -19,8 +19,21 @@ from ..propagation import (
     monte_carlo,
 )
 from ..propagation.propagate import check_model
+from ..propagation.results import (
+    INERTIAL_FRAME,
+    dataset_attrs,
+    epoch_coords,
+    iso_utc,
+    kappa_attrs,
+    label_coords,
+    optional_import,
+)
+from ..time import offsets_to_epochs
 from .debias import debias_drag_coefficient
 from .mixture import GaussianMixture
+
+if TYPE_CHECKING:
+    import xarray
 
 METHODS = ("monte_carlo", "ccsp")
 
@@ -108,6 +121,95 @@ class EnsembleResult:
             "modes": int(at.n_modes()),
         }
         return {"models": models, "mixture": mixture}
+
+    def to_xarray(self) -> xarray.Dataset:
+        """The ensemble as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
+
+        Dims ``model`` (the model names), ``epoch`` (datetime64[ns] UTC coordinate, with
+        ``elapsed`` s), ``rtn``/``rtn2`` (R, T, N; the RTN frame of the reference mean
+        orbit) and ``component`` (x, y, z). Variables: ``cd`` and ``weight`` per model;
+        ``component_mean`` (m) and ``component_covariance`` (m^2) per model and epoch;
+        ``mixture_along_track_mean`` and ``mixture_along_track_std`` (m, the mixture's
+        along-track moments; NaN where a model has no statistics); the reference mean
+        orbit ``reference_position``/``reference_velocity`` (inertial). Attributes: the
+        reference model, the method, its kappa process, seed and members (Monte Carlo),
+        the initial epoch and the rhoprop version. Each model's own run:
+        ``results[name].to_xarray()``.
+        """
+        xr = optional_import("xarray", "EnsembleResult.to_xarray()")
+        first = self.results[self.reference]
+        means = np.asarray(self.component_means, dtype=float)  # (nt, k, 3)
+        covs = np.asarray(self.component_covariances, dtype=float)  # (nt, k, 3, 3)
+        w = np.asarray(self.weights, dtype=float)
+        mu, var = means[:, :, 1], covs[:, :, 1, 1]
+        ok = np.isfinite(mu).all(axis=1) & np.isfinite(var).all(axis=1)
+        mix_mean = np.where(ok, (mu * w).sum(axis=1), np.nan)
+        second = ((var + mu**2) * w).sum(axis=1)
+        mix_std = np.where(ok, np.sqrt(np.maximum(second - mix_mean**2, 0.0)), np.nan)
+        rtn = "RTN of the reference mean orbit"
+        vec = ("epoch", "component")
+        extra: dict[str, Any] = {}
+        if isinstance(first, MonteCarloResult):
+            extra = {
+                **kappa_attrs(first.kappa),
+                "seed": int(first.seed),
+                "members": len(first.decay_times),
+            }
+        ds: xarray.Dataset = xr.Dataset(
+            {
+                "cd": (
+                    "model",
+                    [self.cd[n] for n in self.names],
+                    {"units": "1", "long_name": "drag coefficient"},
+                ),
+                "weight": ("model", w, {"units": "1", "long_name": "mixture weight"}),
+                "component_mean": (
+                    ("model", "epoch", "rtn"),
+                    means.transpose(1, 0, 2),
+                    {"units": "m", "long_name": "mean position offset", "frame": rtn},
+                ),
+                "component_covariance": (
+                    ("model", "epoch", "rtn", "rtn2"),
+                    covs.transpose(1, 0, 2, 3),
+                    {"units": "m^2", "long_name": "position covariance", "frame": rtn},
+                ),
+                "mixture_along_track_mean": (
+                    "epoch",
+                    mix_mean,
+                    {"units": "m", "long_name": "along-track mean of the mixture", "frame": rtn},
+                ),
+                "mixture_along_track_std": (
+                    "epoch",
+                    mix_std,
+                    {"units": "m", "long_name": "along-track std of the mixture", "frame": rtn},
+                ),
+                "reference_position": (
+                    vec,
+                    np.asarray(self.reference_positions, dtype=float),
+                    {"units": "m", "long_name": "reference mean orbit", "frame": INERTIAL_FRAME},
+                ),
+                "reference_velocity": (
+                    vec,
+                    np.asarray(self.reference_velocities, dtype=float),
+                    {"units": "m/s", "long_name": "reference mean orbit", "frame": INERTIAL_FRAME},
+                ),
+            },
+            coords={
+                **epoch_coords(offsets_to_epochs(first.epoch, self.times), self.times),
+                "model": ("model", np.array(self.names, dtype=object)),
+                **label_coords("component", "rtn", "rtn2"),
+            },
+            attrs=dataset_attrs(
+                "EnsembleResult",
+                INERTIAL_FRAME,
+                rtn_frame=rtn,
+                initial_epoch=iso_utc(first.epoch),
+                reference=self.reference,
+                method="monte_carlo" if isinstance(first, MonteCarloResult) else "ccsp",
+                **extra,
+            ),
+        )
+        return ds
 
 
 def ensemble(

@@ -5,22 +5,170 @@ treat a trajectory, a Monte Carlo and a CCSP run alike.
 
 Decay: a Monte Carlo member that decayed is NaN in its positions, velocities, RTN errors
 and densities from its decay time on, and every statistic here is taken over the members
-still flying at each output time (:attr:`MonteCarloResult.survivors`)."""
+still flying at each output time (:attr:`MonteCarloResult.survivors`).
+
+Analysis: every result's ``to_xarray()`` gives a labelled ``xarray.Dataset`` (dims epoch,
+member, component/state/rtn; units and frame in attributes; docs/analysis.md). The
+helpers for those datasets live here too, so that the ensemble and catalog results build
+theirs the same way; xarray and pandas are imported only when a dataset is asked for."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+import importlib
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .. import frames
+from .._version import __version__
 from ..time import offsets_to_epochs
 from .kappa import KappaProcess
 from .state import OrbitState
 
+if TYPE_CHECKING:
+    import xarray
+
 Array = NDArray[Any]
+
+# -- labelled datasets (``to_xarray``; xarray is optional and imported on use) ------------
+
+#: Labels of the ``component`` dimension: a position or velocity vector.
+COMPONENTS = ("x", "y", "z")
+#: Labels of the ``state`` (and ``state2``) dimension: the six state elements.
+STATE_LABELS = ("x", "y", "z", "vx", "vy", "vz")
+#: Labels of the ``rtn`` (and ``rtn2``) dimension: radial, along-track, cross-track.
+RTN_LABELS = ("R", "T", "N")
+#: The ``frame`` attribute of single results: rhoprop's inertial frame (DESIGN.md 3).
+INERTIAL_FRAME = "EME2000 (J2000/GCRF axes, precession-nutation neglected)"
+#: The ``rtn_frame`` attribute: what the RTN components are taken in.
+RTN_FRAME = "RTN of the mean orbit: R = r/|r|, N = r x v/|r x v|, T = N x R"
+_STATE_UNITS = "m (x, y, z), m/s (vx, vy, vz)"
+_COVARIANCE_UNITS = "m^2, m^2/s, m^2/s^2 (position-position, -velocity, velocity-velocity)"
+
+
+def optional_import(module: str, what: str) -> Any:
+    """The optional package ``module`` (xarray, pandas), or a one-line ImportError naming
+    what to install."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise ImportError(
+            f"{what} needs the optional package {module}: pip install 'rhoprop[xarray]'"
+        ) from None
+
+
+def iso_utc(epoch: np.datetime64) -> str:
+    """``epoch`` as an ISO-8601 UTC string (ns, with a ``Z``)."""
+    return f"{np.datetime_as_string(np.asarray(epoch, dtype='datetime64[ns]'))}Z"
+
+
+def dataset_attrs(result_type: str, frame: str, **extra: Any) -> dict[str, Any]:
+    """The attributes every rhoprop dataset carries (netCDF-safe: str, int, float) plus
+    ``extra`` (None values left out)."""
+    attrs: dict[str, Any] = {
+        "title": f"rhoprop {result_type}",
+        "source": f"rhoprop {__version__}",
+        "rhoprop_version": __version__,
+        "result_type": result_type,
+        "frame": frame,
+        "time_scale": "UTC (epoch coordinates); elapsed seconds are SI, leap seconds counted",
+        "units": "SI: m, m/s, s, kg/m^3 (each variable's units attribute)",
+    }
+    attrs.update({k: v for k, v in extra.items() if v is not None})
+    return attrs
+
+
+def kappa_attrs(process: KappaProcess) -> dict[str, Any]:
+    """The kappa process as attributes: ``kappa`` (its kind) and ``kappa_<parameter>``."""
+    out: dict[str, Any] = {"kappa": process.kind}
+    for f in fields(process):  # type: ignore[arg-type]
+        out[f"kappa_{f.name}"] = float(getattr(process, f.name))
+    return out
+
+
+def epoch_coords(epochs: Array, times: Array) -> dict[str, Any]:
+    """The ``epoch`` coordinate (datetime64[ns], UTC) and ``elapsed`` (s since the first
+    epoch of the run) along it."""
+    return {
+        "epoch": (
+            "epoch",
+            np.asarray(epochs, dtype="datetime64[ns]"),
+            {"long_name": "output epoch", "time_scale": "UTC"},
+        ),
+        "elapsed": (
+            "epoch",
+            np.asarray(times, dtype=float),
+            {"units": "s", "long_name": "elapsed SI seconds since initial_epoch"},
+        ),
+    }
+
+
+def label_coords(*names: str) -> dict[str, Any]:
+    """Label coordinates of the named vector dimensions (component, state, state2, rtn,
+    rtn2)."""
+    labels = {
+        "component": COMPONENTS,
+        "state": STATE_LABELS,
+        "state2": STATE_LABELS,
+        "rtn": RTN_LABELS,
+        "rtn2": RTN_LABELS,
+    }
+    return {name: (name, np.array(labels[name])) for name in names}
+
+
+def moment_vars(
+    lead: tuple[str, ...],
+    mean: Array,
+    covariance: Array,
+    frame: str,
+    rtn_covariance: Array | None = None,
+) -> dict[str, Any]:
+    """Dataset variables of state moments with leading dims ``lead`` (ending in
+    ``epoch``): ``mean`` (state), ``covariance`` (state, state2), ``rtn_covariance``
+    (rtn, rtn2; RTN of the mean, computed unless given) and ``along_track_std``."""
+    m = np.asarray(mean, dtype=float)
+    c = np.asarray(covariance, dtype=float)
+    if rtn_covariance is None:
+        basis = rtn_basis(m[..., :3].reshape(-1, 3), m[..., 3:].reshape(-1, 3))
+        pos = c[..., :3, :3].reshape(-1, 3, 3)
+        rtn = np.einsum("tij,tjk,tlk->til", basis, pos, basis).reshape((*c.shape[:-2], 3, 3))
+    else:
+        rtn = np.asarray(rtn_covariance, dtype=float)
+    return {
+        "mean": ((*lead, "state"), m, {"units": _STATE_UNITS, "frame": frame}),
+        "covariance": (
+            (*lead, "state", "state2"),
+            c,
+            {"units": _COVARIANCE_UNITS, "frame": frame},
+        ),
+        "rtn_covariance": (
+            (*lead, "rtn", "rtn2"),
+            rtn,
+            {"units": "m^2", "long_name": "position covariance", "frame": RTN_FRAME},
+        ),
+        "along_track_std": (
+            lead,
+            np.sqrt(rtn[..., 1, 1]),
+            {"units": "m", "long_name": "along-track standard deviation", "frame": RTN_FRAME},
+        ),
+    }
+
+
+def _vector(dims: tuple[str, ...], values: Array, units: str, name: str, frame: str) -> Any:
+    return (
+        dims,
+        np.asarray(values, dtype=float),
+        {"units": units, "long_name": name, "frame": frame},
+    )
+
+
+def _padded(values: Array, nt: int) -> Array:
+    """``values`` (k, ...) on ``nt`` rows, NaN past its end."""
+    out = np.full((nt, *np.shape(values)[1:]), np.nan)
+    out[: len(values)] = values
+    return out
 
 
 @dataclass(frozen=True)
@@ -143,6 +291,33 @@ class Trajectory:
         """The states with zero covariance (a deterministic orbit)."""
         return StateMoments(self.epoch, self.times, self.states, np.zeros((len(self.times), 6, 6)))
 
+    def to_xarray(self) -> xarray.Dataset:
+        """The trajectory as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
+
+        Dims ``epoch`` (datetime64[ns] UTC coordinate, with ``elapsed`` s) and
+        ``component`` (x, y, z); variables ``position`` (m) and ``velocity`` (m/s),
+        inertial; attributes: frame, units, ``initial_epoch``, ``decayed_at_s`` (NaN:
+        no decay), ``evaluations``, ``clipped`` and the rhoprop version.
+        """
+        xr = optional_import("xarray", "Trajectory.to_xarray()")
+        dims = ("epoch", "component")
+        ds: xarray.Dataset = xr.Dataset(
+            {
+                "position": _vector(dims, self.positions, "m", "position", INERTIAL_FRAME),
+                "velocity": _vector(dims, self.velocities, "m/s", "velocity", INERTIAL_FRAME),
+            },
+            coords={**epoch_coords(self.epochs, self.times), **label_coords("component")},
+            attrs=dataset_attrs(
+                "Trajectory",
+                INERTIAL_FRAME,
+                initial_epoch=iso_utc(self.epoch),
+                decayed_at_s=np.nan if self.decayed_at is None else float(self.decayed_at),
+                evaluations=int(self.evaluations),
+                clipped=int(self.clipped),
+            ),
+        )
+        return ds
+
 
 def trajectory_from_core(epoch: np.datetime64, out: tuple[Any, ...]) -> Trajectory:
     """A :class:`Trajectory` from the tuple ``_core.propagate`` returns."""
@@ -196,6 +371,9 @@ class MonteCarloResult:
         reference_positions, reference_velocities: the reference of ``rtn_errors``
             (nt, 3), m and m/s: the mean orbit while it flies; after the mean orbit's
             decay, the sample mean of the surviving members (NaN once none survives).
+        drag_sigma: relative 1-sigma of Cd*A/m the members were drawn with (0: none).
+        drag_factors: factor on Cd*A/m of each member (n,), exp(drag_sigma c) with
+            c ~ N(0, 1) (all 1 when ``drag_sigma`` is 0); None for results built by hand.
     """
 
     epoch: np.datetime64
@@ -212,6 +390,8 @@ class MonteCarloResult:
     step: float
     reference_positions: Array
     reference_velocities: Array
+    drag_sigma: float = 0.0
+    drag_factors: Array | None = None
 
     @property
     def epochs(self) -> Array:
@@ -263,6 +443,103 @@ class MonteCarloResult:
         mean, cov = sample_moments(np.concatenate([self.positions, self.velocities], axis=2), alive)
         return StateMoments(self.epoch, self.times, mean, cov, alive.sum(axis=0))
 
+    def to_xarray(self, *, members: bool = True) -> xarray.Dataset:
+        """The ensemble as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
+
+        Dims ``member``, ``epoch`` (datetime64[ns] UTC coordinate, with ``elapsed`` s),
+        ``component`` (x, y, z), ``rtn`` (R, T, N), ``state``/``state2`` (x ... vz).
+        Per member (left out with ``members=False``): ``position`` (m), ``velocity``
+        (m/s), ``rtn_error`` (m, RTN of the reference), ``along_track_curvilinear`` (m),
+        ``density`` (kg/m^3, when recorded), ``alive``. Per member: ``decay_time`` (s,
+        inf: none), ``clipped``. Per epoch: ``survivors``, the ``reference_*`` and
+        ``mean_orbit_*`` positions and velocities, the RTN statistics ``rtn_mean`` and
+        ``rtn_std`` (over the members flying) and the moments ``mean``, ``covariance``,
+        ``rtn_covariance``, ``along_track_std``. Attributes: frame, units, kappa process,
+        seed, step, initial epoch, rhoprop version. NaN after a member's decay, as here.
+        """
+        xr = optional_import("xarray", "MonteCarloResult.to_xarray()")
+        nt = len(self.times)
+        stats = self.stats()
+        moments = self.moments()
+        vec = ("epoch", "component")
+        data: dict[str, Any] = {}
+        if members:
+            mvec = ("member", "epoch", "component")
+            data["position"] = _vector(mvec, self.positions, "m", "position", INERTIAL_FRAME)
+            data["velocity"] = _vector(mvec, self.velocities, "m/s", "velocity", INERTIAL_FRAME)
+            data["rtn_error"] = (
+                ("member", "epoch", "rtn"),
+                np.asarray(self.rtn_errors, dtype=float),
+                {
+                    "units": "m",
+                    "long_name": "position minus the reference position",
+                    "frame": "RTN of the reference orbit (reference_position/velocity)",
+                },
+            )
+            data["along_track_curvilinear"] = (
+                ("member", "epoch"),
+                self.along_track_curvilinear(),
+                {"units": "m", "long_name": "r_ref times the along-track angle"},
+            )
+            if self.densities is not None:
+                data["density"] = (
+                    ("member", "epoch"),
+                    np.asarray(self.densities, dtype=float),
+                    {"units": "kg/m^3", "long_name": "density seen by the member"},
+                )
+            data["alive"] = (("member", "epoch"), self.alive, {"long_name": "still flying"})
+        data["decay_time"] = (
+            "member",
+            np.asarray(self.decay_times, dtype=float),
+            {"units": "s", "long_name": "decay time since initial_epoch (inf: none)"},
+        )
+        data["clipped"] = (
+            "member",
+            np.asarray(self.clipped, dtype=np.int64),
+            {"long_name": "density evaluations clipped at zero"},
+        )
+        if self.drag_factors is not None:
+            data["drag_factor"] = (
+                "member",
+                np.asarray(self.drag_factors, dtype=float),
+                {"units": "1", "long_name": "factor on Cd*A/m of the member (see drag_sigma)"},
+            )
+        data["survivors"] = ("epoch", self.survivors, {"long_name": "members still flying"})
+        for name, values, units in (
+            ("reference_position", self.reference_positions, "m"),
+            ("reference_velocity", self.reference_velocities, "m/s"),
+            ("mean_orbit_position", _padded(self.mean_orbit.positions, nt), "m"),
+            ("mean_orbit_velocity", _padded(self.mean_orbit.velocities, nt), "m/s"),
+        ):
+            data[name] = _vector(vec, values, units, name.replace("_", " "), INERTIAL_FRAME)
+        rtn_attrs = {"units": "m", "frame": "RTN of the reference orbit"}
+        data["rtn_mean"] = (("epoch", "rtn"), stats.mean, rtn_attrs)
+        data["rtn_std"] = (("epoch", "rtn"), stats.std, {**rtn_attrs, "ddof": 1})
+        data.update(moment_vars(("epoch",), moments.mean, moments.covariance, INERTIAL_FRAME))
+        ds: xarray.Dataset = xr.Dataset(
+            data,
+            coords={
+                **epoch_coords(self.epochs, self.times),
+                "member": ("member", np.arange(len(self.decay_times))),
+                **label_coords("component", "rtn", "rtn2", "state", "state2"),
+            },
+            attrs=dataset_attrs(
+                "MonteCarloResult",
+                INERTIAL_FRAME,
+                rtn_frame=RTN_FRAME,
+                initial_epoch=iso_utc(self.epoch),
+                members=len(self.decay_times),
+                **kappa_attrs(self.kappa),
+                seed=int(self.seed),
+                step_s=float(self.step),
+                drag_sigma=float(self.drag_sigma),
+                mean_orbit_decayed_at_s=np.nan
+                if self.mean_orbit.decayed_at is None
+                else float(self.mean_orbit.decayed_at),
+            ),
+        )
+        return ds
+
 
 @dataclass(frozen=True)
 class CcspResult:
@@ -280,6 +557,11 @@ class CcspResult:
         decayed_at: None, or the time (s from ``epoch``) at which a sigma point first went
             below the floor altitude: the filter stopped there and the outputs end at the
             last update completed before it.
+        drag_sigma: relative 1-sigma of Cd*A/m carried as the second consider parameter
+            (0: density only, the paper's filter).
+        drag_cross_covariance: covariance of the state with the normalised
+            ballistic-coefficient error c (nt, 6), m and m/s (zero when ``drag_sigma`` is
+            0); None for results built by hand.
     """
 
     epoch: np.datetime64
@@ -290,6 +572,8 @@ class CcspResult:
     along_track_std: Array
     cross_covariance: Array
     decayed_at: float | None = None
+    drag_sigma: float = 0.0
+    drag_cross_covariance: Array | None = None
 
     @property
     def epochs(self) -> Array:
@@ -299,3 +583,52 @@ class CcspResult:
     def moments(self) -> StateMoments:
         """The filter's mean and covariance."""
         return StateMoments(self.epoch, self.times, self.mean, self.covariance)
+
+    def to_xarray(self) -> xarray.Dataset:
+        """The filter's outputs as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
+
+        Dims ``epoch`` (update epochs, datetime64[ns] UTC, with ``elapsed`` s),
+        ``state``/``state2`` (x ... vz), ``rtn``/``rtn2`` (R, T, N); variables ``mean``,
+        ``covariance``, ``rtn_covariance``, ``along_track_std`` and ``cross_covariance``
+        (state with kappa); attributes: frame, units, ``initial_epoch``,
+        ``decayed_at_s`` (NaN: the filter ran to the end), rhoprop version.
+        """
+        xr = optional_import("xarray", "CcspResult.to_xarray()")
+        data = moment_vars(
+            ("epoch",), self.mean, self.covariance, INERTIAL_FRAME, self.rtn_covariance
+        )
+        data["cross_covariance"] = (
+            ("epoch", "state"),
+            np.asarray(self.cross_covariance, dtype=float),
+            {
+                "units": "m (x, y, z), m/s (vx, vy, vz)",
+                "long_name": "covariance of the state with the normalised density offset kappa",
+                "frame": INERTIAL_FRAME,
+            },
+        )
+        if self.drag_cross_covariance is not None:
+            data["drag_cross_covariance"] = (
+                ("epoch", "state"),
+                np.asarray(self.drag_cross_covariance, dtype=float),
+                {
+                    "units": "m (x, y, z), m/s (vx, vy, vz)",
+                    "long_name": "covariance of the state with the normalised Cd*A/m error",
+                    "frame": INERTIAL_FRAME,
+                },
+            )
+        ds: xarray.Dataset = xr.Dataset(
+            data,
+            coords={
+                **epoch_coords(self.epochs, self.times),
+                **label_coords("state", "state2", "rtn", "rtn2"),
+            },
+            attrs=dataset_attrs(
+                "CcspResult",
+                INERTIAL_FRAME,
+                rtn_frame=RTN_FRAME,
+                initial_epoch=iso_utc(self.epoch),
+                decayed_at_s=np.nan if self.decayed_at is None else float(self.decayed_at),
+                drag_sigma=float(self.drag_sigma),
+            ),
+        )
+        return ds

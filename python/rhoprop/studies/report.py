@@ -163,8 +163,8 @@ def _settings(members: int, duration: float, record: SpaceWeather) -> dict[str, 
     """What produced the numbers: versions, seeds, processes, models, state."""
     from importlib import metadata
 
-    from .._version import __version__
     from .._core import simd_path
+    from .._version import __version__
     from .paper import METHODS
 
     def version(package: str) -> str:
