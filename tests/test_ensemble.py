@@ -121,6 +121,12 @@ def test_scenario_file_runs(tmp_path):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(summary["models"]) == {"a", "b"} and summary["mixture"]["modes"] >= 1
     assert (tmp_path / "out" / "ensemble.png").stat().st_size > 10_000
+    # One OEM per model (validated by the oem library) and the dataset, all in the manifest.
+    from oem import OrbitEphemerisMessage
+
+    files = json.loads((tmp_path / "out" / "manifest.json").read_text())["files"]
+    assert {"oem/a.oem", "oem/b.oem", "ensemble.nc"} <= set(files)
+    assert len(OrbitEphemerisMessage.open(str(tmp_path / "out" / "oem" / "a.oem")).states) > 1
 
 
 @pytest.mark.parametrize(

@@ -129,6 +129,48 @@ def test_write_oem_takes_a_single_result(tmp_path, single, kind):
         np.testing.assert_allclose(cov, m.covariance, rtol=1e-8, atol=1e-12)
 
 
+def test_write_oem_rtn_covariance_and_xml(tmp_path, single):
+    from oem import OrbitEphemerisMessage
+
+    result = single["ccsp"]
+    m = result.moments()
+    (path,) = io.write_oem(result, tmp_path / "rtn", ref_frame="GCRF", covariance_frame="rtn")
+    text = path.read_text()
+    assert "REF_FRAME = GCRF" in text and "COV_REF_FRAME = RTN" in text
+    covs = list(OrbitEphemerisMessage.open(str(path)).segments[0].covariances)
+    assert {c.frame for c in covs} == {"RTN"}
+    # Independent rotation: the position block against the result's own RTN covariance.
+    got = np.array([c.matrix for c in covs]) * 1e6
+    np.testing.assert_allclose(got[:, :3, :3], m.rtn_covariance, rtol=1e-8, atol=1e-9)
+    # The velocity block rotates with the same basis (rows R, T, N of each mean state).
+    basis = rp.frames.rtn_basis(m.mean[:, :3], m.mean[:, 3:])
+    expect = np.einsum("nij,njk,nlk->nil", basis, m.covariance[:, 3:, 3:], basis)
+    np.testing.assert_allclose(got[:, 3:, 3:], expect, rtol=1e-8, atol=1e-15)
+    # XML through the library reads back the same states and inertial covariances.
+    (xml,) = io.write_oem(result, tmp_path / "xml", file_format="xml")
+    assert xml.suffix == ".xml" and xml.read_text().lstrip().startswith("<?xml")
+    segment = OrbitEphemerisMessage.open(str(xml)).segments[0]
+    states = np.array([s.vector for s in segment.states]) * 1e3
+    np.testing.assert_allclose(states, m.mean, rtol=1e-8)
+    cov = np.array([c.matrix for c in segment.covariances]) * 1e6
+    np.testing.assert_allclose(cov, m.covariance, rtol=1e-8, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"ref_frame": "ITRF"}, "ref_frame must be one of"),
+        ({"covariance_frame": "ric"}, "covariance_frame must be one of"),
+        ({"file_format": "json"}, "file_format must be"),
+        ({"file_format": "xml", "covariance_frame": "rtn"}, "XML writer drops COV_REF_FRAME"),
+    ],
+)
+def test_write_oem_refuses_what_it_cannot_write(tmp_path, single, options, match):
+    with pytest.raises(ValueError, match=match):
+        io.write_oem(single["ccsp"], tmp_path, **options)
+    assert not list(tmp_path.iterdir())
+
+
 def test_write_oem_says_what_it_takes(tmp_path):
     with pytest.raises(TypeError, match=r"write_oem takes a CatalogResult .* not a list"):
         io.write_oem([1, 2], tmp_path)

@@ -14,7 +14,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from ..catalog.export import OutputFolder, command_line, sanitise
+from ..catalog.export import OutputFolder, command_line, sanitise, write_oem
 from ..density import DensityModel, Exponential, Msis
 from ..ensemble import ensemble
 from ..errors import ScenarioError
@@ -291,6 +291,22 @@ def run_scenario_file(
     )
     with folder.path("ensemble.png") as tmp:
         ensemble_figure({name: ens}, tmp)
+    written = [directory / "ensemble.png"]
+    for model_name, result in ens.results.items():
+        oid = sanitise(model_name).replace(" ", "_").replace("/", "_") or "MODEL"
+        paths = write_oem(
+            result, directory / "oem", object_name=name, object_id=oid, originator="rhoprop run"
+        )
+        folder.add(paths)
+        written += paths
+    try:
+        dataset = ens.to_xarray()
+    except ImportError as err:
+        print(f"  (no ensemble.nc: {err})")
+    else:
+        with folder.path("ensemble.nc") as tmp:
+            dataset.to_netcdf(tmp, engine="h5netcdf")
+        written.append(directory / "ensemble.nc")
     summary = {"scenario": sc["name"], "epoch": str(sc["state"].epoch) + "Z", **ens.summary()}
     folder.write_text("summary.json", json.dumps(summary, indent=2))
     lines = [
@@ -308,8 +324,6 @@ def run_scenario_file(
     folder.write_text("summary.md", f"# {name}\n\n{table}\n")
     manifest = folder.finish()
     print(table)
-    print(
-        f"  wrote {directory / 'ensemble.png'}, {directory / 'summary.json'}, "
-        f"{directory / 'summary.md'}, {manifest}"
-    )
+    for path in [*written, directory / "summary.json", directory / "summary.md", manifest]:
+        print(f"  wrote {path}")
     return 0
