@@ -69,3 +69,84 @@ def test_console_script_module_entry():
         [sys.executable, "-m", "rhoprop", "--version"], capture_output=True, text=True, check=True
     )
     assert done.stdout.startswith("rhoprop ")
+
+
+def test_cache_info_and_clear(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
+    (tmp_path / "fields").mkdir()
+    (tmp_path / "fields" / "a.npz").write_bytes(b"x" * 1000)
+    (tmp_path / "fields" / "b.npz").write_bytes(b"x" * 500)
+    (tmp_path / "SW-All.csv").write_text("header\n")
+    assert main(["cache", "info"]) == 0
+    out = capsys.readouterr().out
+    assert str(tmp_path) in out and "fields: 2 files, 0.0 MB" in out and "2 GB" in out
+    assert main(["cache", "clear"]) == 0
+    assert "deleted 2 sampled density fields" in capsys.readouterr().out
+    assert (tmp_path / "SW-All.csv").exists() and not list((tmp_path / "fields").iterdir())
+    assert main(["cache", "clear", "--all"]) == 0
+    assert not (tmp_path / "SW-All.csv").exists()
+
+
+def test_threads_option_sets_every_pool(monkeypatch, capsys):
+    from rhoprop import parallel
+
+    monkeypatch.delenv("RHOPROP_THREADS", raising=False)
+    monkeypatch.delenv("RAYON_NUM_THREADS", raising=False)
+    with pytest.raises(SystemExit):
+        main(["--threads", "0", "cache", "info"])
+    assert "--threads must be at least 1" in capsys.readouterr().err
+    import os
+
+    assert main(["--threads", "3", "cache", "info"]) == 0
+    assert os.environ["RHOPROP_THREADS"] == "3" == os.environ["RAYON_NUM_THREADS"]
+    assert parallel.worker_count() == 3 and parallel.worker_count(5) == 5
+    monkeypatch.setenv("RHOPROP_THREADS", "two")
+    with pytest.raises(ValueError, match=r"\$RHOPROP_THREADS must be a whole number"):
+        parallel.worker_count()
+
+
+def test_paper_quick_writes_its_own_folder(monkeypatch):
+    import rhoprop.studies.report as report
+
+    seen = {}
+    monkeypatch.setattr(report, "run_paper", lambda out, **kw: seen.update(out=out, **kw))
+    assert main(["paper", "--quick", "--seed", "7"]) == 0
+    assert seen["out"] == "rhoprop-paper-quick" and seen["seed"] == 7 and seen["quick"]
+    assert main(["paper"]) == 0
+    assert seen["out"] == "rhoprop-paper" and seen["seed"] == 0
+
+
+def test_drag_files(tmp_path):
+    from rhoprop.catalog.job import read_drag_file
+
+    path = tmp_path / "drag.csv"
+    path.write_text("norad_id,area_to_mass\n25544,0.005\n1,0.02\n")
+    assert read_drag_file(path) == pytest.approx({25544: 0.011, 1: 0.044})
+    assert read_drag_file(path, cd=3.0) == pytest.approx({25544: 0.015, 1: 0.06})
+    path.write_text("norad_id,drag_parameter\n25544,0.01\n")
+    assert read_drag_file(path) == {25544: 0.01}
+    with pytest.raises(ValueError, match="--cd does not apply"):
+        read_drag_file(path, cd=2.0)
+    for text, match in [
+        ("id,beta\n1,2\n", "expected a header"),
+        ("norad_id,drag_parameter\n1,-2\n", "line 2: drag_parameter must be > 0"),
+        ("norad_id,drag_parameter\nx,2\n", "line 2: norad_id must be an integer"),
+        ("norad_id,drag_parameter\n1,2\n1,3\n", "line 3: NORAD id 1 appears twice"),
+    ]:
+        path.write_text(text)
+        with pytest.raises(ValueError, match=match):
+            read_drag_file(path)
+
+
+def test_catalog_options_fail_clearly(tmp_path, monkeypatch, capsys):
+    import sys as _sys
+
+    sample = tmp_path / "one.tle"
+    sample.write_text("x\n")
+    assert main(["catalog", str(sample), "--end", "2002-09-08", "--cd", "2.0"]) == 1
+    assert "--cd applies to a --drag-file" in capsys.readouterr().err
+    monkeypatch.setitem(_sys.modules, "distributed", None)  # as if Dask were not installed
+    args = ["catalog", str(sample), "--end", "2002-09-08", "--scheduler", "tcp://x:1"]
+    assert main(args) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == "rhoprop: error: --scheduler needs Dask: pip install 'rhoprop[distributed]'"

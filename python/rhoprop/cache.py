@@ -177,3 +177,48 @@ def _evict(directory: Path, cap: int, keep: Path) -> None:
         except OSError:
             continue
         total -= size
+
+
+def cache_info(override: str | os.PathLike[str] | None = None) -> dict[str, Any]:
+    """What the cache holds: its directory, the size cap (bytes), and per subfolder
+    (``fields`` for sampled density fields, downloads such as the space-weather record
+    and JB2008 indices) the number of files and their bytes."""
+    root = cache_dir(override)
+    parts: dict[str, dict[str, int]] = {}
+    if root.is_dir():
+        for path in sorted(root.rglob("*")):
+            if path.is_file() and not path.is_symlink():
+                rel = path.relative_to(root)
+                key = rel.parts[0] if len(rel.parts) > 1 else "."
+                part = parts.setdefault(key, {"files": 0, "bytes": 0})
+                part["files"] += 1
+                part["bytes"] += path.stat().st_size
+    return {
+        "directory": str(root),
+        "max_bytes_per_folder": max_bytes(),
+        "parts": parts,
+        "total_bytes": sum(p["bytes"] for p in parts.values()),
+    }
+
+
+def clear_cache(
+    override: str | os.PathLike[str] | None = None, *, everything: bool = False
+) -> tuple[int, int]:
+    """Deletes the sampled density fields (``fields/*.npz``), or with ``everything`` every
+    file rhoprop keeps in the cache (also the downloaded space-weather record and JB2008
+    indices, which ``rhoprop data refresh`` fetches again). Returns (files, bytes)
+    deleted."""
+    root = cache_dir(override)
+    pattern = root.rglob("*") if everything else (root / "fields").glob("*.npz")
+    files = n_bytes = 0
+    for path in sorted(pattern, reverse=True):
+        if path.is_file() or path.is_symlink():
+            size = path.lstat().st_size
+            path.unlink()
+            files, n_bytes = files + 1, n_bytes + size
+        elif everything and path.is_dir():
+            try:
+                path.rmdir()
+            except OSError:
+                pass
+    return files, n_bytes

@@ -17,10 +17,12 @@ from .catalog.job import MODEL_NAMES
 def _paper(args: argparse.Namespace) -> int:
     from .studies.report import run_paper
 
+    out = args.out or ("rhoprop-paper-quick" if args.quick else "rhoprop-paper")
     run_paper(
-        args.out,
+        out,
         quick=args.quick,
         members=args.members,
+        seed=args.seed,
         overwrite=args.overwrite,
         command=args.command_line,
     )
@@ -46,6 +48,10 @@ def _catalog(args: argparse.Namespace) -> int:
         fit=args.fit,
         initial_covariance=args.initial_covariance,
         zonal_degree=args.zonal_degree,
+        seed=args.seed,
+        update_interval=args.update_interval,
+        drag_file=args.drag_file,
+        cd=args.cd,
     )
     return 0
 
@@ -80,7 +86,11 @@ def _run(args: argparse.Namespace) -> int:
     from .studies.scenario_file import run_scenario_file
 
     return run_scenario_file(
-        args.scenario, out=args.out, overwrite=args.overwrite, command=args.command_line
+        args.scenario,
+        out=args.out,
+        overwrite=args.overwrite,
+        command=args.command_line,
+        seed=args.seed,
     )
 
 
@@ -96,6 +106,33 @@ def _conjunction(args: argparse.Namespace) -> int:
         drag_parameters=tuple(args.drag) if args.drag else (None, None),
         json_path=args.json,
     )
+    return 0
+
+
+def _seed(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the Monte Carlo members (default 0)"
+    )
+
+
+def _cache(args: argparse.Namespace) -> int:
+    from .cache import cache_info, clear_cache
+
+    if args.cache_command == "clear":
+        files, n_bytes = clear_cache(everything=args.all)
+        what = "cached files" if args.all else "sampled density fields"
+        print(f"deleted {files} {what} ({n_bytes / 1e6:.1f} MB)")
+        return 0
+    info = cache_info()
+    print(f"cache: {info['directory']}")
+    print(
+        f"size cap per folder: {info['max_bytes_per_folder'] / 1e9:g} GB "
+        "($RHOPROP_CACHE_MAX_BYTES; least recently used entries go first)"
+    )
+    for name, part in sorted(info["parts"].items()):
+        label = "(top level)" if name == "." else name
+        print(f"  {label}: {part['files']} files, {part['bytes'] / 1e6:.1f} MB")
+    print(f"total: {info['total_bytes'] / 1e6:.1f} MB")
     return 0
 
 
@@ -118,6 +155,12 @@ def build_parser() -> argparse.ArgumentParser:
         "Exit codes: 0 ok, 1 failure, 2 usage.",
     )
     parser.add_argument("--version", action="version", version=f"rhoprop {__version__}")
+    parser.add_argument(
+        "--threads",
+        type=int,
+        default=None,
+        help="worker threads for every command (default: all cores); results do not depend on it",
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     paper = sub.add_parser(
         "paper",
@@ -144,9 +187,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     paper.add_argument(
         "--out",
-        default="rhoprop-paper",
-        help="directory for figures and summaries (default ./rhoprop-paper)",
+        default=None,
+        help="directory for figures and summaries (default ./rhoprop-paper, "
+        "./rhoprop-paper-quick with --quick)",
     )
+    _seed(paper)
     _overwrite(paper)
     paper.set_defaults(run=_paper)
     run = sub.add_parser(
@@ -161,6 +206,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="output directory (overrides the file's output.directory, which is relative "
         "to the scenario file and must stay inside its folder)",
+    )
+    run.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="Monte Carlo seed (overrides the file's method.seed)",
     )
     _overwrite(run)
     run.set_defaults(run=_run)
@@ -180,6 +231,26 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument("--method", choices=("ccsp", "monte_carlo"), default="ccsp")
     cat.add_argument("--members", type=int, default=100, help="Monte Carlo members per object")
     cat.add_argument("--output-step", type=float, default=3600.0, help="output spacing, s")
+    cat.add_argument(
+        "--update-interval",
+        type=float,
+        default=3600.0,
+        help="CCSP update interval, s (default 3600, the paper's tuning)",
+    )
+    _seed(cat)
+    cat.add_argument(
+        "--drag-file",
+        default=None,
+        metavar="CSV",
+        help="per-object drag instead of B*: a CSV with a norad_id column and either "
+        "drag_parameter (Cd*A/m, m^2/kg) or area_to_mass (A/m, m^2/kg; times --cd)",
+    )
+    cat.add_argument(
+        "--cd",
+        type=float,
+        default=None,
+        help="drag coefficient for a --drag-file that gives area_to_mass (default 2.2)",
+    )
     cat.add_argument(
         "--model",
         default="2.1",
@@ -293,6 +364,24 @@ def build_parser() -> argparse.ArgumentParser:
     )
     refresh.add_argument("--timeout", type=float, default=60.0, help="per download, s")
     refresh.set_defaults(run=_data_refresh)
+    cache = sub.add_parser(
+        "cache",
+        help="show or clear the user cache (sampled density fields, downloads)",
+        description="The cache ($RHOPROP_CACHE, else $XDG_CACHE_HOME/rhoprop or "
+        "~/.cache/rhoprop) holds sampled density fields (recomputed when missing) and "
+        "downloaded space-weather and JB2008 files. Each folder is kept under "
+        "$RHOPROP_CACHE_MAX_BYTES (default 2 GB) by deleting the least recently used "
+        "entries.",
+    )
+    cache_sub = cache.add_subparsers(dest="cache_command", metavar="ACTION")
+    cache_sub.add_parser("info", help="where the cache is and what it holds")
+    clear = cache_sub.add_parser("clear", help="delete the sampled density fields")
+    clear.add_argument(
+        "--all",
+        action="store_true",
+        help="also delete the downloaded space-weather record and JB2008 indices",
+    )
+    cache.set_defaults(run=_cache, cache_command="info")
     return parser
 
 
@@ -307,12 +396,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     if getattr(args, "members", None) is not None and args.members < 2:
         parser.error("--members must be at least 2")
+    if args.threads is not None:
+        if args.threads < 1:
+            parser.error("--threads must be at least 1")
+        from .parallel import set_threads
+
+        set_threads(args.threads)
     try:
         return int(args.run(args))
     except KeyboardInterrupt:
         print("\ninterrupted", file=sys.stderr)
         return 130
-    except (ValueError, TypeError, OSError) as err:
+    except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
+        return 0
+    except (ValueError, TypeError, OSError, ImportError) as err:
         print(f"rhoprop: error: {err}", file=sys.stderr)
         return 1
 

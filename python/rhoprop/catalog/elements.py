@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..parallel import worker_count
 from ..propagation import OrbitState
 from ..time import from_jd
 from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
@@ -322,7 +323,6 @@ def _fit_all(
     """Replaces the objects of ``cat`` by fitted ones (in place, order kept)."""
     import concurrent.futures as cf
     import dataclasses
-    import os
 
     from ..density import SampledModel, altitude_band
     from .covariance import tle_accuracy, tle_covariance
@@ -361,7 +361,7 @@ def _fit_all(
             fit=f,
         )
 
-    with cf.ThreadPoolExecutor(max_workers=threads or os.cpu_count() or 1) as pool:
+    with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
         fitted = list(pool.map(one, objs))
     kept: list[CatalogObject] = []
     for obj, res in zip(objs, fitted, strict=True):

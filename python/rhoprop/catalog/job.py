@@ -84,6 +84,60 @@ def refresh_data(timeout: float = 60.0) -> list[str]:
     return lines
 
 
+def _need_dask() -> None:
+    """ImportError in one line when the ``distributed`` extra is missing."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise ImportError("--scheduler needs Dask: pip install 'rhoprop[distributed]'") from None
+
+
+#: Default drag coefficient for a drag file that gives area-to-mass ratios.
+DRAG_FILE_CD = 2.2
+
+
+def read_drag_file(path: str | Path, cd: float | None = None) -> dict[int, float]:
+    """{NORAD id: Cd*A/m (m^2/kg)} from a CSV with a header: ``norad_id`` and either
+    ``drag_parameter`` (Cd*A/m, m^2/kg) or ``area_to_mass`` (A/m, m^2/kg, multiplied by
+    ``cd``, default :data:`DRAG_FILE_CD`). ValueError naming the file, line and column
+    for anything else."""
+    import csv
+
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"drag file {str(p)!r} does not exist")
+    with p.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    columns = set(rows[0]) if rows else set()
+    if "norad_id" not in columns or not ({"drag_parameter", "area_to_mass"} & columns):
+        raise ValueError(
+            f"{p.name}: expected a header with norad_id and drag_parameter or area_to_mass, "
+            f"got {sorted(columns)}"
+        )
+    kind = "drag_parameter" if "drag_parameter" in columns else "area_to_mass"
+    if kind == "drag_parameter" and cd is not None:
+        raise ValueError(f"{p.name} gives drag_parameter (Cd*A/m): --cd does not apply")
+    factor = 1.0 if kind == "drag_parameter" else (DRAG_FILE_CD if cd is None else float(cd))
+    if not factor > 0:
+        raise ValueError(f"cd must be > 0, got {cd}")
+    out: dict[int, float] = {}
+    for line, row in enumerate(rows, start=2):
+        try:
+            norad = int(row["norad_id"])
+            value = float(row[kind])
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"{p.name} line {line}: norad_id must be an integer and {kind} a number, "
+                f"got {row.get('norad_id')!r}, {row.get(kind)!r}"
+            ) from None
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{p.name} line {line}: {kind} must be > 0, got {value}")
+        if norad in out:
+            raise ValueError(f"{p.name} line {line}: NORAD id {norad} appears twice")
+        out[norad] = value * factor
+    return out
+
+
 def run_catalog_file(
     file: str | Path,
     end: str,
@@ -101,6 +155,10 @@ def run_catalog_file(
     fit: bool = False,
     initial_covariance: str | None = None,
     zonal_degree: int = 2,
+    seed: int = 0,
+    update_interval: float = 3600.0,
+    drag_file: str | Path | None = None,
+    cd: float | None = None,
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -115,14 +173,22 @@ def run_catalog_file(
     to each element set first (``load(fit=True)``). ``initial_covariance``: see
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only, default) to 6 (J2..J6).
+    ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
+    interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
     Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
+    drag = read_drag_file(drag_file, cd) if drag_file is not None else None
+    if drag_file is None and cd is not None:
+        raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
+    if scheduler:
+        _need_dask()
     atmosphere = model_by_name(model)
     cat = load(
         file,
         errors="skip" if skip_bad else "raise",
         fit=fit,
         model=atmosphere if fit else None,
+        drag_parameters=drag,
     )
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
@@ -132,7 +198,7 @@ def run_catalog_file(
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     client = None
     if scheduler:
-        from distributed import Client
+        from distributed import Client  # checked by _need_dask
 
         client = Client(scheduler)
     t0 = time.perf_counter()
@@ -147,6 +213,8 @@ def run_catalog_file(
         errors="record" if skip_bad else "raise",
         initial_covariance=covariance,
         zonal_degree=zonal_degree,
+        seed=seed,
+        update_interval=update_interval,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory

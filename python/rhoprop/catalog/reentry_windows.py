@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import datetime as _dt
-import os
 from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Any
@@ -27,6 +26,7 @@ import numpy as np
 
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import SampledModel, altitude_band
+from ..parallel import worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..propagation.propagate import FIELD_MARGIN
@@ -194,7 +194,7 @@ def reentry(
             times.append(np.asarray(mc.decay_times, dtype=float))
         return np.concatenate(times), obj.drag_parameter, rel
 
-    with cf.ThreadPoolExecutor(max_workers=threads or os.cpu_count() or 1) as pool:
+    with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
         done = list(pool.map(one, range(len(objs)), objs))
     nat = np.datetime64("NaT", "ns")
     med, lo, hi = (np.full(len(objs), nat) for _ in range(3))

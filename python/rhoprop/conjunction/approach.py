@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import math
-import os
 import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -40,6 +39,7 @@ from ..density import SampledModel, altitude_band
 from ..density.field import FieldResolution
 from ..density.model import as_atmosphere
 from ..errors import DecayError
+from ..parallel import worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft, Trajectory, propagate
 from ..propagation.propagate import (
@@ -923,7 +923,7 @@ def screen(
     degree = zonal_degree_argument(zonal_degree)
     if errors not in ("raise", "skip"):
         raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
-    workers = (os.cpu_count() or 1) if threads is None else int(threads)
+    workers = worker_count(threads)
     if workers < 1:
         raise ValueError(f"threads must be >= 1, got {threads!r}")
     timings = dict.fromkeys(

@@ -33,6 +33,7 @@ def run_paper(
     members: int | None = None,
     overwrite: bool = False,
     command: str | None = None,
+    seed: int = 0,
 ) -> list[Path]:
     """The paper's study: deterministic orbits, Fig. 4, Fig. 5 (four cases), Fig. 6.
 
@@ -43,6 +44,7 @@ def run_paper(
         members: Monte Carlo members per run (default 1000, 100 with ``quick``).
         overwrite: clear ``out`` if it holds an earlier run's files.
         command: the command recorded in ``manifest.json`` (default: this process's).
+        seed: seed of every Monte Carlo run (and of the conjunction study's secondary).
 
     Returns:
         The paths written: four PNG figures, ``summary.json``, ``summary.md`` and
@@ -62,7 +64,7 @@ def run_paper(
 
     _stage("Method comparison (paper Fig. 4), NRLMSIS 2.1, Case I", start)
     comparison = method_comparison(
-        state, craft, Msis("2.1", space_weather=record), duration, n=members
+        state, craft, Msis("2.1", space_weather=record), duration, n=members, seed=seed
     )
     with folder.path("method_comparison.png") as tmp:
         comparison.figure(tmp)
@@ -72,7 +74,7 @@ def run_paper(
     _stage("Ensembles for the four space-weather cases (paper Fig. 5)", start)
     model_names, model_reason, _ = scenarios.model_choice()
     print(f"models: {', '.join(model_names)}: {model_reason}")
-    ensembles = case_ensembles(n=members, duration=duration, record=record)
+    ensembles = case_ensembles(n=members, duration=duration, record=record, seed=seed)
     with folder.path("ensembles.png") as tmp:
         ensemble_figure(ensembles, tmp)
     figures.append(out / "ensembles.png")
@@ -81,7 +83,7 @@ def run_paper(
 
     disputed = most_disputed(ensembles)
     _stage(f"Conjunction: Pc per model, mixture and Monte Carlo ({disputed})", start)
-    conj = conjunction_study(ensembles[disputed], case=disputed)
+    conj = conjunction_study(ensembles[disputed], case=disputed, seed=seed)
     with folder.path("conjunction.png") as tmp:
         conj.figure(tmp)
     figures.append(out / "conjunction.png")
@@ -96,13 +98,14 @@ def run_paper(
         Msis("00", space_weather=sw),
         duration,
         n=members,
+        seed=seed,
     )
     with folder.path("ccsp_vs_monte_carlo.png") as tmp:
         versus.figure(tmp)
     figures.append(out / "ccsp_vs_monte_carlo.png")
     print(versus.table())
 
-    settings = _settings(members, duration, record)
+    settings = _settings(members, duration, record, seed)
     summary = {
         **settings,
         "members": members,
@@ -159,7 +162,7 @@ def run_paper(
     return written
 
 
-def _settings(members: int, duration: float, record: SpaceWeather) -> dict[str, Any]:
+def _settings(members: int, duration: float, record: SpaceWeather, seed: int) -> dict[str, Any]:
     """What produced the numbers: versions, seeds, processes, models, state."""
     from importlib import metadata
 
@@ -180,7 +183,7 @@ def _settings(members: int, duration: float, record: SpaceWeather) -> dict[str, 
             "simd_path": simd_path(),
             **{p: version(p) for p in ("numpy", "pymsis", "spaceweather", "matplotlib")},
         },
-        "seed": 0,
+        "seed": seed,
         "space_weather": record.source,
         "spacecraft": {"cd_ref": craft.cd, "area_to_mass_m2_kg": craft.area_to_mass},
         "initial_state_case_i": {

@@ -262,12 +262,16 @@ def run_scenario_file(
     *,
     overwrite: bool = False,
     command: str | None = None,
+    seed: int | None = None,
 ) -> int:
     """Runs a scenario file: the ensemble, its figure, summary.json, summary.md and
     manifest.json, in ``out`` (relative to the working directory) or else the file's
     ``output.directory`` (relative to the scenario file's folder). A folder holding an
-    earlier run's files is refused unless ``overwrite`` (which clears it)."""
+    earlier run's files is refused unless ``overwrite`` (which clears it). ``seed``
+    overrides the file's Monte Carlo seed."""
     sc = load_scenario(path)
+    if seed is not None and sc["method"] == "monte_carlo":
+        sc["options"]["seed"] = int(seed)
     folder = OutputFolder(
         Path(out) if out is not None else sc["directory"],
         command=command or command_line(),

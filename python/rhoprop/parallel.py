@@ -1,0 +1,39 @@
+"""How many workers run at once: the ``--threads`` option of the command line and
+``$RHOPROP_THREADS``. The core's thread pool reads ``$RAYON_NUM_THREADS`` when it first
+starts; the Python pools that run objects side by side (catalogs, fits, screening) read
+:func:`worker_count`. Results never depend on the count (fixed seeds per member)."""
+
+from __future__ import annotations
+
+import os
+
+#: Environment variable of the default worker count.
+THREADS_ENV = "RHOPROP_THREADS"
+
+
+def worker_count(threads: int | None = None) -> int:
+    """``threads`` if given, else ``$RHOPROP_THREADS``, else the CPU count; ValueError
+    naming the source unless a whole number >= 1."""
+    source = "threads"
+    value: object = threads
+    if threads is None:
+        text = os.environ.get(THREADS_ENV, "").strip()
+        if not text:
+            return os.cpu_count() or 1
+        source, value = f"${THREADS_ENV}", text
+    try:
+        count = int(str(value))
+    except ValueError:
+        count = 0
+    if isinstance(value, bool) or count < 1 or str(count) != str(value).strip():
+        raise ValueError(f"{source} must be a whole number >= 1, got {value!r}")
+    return count
+
+
+def set_threads(threads: int) -> None:
+    """Makes ``threads`` the default of this process: the Python pools (through
+    ``$RHOPROP_THREADS``) and the core's pool (``$RAYON_NUM_THREADS``, read when the
+    core first runs parallel work, so call this before any run)."""
+    count = worker_count(threads)
+    os.environ[THREADS_ENV] = str(count)
+    os.environ["RAYON_NUM_THREADS"] = str(count)
