@@ -2,33 +2,31 @@
 
 from __future__ import annotations
 
-import sys
-import time
+from typing import Any
 
 
 class ProgressBar:
-    """A one-line progress bar on a terminal (stderr), shown once a run has taken 1 s.
+    """A progress bar through ``tqdm`` (a terminal line on stderr, a widget in Jupyter),
+    shown once a run has taken 1 s and only where someone can see it (a terminal or a
+    notebook; not in logs).
 
-    Called with the number of items done; :meth:`close` ends the line.
+    Called with the number of items done; :meth:`close` ends it.
     """
 
     def __init__(self, total: int, label: str, unit: str = "members") -> None:
+        from tqdm.auto import tqdm
+
         self.total, self.label, self.unit = total, label, unit
-        self.start = time.perf_counter()
-        self.shown = False
+        self._bar: Any = tqdm(
+            total=total, desc=label, unit=f" {unit}", delay=1.0, disable=None, leave=True
+        )
+        self._done = 0
 
     def __call__(self, done: int) -> None:
-        elapsed = time.perf_counter() - self.start
-        if elapsed < 1.0 or not sys.stderr.isatty():
-            return
-        self.shown = True
-        frac = done / self.total
-        bar = "#" * int(30 * frac)
-        sys.stderr.write(
-            f"\r{self.label} [{bar:<30}] {done}/{self.total} {self.unit}  {elapsed:5.1f} s"
-        )
-        sys.stderr.flush()
+        step = int(done) - self._done
+        if step > 0:
+            self._bar.update(step)
+            self._done = int(done)
 
     def close(self) -> None:
-        if self.shown:
-            sys.stderr.write("\n")
+        self._bar.close()
