@@ -164,3 +164,16 @@ def test_cli_catalog_fit_and_initial_covariance(tmp_path, tle_file):
     bad = main(["catalog", str(SAMPLE), "--end", "2002-09-08T00:00Z", "--out",
                 str(tmp_path / "run3"), "--initial-covariance", "nonsense"])  # fmt: skip
     assert bad == 1
+
+
+def test_fit_with_sgp4s_own_zonals_matches_sgp4(atmosphere):
+    # SGP4 (the pseudo-observations) models J2, J3 and J4: a fit with the same zonal
+    # harmonics follows it to metres, a J2-only fit to hundreds of metres, and J5/J6,
+    # which SGP4 lacks, make it worse again. The reference is SGP4 itself.
+    obj = catalog.load(SAMPLE)[0]
+    rms = {d: fit_element_set(obj, atmosphere, zonal_degree=d).rms_total for d in (2, 4, 6)}
+    assert rms[4] < 20.0 and rms[2] > 10 * rms[4] and rms[6] > 2 * rms[4], rms
+    fitted = catalog.load(SAMPLE, fit=True, model=atmosphere, zonal_degree=4)
+    assert fitted[0].fit.rms_total == pytest.approx(rms[4], rel=1e-6)
+    with pytest.raises(ValueError, match="zonal_degree"):
+        catalog.load(SAMPLE, zonal_degree=7)

@@ -237,6 +237,7 @@ def load(
     model: Any = None,
     span: tuple[float, float] | None = None,
     threads: int | None = None,
+    zonal_degree: int = 2,
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content, plain or gzip-compressed.
@@ -266,6 +267,8 @@ def load(
         span: fit span, s from each epoch (default ``fit.DEFAULT_SPAN``, one day either
             side).
         threads: objects fitted at once (default: CPU count).
+        zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2, default) to 6;
+            fit with the degree the objects will be propagated with.
     """
     from .fit import DEFAULT_SPAN
 
@@ -273,6 +276,9 @@ def load(
         raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
     if fit and model is None:
         raise ValueError("fit=True needs a density model: load(path, fit=True, model=...)")
+    from ..propagation.propagate import zonal_degree_argument
+
+    zonal_degree = zonal_degree_argument(zonal_degree)
     p = Path(path)
     raw = p.read_bytes()
     if raw[:2] == b"\x1f\x8b":  # gzip, as catalog archives are often stored
@@ -313,12 +319,17 @@ def load(
     if not out.objects and not out.skipped:
         raise ValueError(f"{p} holds no TLE or OMM element sets")
     if fit and out.objects:
-        _fit_all(out, model, span or DEFAULT_SPAN, errors, threads)
+        _fit_all(out, model, span or DEFAULT_SPAN, errors, threads, zonal_degree)
     return out
 
 
 def _fit_all(
-    cat: Catalog, model: Any, span: tuple[float, float], errors: str, threads: int | None
+    cat: Catalog,
+    model: Any,
+    span: tuple[float, float],
+    errors: str,
+    threads: int | None,
+    zonal_degree: int = 2,
 ) -> None:
     """Replaces the objects of ``cat`` by fitted ones (in place, order kept)."""
     import concurrent.futures as cf
@@ -343,7 +354,7 @@ def _fit_all(
 
     def one(obj: CatalogObject) -> CatalogObject | Exception:
         try:
-            f = fit_element_set(obj, atmosphere, span=span)
+            f = fit_element_set(obj, atmosphere, span=span, zonal_degree=zonal_degree)
         except Exception as err:  # recorded per object below
             return err
         acc = tle_accuracy(f.state)

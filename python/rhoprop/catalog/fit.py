@@ -79,7 +79,12 @@ class FitResult:
 
 
 def _positions(
-    p: np.ndarray, t0: np.datetime64, model: Any, duration: float, spacing: float
+    p: np.ndarray,
+    t0: np.datetime64,
+    model: Any,
+    duration: float,
+    spacing: float,
+    zonal_degree: int = 2,
 ) -> np.ndarray:
     """States (k, 6) at the observation times for parameters ``p`` at ``t0``."""
     traj = propagate(
@@ -89,6 +94,7 @@ def _positions(
         duration,
         output_step=spacing,
         method="rk8",
+        zonal_degree=zonal_degree,
     )
     k = round(duration / spacing) + 1
     if traj.decayed_at is not None or len(traj.times) < k:
@@ -105,6 +111,7 @@ def fit_element_set(
     spacing: float = DEFAULT_SPACING,
     obs_sigma: float = 1000.0,
     max_iterations: int = 8,
+    zonal_degree: int = 2,
 ) -> FitResult:
     """Fits state and Cd*A/m of one element set to its SGP4 positions.
 
@@ -121,6 +128,8 @@ def fit_element_set(
         obs_sigma: weight of a pseudo-observation, 1-sigma per component, m (default 1 km,
             the order of TLE accuracy); only sets the balance against the prior.
         max_iterations: Gauss-Newton iterations at most.
+        zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6; use the
+            degree the fitted state will be propagated with.
 
     Returns:
         :class:`FitResult`. Raises ValueError if SGP4 fails over the span or the orbit
@@ -165,13 +174,13 @@ def fit_element_set(
     iterations = 0
     jac = np.zeros((len(times) * 3, 7))
     jac_epoch = np.zeros((6, 7))
-    nominal = _positions(p, t0, model, duration, spacing)
+    nominal = _positions(p, t0, model, duration, spacing, zonal_degree)
     for iterations in range(1, max_iterations + 1):  # noqa: B007 - reported
         steps[6] = 0.01 * p[6]
         for j in range(7):
             q = p.copy()
             q[j] += steps[j]
-            pert = _positions(q, t0, model, duration, spacing)
+            pert = _positions(q, t0, model, duration, spacing, zonal_degree)
             jac[:, j] = ((pert[:, :3] - nominal[:, :3]) / steps[j]).ravel()
             jac_epoch[:, j] = (pert[i_epoch] - nominal[i_epoch]) / steps[j]
         res = (obs - nominal[:, :3]).ravel()
@@ -181,7 +190,7 @@ def fit_element_set(
         dp = np.linalg.lstsq(a / scale, b, rcond=None)[0] / scale
         p = p + dp
         p[6] = max(p[6], MIN_DRAG_PARAMETER)
-        nominal = _positions(p, t0, model, duration, spacing)
+        nominal = _positions(p, t0, model, duration, spacing, zonal_degree)
         if np.linalg.norm(dp[:3]) < 0.01 and abs(dp[6]) < 1e-4 * p[6]:
             converged = True
             break

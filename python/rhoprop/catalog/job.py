@@ -189,6 +189,7 @@ def run_catalog_file(
         fit=fit,
         model=atmosphere if fit else None,
         drag_parameters=drag,
+        zonal_degree=zonal_degree,
     )
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
