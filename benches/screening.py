@@ -26,7 +26,7 @@ import rhoprop as rp
 from machine import describe, info
 from rhoprop import catalog
 from rhoprop.conjunction import screen
-from rhoprop.conjunction.approach import STAGES
+from rhoprop.conjunction.screening import STAGES
 
 #: The stage each count feeds, and the timing that measures it.
 RATES = (

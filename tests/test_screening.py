@@ -19,7 +19,7 @@ import pytest
 import rhoprop as rp
 from rhoprop import _core, catalog
 from rhoprop.conjunction import CloseApproach, closest_approach, screen
-from rhoprop.conjunction.approach import STAGES
+from rhoprop.conjunction.screening import STAGES
 from rhoprop.constants import J2, MU, R_EARTH
 from rhoprop.time import add_seconds, seconds_between, ut1_seconds
 
