@@ -203,7 +203,14 @@ def test_rhoprop_run_writes_a_manifest_and_refuses_to_mix(tmp_path, capsys):
     assert main(["run", str(path), "--out", str(out)]) == 0
     manifest = json.loads((out / MANIFEST).read_text())
     assert manifest["complete"]
-    assert sorted(manifest["files"]) == ["ensemble.png", "summary.json", "summary.md"]
+    assert sorted(manifest["files"]) == [
+        "ensemble.nc",
+        "ensemble.png",
+        "oem/a.oem",
+        "oem/b.oem",
+        "summary.json",
+        "summary.md",
+    ]
     assert (out / "summary.md").read_text().startswith("# tiny_study\n")
     assert main(["run", str(path), "--out", str(out)]) == 1
     assert "--overwrite" in capsys.readouterr().err

@@ -1,0 +1,87 @@
+"""The documentation site's code examples run as written (the site: mkdocs.yml, docs/).
+
+Every ```python block of each page listed in PAGES runs, the blocks of one page in order in
+one namespace (as a reader runs them top to bottom), in a temporary working directory that
+holds ``catalog.tle`` (the synthetic sample catalog) for the pages that read a TLE file.
+A block preceded by the comment ``<!-- docs-test: skip REASON -->`` (blank lines between are
+fine) is skipped with that reason: blocks that need real data, a network or objects the
+reader brings. Every page under docs/ is either in PAGES or in ELSEWHERE (with where its
+examples run), so a new page cannot escape. README.md: tests/test_readme.py.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).parents[1]
+DOCS = ROOT / "docs"
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+
+#: Pages whose python blocks run here, with a check of what they print.
+PAGES: dict[str, tuple[str, ...]] = {
+    "getting-started.md": ("2002-09-08T01:00:00", "(500, 25)", "CCSP / Monte Carlo: 1.5"),
+    "own-model.md": ("FromFunction(name='my_model')", "4.810e-12 +- 7.2e-13", "True True"),
+    "mc-vs-ccsp.md": ("PiecewiseConstant / CCSP: 0.9", "long-time theory: 1.52"),
+    "ensembles.md": ("'NRLMSISE-00': 2.555", "1 mode(s)"),
+    "catalogs.md": ("propagated", "local == dask: True"),
+    "plots.md": (),
+    "conjunction.md": (),
+}
+#: Pages whose examples run elsewhere, or that have none.
+ELSEWHERE = {
+    "analysis.md": "tests/test_results_xarray.py::test_docs_analysis_examples_run",
+    "index.md": "no python blocks",
+    "paper-study.md": "no python blocks",
+    "performance.md": "no python blocks",
+    "density-models.md": "no python blocks",
+    "architecture.md": "no python blocks",
+    "conventions.md": "no python blocks",
+    "catalog-realism.md": "no python blocks",
+}
+
+_BLOCK = re.compile(
+    r"(?:<!--\s*docs-test:\s*skip\s+(?P<reason>.*?)\s*-->\s*\n(?:[ \t]*\n)*)?"
+    r"^```python\n(?P<code>.*?)^```",
+    flags=re.S | re.M,
+)
+
+
+def blocks(page: str) -> list[tuple[str, str | None]]:
+    """(code, skip reason or None) of every python block of ``page``, in order."""
+    text = (DOCS / page).read_text()
+    return [(m["code"], m["reason"]) for m in _BLOCK.finditer(text)]
+
+
+def test_every_page_is_accounted_for():
+    pages = {p.relative_to(DOCS).as_posix() for p in DOCS.rglob("*.md")}
+    pages = {p for p in pages if not p.startswith("api/")}  # mkdocstrings pages, no code
+    assert pages == set(PAGES) | set(ELSEWHERE), "list each docs page in PAGES or ELSEWHERE"
+    for page, why in ELSEWHERE.items():
+        if why == "no python blocks":
+            assert not blocks(page), f"{page} has python blocks: add it to PAGES"
+
+
+def test_skip_markers_parse():
+    reasons = [reason for _, reason in blocks("conjunction.md") if reason]
+    assert reasons and all("active.tle" in r for r in reasons)
+
+
+@pytest.mark.parametrize("page", sorted(PAGES))
+def test_page_examples_run(page, tmp_path, monkeypatch, capsys):
+    found = blocks(page)
+    assert found, f"{page} has no python blocks"
+    runnable = [code for code, reason in found if reason is None]
+    if not runnable:
+        pytest.skip("; ".join(f"{page}: {reason}" for _, reason in found))
+    shutil.copy(SAMPLE, tmp_path / "catalog.tle")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, object] = {}
+    for code in runnable:
+        exec(compile(code, f"docs/{page}", "exec"), namespace)
+    out = capsys.readouterr().out
+    for expected in PAGES[page]:
+        assert expected in out, f"docs/{page} no longer prints {expected!r}:\n{out}"
