@@ -140,6 +140,7 @@ def run_config(
     threads: int,
     update_interval: float,
     fit_span: tuple[float, float] | None = None,
+    drag_sigma: Any = "auto",
 ) -> tuple[dict[int, dict[str, Any]], float, float]:
     """Predicted mean and covariance at each object's truth epoch; the load (and fit)
     time and the propagation time, s."""
@@ -162,6 +163,7 @@ def run_config(
             update_interval=update_interval,
             progress=False,
             errors="record",
+            drag_sigma=drag_sigma,
             **({} if cov is None else {"initial_covariance": cov}),
         )
         return obj.norad_id, {
@@ -258,6 +260,12 @@ def main() -> None:
     parser.add_argument(
         "--update-interval", type=float, default=3600.0, help="CCSP update interval, s"
     )
+    parser.add_argument(
+        "--drag-sigma",
+        default="auto",
+        help="relative 1-sigma of Cd*A/m propagated by the CCSP: 'auto' (default: the fit's, "
+        "at least 0.15; 0.15 without a fit) or a number (0: none, as before issue 16 item 3)",
+    )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = parser.parse_args()
     folder = data_dir()
@@ -288,18 +296,28 @@ def main() -> None:
             start_s, end_s = (float(x) for x in args.fit_span.split(","))
             span = (start_s, end_s)
         results = {}
+        drag_sigma = args.drag_sigma if args.drag_sigma == "auto" else float(args.drag_sigma)
+        print(f"Cd*A/m relative sigma: {drag_sigma}")
         for config in args.configs.split(","):
             pred, t_load, t_run = run_config(
-                config, path, field, truth, args.threads, args.update_interval, span
+                config, path, field, truth, args.threads, args.update_interval, span, drag_sigma
             )
             results[config] = figures(pred, truth)
             results[config]["seconds"] = {"load": t_load, "propagation": t_run}
             show(config, results[config], t_load, t_run)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    name = f"catalog_realism_{int(args.update_interval)}s.json"
+    name = f"catalog_realism_{int(args.update_interval)}s_drag_{args.drag_sigma}.json"
     (out / name).write_text(
-        json.dumps({"machine": info(), "objects": len(ids), "results": results}, indent=2)
+        json.dumps(
+            {
+                "machine": info(),
+                "objects": len(ids),
+                "drag_sigma": args.drag_sigma,
+                "results": results,
+            },
+            indent=2,
+        )
     )
 
 

@@ -225,8 +225,10 @@ def test_monte_carlo_catalog_goes_through_the_public_wrapper():
         n=16,
         seed=5,
         progress=False,
+        drag_sigma=0.15,  # drag_sigma="auto": 0.15 for an object without a fit
     )
     np.testing.assert_array_equal(r.covariance[2], mc.moments().covariance)
+    np.testing.assert_array_equal(r.drag_sigma, 0.15)
     assert (r.status == "propagated").all()
 
 

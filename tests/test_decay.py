@@ -198,6 +198,7 @@ def test_catalog_monte_carlo_moments_use_the_survivors():
         n=20,
         seed=5 + k,
         progress=False,
+        drag_sigma=0.15,  # the catalog's drag_sigma="auto" for an object without a fit
     )
     m = mc.moments()
     ok = m.count >= 2

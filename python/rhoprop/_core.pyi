@@ -15,6 +15,7 @@ __all__ = [
     "HARD_BODY_SHAPES",
     "J2",
     "KAPPA_KINDS",
+    "MAX_DRAG_SIGMA",
     "MAX_STEPS",
     "MU",
     "OMEGA_EARTH",
@@ -53,6 +54,8 @@ OMEGA_EARTH: float
 SECONDS_PER_DAY: float
 DEFAULT_FLOOR_ALTITUDE: float
 MAX_STEPS: int
+# Largest relative 1-sigma of Cd*A/m (drag_sigma) that monte_carlo and ccsp accept.
+MAX_DRAG_SIGMA: float
 # Names of the kappa processes: the first item of monte_carlo's kappa spec.
 KAPPA_KINDS: tuple[str, ...]
 # Names of the hard-body shapes pc_2d accepts.
@@ -124,8 +127,11 @@ def ccsp(
     step: float,
     floor_altitude: float,
     zonal_degree: int = 2,
-) -> dict[str, _F64]:
-    """CCSP filter: times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6)."""
+    drag_sigma: float = 0.0,
+) -> dict[str, Any]:
+    """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
+    (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
+    Cd*A/m carried as the second consider parameter."""
 
 def monte_carlo(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
@@ -145,9 +151,11 @@ def monte_carlo(
     threads: int | None,
     progress: Callable[[int], object] | None,
     zonal_degree: int = 2,
+    drag_sigma: float = 0.0,
 ) -> dict[str, Any]:
     """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
-    (n,), decay_times (n,), step (s)."""
+    (n,), decay_times (n,), step (s), drag_factors (n,) (factor on Cd*A/m per member,
+    log-normal with log-sigma drag_sigma)."""
 
 def gmst(ut1: _F64) -> _F64:
     """GMST (IAU-82), rad, for UT1 seconds since J2000."""

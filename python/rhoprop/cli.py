@@ -52,6 +52,7 @@ def _catalog(args: argparse.Namespace) -> int:
         update_interval=args.update_interval,
         drag_file=args.drag_file,
         cd=args.cd,
+        drag_sigma=args.drag_sigma,
     )
     return 0
 
@@ -250,6 +251,14 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         default=None,
         help="drag coefficient for a --drag-file that gives area_to_mass (default 2.2)",
+    )
+    cat.add_argument(
+        "--drag-sigma",
+        default="auto",
+        metavar="auto|S",
+        help="relative 1-sigma of each object's Cd*A/m propagated with the density "
+        "uncertainty (CCSP consider parameter, Monte Carlo samples): 'auto' (default: the "
+        "fit's, at least 0.15, at most 1; 0.15 without --fit) or a number (0: none)",
     )
     cat.add_argument(
         "--model",

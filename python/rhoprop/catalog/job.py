@@ -159,6 +159,7 @@ def run_catalog_file(
     update_interval: float = 3600.0,
     drag_file: str | Path | None = None,
     cd: float | None = None,
+    drag_sigma: str | float = "auto",
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -175,8 +176,17 @@ def run_catalog_file(
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only, default) to 6 (J2..J6).
     ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
     interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
+    ``drag_sigma``: relative 1-sigma of Cd*A/m, "auto" or a number (text from the command
+    line is converted), see :func:`~rhoprop.catalog.propagate_catalog`.
     Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
+    if isinstance(drag_sigma, str) and drag_sigma != "auto":
+        try:
+            drag_sigma = float(drag_sigma)
+        except ValueError:
+            raise ValueError(
+                f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
+            ) from None
     drag = read_drag_file(drag_file, cd) if drag_file is not None else None
     if drag_file is None and cd is not None:
         raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
@@ -216,6 +226,7 @@ def run_catalog_file(
         zonal_degree=zonal_degree,
         seed=seed,
         update_interval=update_interval,
+        drag_sigma=drag_sigma,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory

@@ -6,7 +6,6 @@ recorded per object), never swallowed."""
 from __future__ import annotations
 
 import concurrent.futures as cf
-import os
 import re
 import threading
 from dataclasses import dataclass
@@ -18,6 +17,7 @@ from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel, altitude_band
 from ..errors import RhopropError
+from ..parallel import worker_count
 from ..progress import ProgressBar
 from ..propagation import (
     Spacecraft,
@@ -26,6 +26,7 @@ from ..propagation import (
     propagate,
 )
 from ..propagation.kappa import GaussMarkov, KappaProcess
+from ..propagation.montecarlo import drag_sigma_argument
 from ..propagation.propagate import FIELD_MARGIN, zonal_degree_argument
 from ..propagation.results import (
     dataset_attrs,
@@ -44,6 +45,7 @@ from ..time import (
 )
 from .covariance import paper_covariance
 from .elements import CatalogObject
+from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA, _relative_sigma
 
 if TYPE_CHECKING:
     import pandas
@@ -82,6 +84,8 @@ class CatalogResult:
             ``errors="record"``).
         reason: per object, what happened in words ("" when propagated): the decay epoch,
             where the CCSP stopped, or the error (type and message) of a failed object.
+        drag_sigma: per object (objects,), the relative 1-sigma of Cd*A/m propagated (0:
+            none); None for results built by hand.
     """
 
     objects: list[CatalogObject]
@@ -95,6 +99,7 @@ class CatalogResult:
     status: np.ndarray
     reason: np.ndarray
     covariance_note: np.ndarray | None = None
+    drag_sigma: np.ndarray | None = None
 
     def to_xarray(self) -> xarray.Dataset:
         """The run as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
@@ -180,6 +185,51 @@ PROPAGATED_NOTE = (
     "coefficient uncertainty, space-weather forecast error beyond the model's driver "
     "sigma, manoeuvres"
 )
+
+
+#: Largest relative Cd*A/m sigma of ``drag_sigma="auto"``: a fit whose prior dominated
+#: (``FitResult.drag_observable`` False) reports formal sigmas of several times Cd*A/m.
+AUTO_DRAG_SIGMA_MAX = 1.0
+
+
+def _drag_sigma(obj: CatalogObject, choice: Any) -> float:
+    """The relative 1-sigma of Cd*A/m of ``obj`` for ``drag_sigma=choice``: "auto" is the
+    rule of :func:`~rhoprop.catalog.reentry`, the fit's formal relative sigma but at least
+    ``DEFAULT_DRAG_RELATIVE_SIGMA`` (0.15), or 0.15 without a fit, and at most
+    ``AUTO_DRAG_SIGMA_MAX`` (1); a number for every object; a callable object -> number.
+    Checked like ``rp.ccsp``'s ``drag_sigma``."""
+    if isinstance(choice, str):
+        if choice != "auto":
+            raise ValueError(f"drag_sigma must be 'auto', a number or a callable, got {choice!r}")
+        value: Any = min(_relative_sigma(obj, None), AUTO_DRAG_SIGMA_MAX)
+    elif callable(choice):
+        value = choice(obj)
+    else:
+        value = choice
+    try:
+        return drag_sigma_argument(value)
+    except (TypeError, ValueError) as err:
+        raise type(err)(f"object {obj.norad_id} ({obj.name}): {err}") from None
+
+
+def _drag_note(obj: CatalogObject, sigma: float, choice: Any) -> str:
+    """What the propagation includes, in words, for a relative Cd*A/m sigma ``sigma``."""
+    if sigma == 0.0:
+        return PROPAGATED_NOTE
+    if isinstance(choice, str):
+        why = (
+            f"the fit's formal sigma, at least {DEFAULT_DRAG_RELATIVE_SIGMA:g}, at most "
+            f"{AUTO_DRAG_SIGMA_MAX:g}"
+            if obj.fit is not None
+            else "assumed, no fit"
+        )
+    else:
+        why = "user-supplied"
+    return (
+        f"propagated: density uncertainty of the model (kappa) and the ballistic "
+        f"coefficient's (Cd*A/m relative 1-sigma {sigma:.3g}, {why}); not included: "
+        f"space-weather forecast error beyond the model's driver sigma, manoeuvres"
+    )
 
 
 _PAPER_NOTE = "initial covariance: the paper's near-zero 1 mm, 1 um/s (Monte Carlo: none)"
@@ -320,7 +370,9 @@ def _propagate_object(
         decay = mean.decayed_at
         k = int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
         if k:
-            means, covs, stopped = _ccsp_outputs(obj, craft, model, offsets[:k], cfg, initial)
+            means, covs, stopped = _ccsp_outputs(
+                obj, craft, model, offsets[:k], cfg, initial, cfg["drag_sigmas"][index]
+            )
             done = len(means)
             out_mean[:done], out_cov[:done] = means, covs
             if stopped:
@@ -338,6 +390,7 @@ def _propagate_object(
             model,
             output_times=offsets,
             n=cfg["n"],
+            drag_sigma=cfg["drag_sigmas"][index],
             kappa=cfg["kappa"],
             seed=cfg["seed"] + index,
             output_step=None,
@@ -383,6 +436,7 @@ def _ccsp_outputs(
     offsets: np.ndarray,
     cfg: dict[str, Any],
     initial: np.ndarray | None,
+    drag_sigma: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """CCSP means (k, 6) and covariances (k, 6, 6) at the first k of ``offsets`` (s from
     the object's epoch) it reached, and "" or why it stopped before the last. Only a
@@ -401,6 +455,7 @@ def _ccsp_outputs(
             initial_covariance=initial,
             floor_altitude=cfg["floor_altitude"],
             zonal_degree=cfg["zonal_degree"],
+            drag_sigma=drag_sigma,
         )
 
     k, why = len(offsets), ""
@@ -531,7 +586,7 @@ def _run_local(
     sigma points or members. Ctrl-C (or an error) cancels the objects not started and
     stops running Monte Carlos at once; a running CCSP finishes its object first."""
     stop = threading.Event()
-    pool = cf.ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
+    pool = cf.ThreadPoolExecutor(max_workers=worker_count())
     results: dict[int, dict[str, Any]] = {}
     try:
         futures = [
@@ -567,6 +622,7 @@ def propagate_catalog(
     errors: str = "raise",
     initial_covariance: Any = None,
     zonal_degree: int = 2,
+    drag_sigma: Any = "auto",
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -599,6 +655,14 @@ def propagate_catalog(
             ``covariance_note`` (and the OEM and summary).
         zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
             only, the paper's model; up to 6 adds J3..J6 (EGM2008).
+        drag_sigma: relative 1-sigma of each object's Cd*A/m (dimensionless, 0.15 =
+            15 %), propagated as the CCSP's second consider parameter or sampled per Monte
+            Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
+            fit's formal relative sigma but at least 0.15 (at most 1, for fits whose prior
+            dominated), or 0.15 for an object without a fit (the rule of
+            ``rp.catalog.reentry``); a number for every object (0: none,
+            the behaviour before issue 16); or a callable object -> number. Recorded in
+            ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md).
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -640,8 +704,12 @@ def propagate_catalog(
         "errors": errors,
         "initial_covariance": initial_covariance,
         "zonal_degree": zonal_degree_argument(zonal_degree),
+        "drag_sigmas": tuple(_drag_sigma(o, drag_sigma) for o in objs),
     }
-    notes = [f"{_initial_covariance(o, initial_covariance)[1]}; {PROPAGATED_NOTE}" for o in objs]
+    notes = [
+        f"{_initial_covariance(o, initial_covariance)[1]}; {_drag_note(o, sig, drag_sigma)}"
+        for o, sig in zip(objs, cfg["drag_sigmas"], strict=True)
+    ]
     epochs = common_epochs(objs, end64, step)
     shipped = _shipped_model(model, objs, end64, floor)
     bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
@@ -677,4 +745,5 @@ def propagate_catalog(
         status=np.array([r["status"] for r in order], dtype=object),
         reason=np.array([r["reason"] for r in order], dtype=object),
         covariance_note=np.array(notes, dtype=object),
+        drag_sigma=np.array(cfg["drag_sigmas"], dtype=float),
     )

@@ -40,6 +40,18 @@ def max_threads() -> int:
     return MAX_THREADS_PER_CPU * (os.cpu_count() or 1)
 
 
+def drag_sigma_argument(value: object) -> float:
+    """``drag_sigma`` checked: the relative 1-sigma of Cd*A/m, a finite number from 0 to
+    ``rhoprop._core.MAX_DRAG_SIGMA`` (3); else a ValueError/TypeError naming it."""
+    out = _validate.real("drag_sigma", value)
+    if not 0.0 <= out <= _core.MAX_DRAG_SIGMA:
+        raise ValueError(
+            f"drag_sigma must be from 0 to {_core.MAX_DRAG_SIGMA:g} (the relative 1-sigma of "
+            f"Cd*A/m, e.g. 0.1 = 10 %), got {out}"
+        )
+    return out
+
+
 def result_bytes(n: int, nt: int, record_density: bool) -> int:
     """Memory of a Monte Carlo's member arrays, bytes: positions, velocities and RTN
     errors (9 float64 per member and output) plus the densities (1 more) if recorded."""
@@ -67,6 +79,7 @@ def monte_carlo(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     max_memory: float = DEFAULT_MAX_MEMORY,
     zonal_degree: int = 2,
+    drag_sigma: float = 0.0,
 ) -> MonteCarloResult:
     """Propagates ``n`` members, each with its own density perturbation kappa(t).
 
@@ -110,6 +123,13 @@ def monte_carlo(
         zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
             only, the paper's model; 3 to 6 add J3..J6 (EGM2008), which move the paper's orbit
             by 1.6 km in a day.
+        drag_sigma: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
+            0.1 = 10 %; default 0: every member flies the spacecraft's value). Member i
+            flies Cd*A/m times exp(drag_sigma c_i), c_i ~ N(0, 1): a log-normal with
+            median the nominal value (always positive; for small sigma, 1 + drag_sigma c).
+            c_i comes from a stream of its own per member, so it depends only on ``seed``
+            and i (not on the thread count) and leaves the member's kappa draws as they
+            are without it. The factors are ``result.drag_factors``. At most 3.
 
     Returns:
         :class:`MonteCarloResult`. Decayed members are NaN from their decay time on and
@@ -162,6 +182,7 @@ def monte_carlo(
     )
     floor = _validate.real("floor_altitude", floor_altitude)
     degree = zonal_degree_argument(zonal_degree)
+    drag_sigma = drag_sigma_argument(drag_sigma)
     cov = None
     if initial_covariance is not None:
         cov = np.array(initial_covariance, dtype=float)
@@ -194,11 +215,12 @@ def monte_carlo(
                 threads,
                 callback,
                 degree,
+                drag_sigma,
             )
         finally:
             if bar is not None:
                 bar.close()
-        # The mean orbit: same integrator, step and field, kappa = 0.
+        # The mean orbit: same integrator, step and field, kappa = 0, nominal Cd*A/m.
         mean = _core.propagate(
             atmosphere,
             epoch,
@@ -239,6 +261,8 @@ def monte_carlo(
         step=float(out["step"]),
         reference_positions=ref_p,
         reference_velocities=ref_v,
+        drag_sigma=drag_sigma,
+        drag_factors=np.asarray(out["drag_factors"], dtype=float),
     )
 
 

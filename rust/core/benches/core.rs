@@ -141,6 +141,7 @@ fn runs(c: &mut Criterion) {
         members: 64,
         seed: 1,
         record_density: false,
+        drag_sigma: 0.0,
     };
     group.bench_function("exponential/64 members x 1 day", |b| {
         b.iter(|| monte_carlo(&atm, black_box(&mc), &Progress::default()).unwrap())
@@ -194,6 +195,7 @@ fn runs(c: &mut Criterion) {
         perturbation: Perturbation::Additive,
         method: FixedMethod::Rk8,
         max_step: 180.0,
+        drag_sigma: 0.0,
     };
     group.bench_function("exponential/3 days, hourly updates", |b| {
         b.iter(|| ccsp(&atm, black_box(&cfg), &Progress::default()).unwrap())

@@ -43,6 +43,7 @@ fn main() {
         members,
         seed: 1,
         record_density: false,
+        drag_sigma: 0.0,
     };
     let out = monte_carlo(&atm, &cfg, &Progress::default()).expect("run");
     let member_rhs = members as u64 * (86400.0 / 240.0) as u64 * 12;

@@ -10,6 +10,15 @@
 //! cross-covariance shrinks by 1 / (lambda2 + p) per update: the filter is the linearised
 //! covariance of a kappa piecewise constant over each interval with correlation
 //! 1 / (lambda2 + p) between consecutive intervals.
+//!
+//! With `drag_sigma` > 0 a second consider parameter joins: c, the normalised error of
+//! Cd*A/m (unit variance; the sigma point flies with Cd*A/m exp(drag_sigma c)). Unlike
+//! kappa it is a constant of the object, so its cross-covariance D with the state is
+//! carried in full from update to update (never shrunk): the augmented state is
+//! [r, v, kappa, c], p = 2, and the factor is
+//! S = [[Chol(A), C / sqrt(l2), alpha sqrt(l2) D], [0, sqrt(l2), 0], [0, 0, alpha sqrt(l2)]]
+//! with A = l1 (P - D D^T) - C C^T / l2 and alpha = [`DRAG_ALPHA`] (docs/conventions.md
+//! derives it).
 
 use crate::decay::{crossing, lane_step, may_cross_lanes};
 use crate::density::Atmosphere;
@@ -17,10 +26,12 @@ use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{finite, positive, CoreError};
 use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::KappaLanes;
-use crate::problem::Problem;
+use crate::problem::{check_drag_sigma, drag_factor, Problem};
 use crate::progress::Progress;
 use crate::simd::{dispatch_on, Kernel, SimdPath};
 use nalgebra::{Cholesky, Matrix6, SMatrix, Vector6};
+
+type Matrix8 = SMatrix<f64, 8, 8>;
 use rayon::prelude::*;
 
 /// Settings of a CCSP run.
@@ -38,6 +49,9 @@ pub struct CcspConfig {
     pub method: FixedMethod,
     /// Largest integration step, s.
     pub max_step: f64,
+    /// Relative 1-sigma of Cd*A/m (log-normal, [`drag_factor`]), carried as the second
+    /// consider parameter c; 0 (the paper's filter) leaves it out.
+    pub drag_sigma: f64,
 }
 
 /// Mean, covariance and state-kappa cross-covariance at every update time.
@@ -47,29 +61,53 @@ pub struct CcspOutput {
     pub means: Vec<[f64; 6]>,
     pub covariances: Vec<[[f64; 6]; 6]>,
     pub cross: Vec<[f64; 6]>,
+    /// Cross-covariance of the state with the normalised ballistic-coefficient error c
+    /// (zero when `drag_sigma` is 0).
+    pub drag_cross: Vec<[f64; 6]>,
     /// When a sigma point first went below the floor altitude (s from the epoch): the
     /// filter stopped there and the outputs end at the last update before it.
     pub decayed_at: Option<f64>,
 }
 
 const N: usize = 6;
-/// Sigma points: 2n + 1 state points, then 2p + 1 consider points (p = 1).
-const POINTS: usize = 2 * N + 1 + 3;
+/// Sigma points: 2n + 1 state points, then the consider points: their centre, kappa + and
+/// -, and (with a ballistic-coefficient sigma) c + and -.
+const POINTS_KAPPA: usize = 2 * N + 1 + 3;
+const POINTS_DRAG: usize = POINTS_KAPPA + 2;
+/// Scaling alpha of the c points (the scaled unscented transform, Julier 2002, for the
+/// ballistic-coefficient set alone): they probe +-alpha sqrt(l2) in c and the state
+/// +-alpha sqrt(l2) D, with weights 1 / (2 l2 alpha^2), so they reproduce D D^T for any
+/// alpha; a small alpha is the tangent-linear limit. At alpha = 1 the points lie
+/// sqrt(3) sigma along a straight line in Cartesian space while the spread is curved
+/// along the orbit (kilometres along-track): re-drawn there every update, they lost 24 %
+/// of the along-track sigma by 3 days at drag_sigma = 0.3 against finite differences and
+/// a Monte Carlo (docs/conventions.md).
+pub const DRAG_ALPHA: f64 = 0.01;
+/// A sigma point: [state (6), kappa, c].
+type Point = [f64; 8];
 
-type Matrix7 = SMatrix<f64, 7, 7>;
-
-/// The scaled block factor S = [[Chol(A), B^T], [0, sqrt(l2)]] of DESIGN.md section 6, with
-/// B = C^T / sqrt(l2) and A = l1 P - B^T B, for state covariance `p` (already including
-/// C C^T) and cross-covariance `c` (kappa has unit variance). `t` names the epoch in errors.
+/// The scaled block factor of DESIGN.md section 6 generalised to the two consider
+/// parameters [kappa, c]:
+/// S = [[Chol(A), B^T], [0, diag(sqrt(l2), alpha sqrt(l2))]] with
+/// B^T = [C / sqrt(l2), alpha sqrt(l2) D] and A = l1 `pc` - C C^T / l2, where
+/// `pc` = P - D D^T is the state covariance without the part explained by c (it includes
+/// C C^T), `c` the cross-covariance with kappa and `d` the cross-covariance with c (both
+/// of unit variance), `alpha` the scaling of the c points ([`DRAG_ALPHA`]). Hence
+/// S S^T = [[l1 pc + a^2 l2 D D^T, C, a^2 l2 D], [C^T, l2, 0], [a^2 l2 D^T, 0, a^2 l2]]
+/// (a = alpha): kappa's cross block unscaled as in DESIGN.md (the 1 / l2 forgetting per
+/// update), c's scaled like its variance (carried in full). With D = 0 the first seven
+/// rows and columns are the p = 1 factor exactly. `t` names the epoch in errors.
 pub fn factor(
-    p: &Matrix6<f64>,
+    pc: &Matrix6<f64>,
     c: &Vector6<f64>,
+    d: &Vector6<f64>,
     l1: f64,
     l2: f64,
+    alpha: f64,
     t: f64,
-) -> Result<Matrix7, CoreError> {
+) -> Result<Matrix8, CoreError> {
     let bt = c / l2.sqrt();
-    let a = p * l1 - bt * bt.transpose();
+    let a = pc * l1 - bt * bt.transpose();
     let a = (a + a.transpose()) * 0.5;
     let chol = Cholesky::new(a).ok_or_else(|| {
         CoreError::invalid(
@@ -78,10 +116,13 @@ pub fn factor(
             "is not positive definite (value: smallest eigenvalue of (lambda1+n) P - B^T B)",
         )
     })?;
-    let mut s = Matrix7::zeros();
+    let mut s = Matrix8::zeros();
     s.fixed_view_mut::<6, 6>(0, 0).copy_from(&chol.l());
     s.fixed_view_mut::<6, 1>(0, 6).copy_from(&bt);
+    s.fixed_view_mut::<6, 1>(0, 7)
+        .copy_from(&(d * (alpha * l2.sqrt())));
     s[(6, 6)] = l2.sqrt();
+    s[(7, 7)] = alpha * l2.sqrt();
     Ok(s)
 }
 
@@ -104,6 +145,7 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
     positive("step", cfg.max_step)?;
     positive("scaling[0] (lambda1 + n)", cfg.scaling.0)?;
     positive("scaling[1] (lambda2 + p)", cfg.scaling.1)?;
+    let drag_on = check_drag_sigma(cfg.drag_sigma)? > 0.0;
     let (l1, l2) = cfg.scaling;
     // UKF weights: w0 = lambda / (n + lambda), wi = 1 / (2 (n + lambda)).
     let (w0, wi) = ((l1 - N as f64) / l1, 0.5 / l1);
@@ -123,30 +165,36 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
     }
     let y0 = cfg.problem.y0;
     let mut mean = Vector6::from_column_slice(&y0);
-    let mut p = p0;
+    // The state covariance without the part explained by c: P = pc + D D^T.
+    let mut pc = p0;
     let mut c = Vector6::zeros();
+    let mut d = Vector6::zeros();
     let mut out = CcspOutput {
         times: vec![0.0],
         means: vec![y0],
         covariances: vec![cfg.p0],
         cross: vec![[0.0; 6]],
+        drag_cross: vec![[0.0; 6]],
         decayed_at: None,
     };
+    let npoints = if drag_on { POINTS_DRAG } else { POINTS_KAPPA };
     let mut t = 0.0;
     for &t1 in &cfg.update_times {
         progress.check()?;
-        let s = factor(&p, &c, l1, l2, t)?;
-        // Sigma points [state; kappa] around the mean (kappa mean 0).
-        let mut points = [[0.0f64; 7]; POINTS];
+        let s = factor(&pc, &c, &d, l1, l2, DRAG_ALPHA, t)?;
+        // Sigma points [state; kappa; c] around the mean (kappa and c of mean 0).
+        let mut points = vec![[0.0f64; 8]; npoints];
         for (k, pt) in points.iter_mut().enumerate() {
             let (col, sign) = match k {
                 0 | 13 => (None, 0.0),
                 1..=6 => (Some(k - 1), 1.0),
                 7..=12 => (Some(k - 7), -1.0),
                 14 => (Some(6), 1.0),
-                _ => (Some(6), -1.0),
+                15 => (Some(6), -1.0),
+                16 => (Some(7), 1.0),
+                _ => (Some(7), -1.0),
             };
-            for i in 0..7 {
+            for i in 0..8 {
                 let base = if i < N { mean[i] } else { 0.0 };
                 pt[i] = base + col.map_or(0.0, |j| sign * s[(i, j)]);
             }
@@ -172,15 +220,29 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
         }
         mean = m1;
         c = cross;
-        p = p1 + c * c.transpose();
-        p = (p + p.transpose()) * 0.5;
-        if Cholesky::new(p).is_none() {
+        pc = p1 + c * c.transpose();
+        pc = (pc + pc.transpose()) * 0.5;
+        if Cholesky::new(pc).is_none() {
             return Err(CoreError::invalid(
                 format!("CCSP covariance at t = {t1} s"),
-                p.symmetric_eigenvalues().min(),
+                pc.symmetric_eigenvalues().min(),
                 "is not positive definite (value: smallest eigenvalue); try a larger initial \
                  covariance or scaling",
             ));
+        }
+        let mut p = pc;
+        if drag_on {
+            // Set 2, c points: the cross-covariance with the ballistic-coefficient error,
+            // carried whole. The points sit at +-alpha sqrt(l2) in c with weights
+            // 1 / (2 l2 alpha^2) (they reproduce D D^T for any alpha); the consider
+            // centre (point 13) is the reference, as the weighted mean cancels.
+            let wc = 0.5 / (l2 * DRAG_ALPHA * DRAG_ALPHA);
+            d = [16, 17]
+                .iter()
+                .map(|&k| wc * (ends[k] - ends[13]) * points[k][7])
+                .sum();
+            p = pc + d * d.transpose();
+            p = (p + p.transpose()) * 0.5;
         }
         t = t1;
         out.times.push(t);
@@ -188,6 +250,7 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
         out.covariances
             .push(std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])));
         out.cross.push(std::array::from_fn(|i| c[i]));
+        out.drag_cross.push(std::array::from_fn(|i| d[i]));
         progress.add(1);
     }
     Ok(out)
@@ -209,7 +272,7 @@ type PointEnds = (Vec<Vector6<f64>>, Option<f64>);
 fn propagate_points<A: Atmosphere + ?Sized>(
     atmosphere: &A,
     cfg: &CcspConfig,
-    points: &[[f64; 7]; POINTS],
+    points: &[Point],
     t0: f64,
     t1: f64,
     progress: &Progress,
@@ -225,7 +288,7 @@ fn propagate_points_in<A: Atmosphere + ?Sized, const W: usize>(
     path: SimdPath,
     atmosphere: &A,
     cfg: &CcspConfig,
-    points: &[[f64; 7]; POINTS],
+    points: &[Point],
     t0: f64,
     t1: f64,
     progress: &Progress,
@@ -285,12 +348,12 @@ impl<R, const W: usize> StepHooks<W, R> for FloorWatch<W> {
     }
 }
 
-/// Up to `W` sigma points [state; kappa] stepped together through `plan` (unused lanes
+/// Up to `W` sigma points [state; kappa; c] stepped together through `plan` (unused lanes
 /// repeat the last point and are discarded).
 struct SigmaBatch<'a, A: ?Sized, const W: usize> {
     atmosphere: &'a A,
     cfg: &'a CcspConfig,
-    chunk: &'a [[f64; 7]],
+    chunk: &'a [Point],
     plan: &'a StepPlan,
 }
 
@@ -308,15 +371,17 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
         let lanes = chunk.len();
         let mut y: State<W> = [[0.0; W]; 6];
         let mut kappa = KappaLanes::<W>::zero();
+        let mut drag = [0.0; W];
+        let problem = &cfg.problem;
         for l in 0..W {
             let pt = chunk[l.min(lanes - 1)];
             for c in 0..6 {
                 y[c][l] = pt[c];
             }
             kappa.k0[l] = pt[6];
+            drag[l] = problem.drag * drag_factor(cfg.drag_sigma, pt[7]);
         }
-        let problem = &cfg.problem;
-        let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, [problem.drag; W]);
+        let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, drag);
         dynamics.zonal_degree = problem.zonal_degree;
         dynamics.perturbation = cfg.perturbation;
         dynamics.kappa = kappa;
@@ -347,26 +412,44 @@ mod tests {
         fn factor_reproduces_the_documented_product(
             diag in proptest::collection::vec(1.0f64..100.0, 6),
             c in proptest::collection::vec(-1.0f64..1.0, 6),
+            d in proptest::collection::vec(-10.0f64..10.0, 6),
+            l1 in 1.0f64..5.0,
+            l2 in 1.0f64..5.0,
+            alpha in 0.01f64..1.0,
         ) {
-            // S S^T = [[l1 P, C], [C^T, l2]] (DESIGN.md section 6: the cross block unscaled).
-            let mut p = Matrix6::from_diagonal(&Vector6::from_column_slice(&diag));
+            // S S^T = [[l1 pc + a^2 l2 D D^T, C, a^2 l2 D], [C^T, l2, 0], [a^2 l2 D^T, 0,
+            // a^2 l2]]: kappa's cross block unscaled (DESIGN.md section 6), c's scaled like
+            // its variance (a = alpha).
+            let mut pc = Matrix6::from_diagonal(&Vector6::from_column_slice(&diag));
             let c = Vector6::from_column_slice(&c);
-            p += c * c.transpose();
-            let s = factor(&p, &c, 3.0, 3.0, 0.0).unwrap();
+            let d = Vector6::from_column_slice(&d);
+            pc += c * c.transpose();
+            let s = factor(&pc, &c, &d, l1, l2, alpha, 0.0).unwrap();
             let sst = s * s.transpose();
-            let tl = sst.fixed_view::<6, 6>(0, 0) - p * 3.0;
-            prop_assert!(tl.abs().max() < 1e-9 * p.abs().max());
+            let a2 = alpha * alpha;
+            let scale = (pc * l1 + d * d.transpose() * (a2 * l2)).abs().max();
+            let tl = sst.fixed_view::<6, 6>(0, 0) - pc * l1 - d * d.transpose() * (a2 * l2);
+            prop_assert!(tl.abs().max() < 1e-9 * scale);
             prop_assert!((sst.fixed_view::<6, 1>(0, 6) - c).abs().max() < 1e-12);
-            prop_assert!((sst[(6, 6)] - 3.0).abs() < 1e-12);
+            let cross = sst.fixed_view::<6, 1>(0, 7) - d * (a2 * l2);
+            prop_assert!(cross.abs().max() < 1e-12 * scale);
+            prop_assert!((sst[(6, 6)] - l2).abs() < 1e-12);
+            prop_assert!((sst[(7, 7)] - a2 * l2).abs() < 1e-12);
+            prop_assert!(sst[(6, 7)] == 0.0);
             // Lower block-triangular: zeros below the state block.
-            prop_assert!(s.fixed_view::<1, 6>(6, 0).abs().max() == 0.0);
+            prop_assert!(s.fixed_view::<2, 6>(6, 0).abs().max() == 0.0);
+            // With D = 0 the p = 1 factor of DESIGN.md section 6, bit for bit.
+            let s0 = factor(&pc, &c, &Vector6::zeros(), l1, l2, alpha, 0.0).unwrap();
+            prop_assert!(s0.fixed_view::<7, 7>(0, 0) == s.fixed_view::<7, 7>(0, 0));
+            prop_assert!(s0.fixed_view::<6, 1>(0, 7).abs().max() == 0.0);
         }
     }
 
     #[test]
     fn non_positive_definite_is_an_error_naming_the_epoch() {
         let p = Matrix6::from_diagonal(&Vector6::new(1.0, 1.0, 1.0, 1.0, 1.0, -1.0));
-        let e = factor(&p, &Vector6::zeros(), 3.0, 3.0, 7200.0).unwrap_err();
+        let z = Vector6::zeros();
+        let e = factor(&p, &z, &z, 3.0, 3.0, DRAG_ALPHA, 7200.0).unwrap_err();
         assert!(e.to_string().contains("t = 7200 s"), "{e}");
     }
 
@@ -399,6 +482,7 @@ mod tests {
             perturbation: Perturbation::Additive,
             method: FixedMethod::Rk8,
             max_step: 180.0,
+            drag_sigma: 0.0,
         };
         let out = ccsp(&atm, &cfg, &Progress::default()).unwrap();
         let mean = propagate(
@@ -447,6 +531,7 @@ mod tests {
             perturbation: Perturbation::Additive,
             method: FixedMethod::Rk8,
             max_step: 180.0,
+            drag_sigma: 0.0,
         };
         let p = Progress::default();
         p.cancel.store(true, Ordering::Relaxed);
@@ -456,5 +541,122 @@ mod tests {
         let out = ccsp(&atm, &cfg, &p).unwrap();
         assert_eq!(out.times, vec![0.0, 3600.0, 7200.0]);
         assert_eq!(p.done.load(Ordering::Relaxed), 2);
+    }
+
+    /// The paper's orbit and craft with the paper's near-zero initial covariance.
+    fn paper_config(update_times: Vec<f64>, drag_sigma: f64) -> CcspConfig {
+        let mut p0 = [[0.0; 6]; 6];
+        for i in 0..6 {
+            p0[i][i] = if i < 3 { 1e-6 } else { 1e-12 };
+        }
+        CcspConfig {
+            problem: Problem {
+                epoch: 8.4e7,
+                y0: [
+                    3782900.7032,
+                    -5441600.6779,
+                    -1420075.1327,
+                    -606.6600,
+                    1539.2559,
+                    -7488.3946,
+                ],
+                drag: 3.0912 * 0.0015,
+                floor_altitude: 120e3,
+                zonal_degree: 2,
+            },
+            p0,
+            update_times,
+            scaling: (3.0, 3.0),
+            perturbation: Perturbation::Additive,
+            method: FixedMethod::Rk8,
+            max_step: 180.0,
+            drag_sigma,
+        }
+    }
+
+    /// Position at `t` of the paper's orbit with Cd*A/m times `factor`.
+    fn position_with_drag(
+        atm: &crate::density::Exponential,
+        cfg: &CcspConfig,
+        factor: f64,
+        t: f64,
+    ) -> Vector6<f64> {
+        use crate::propagate::{propagate, Method};
+        let mut problem = cfg.problem;
+        problem.drag *= factor;
+        let tr = propagate(
+            atm,
+            &problem,
+            &[t],
+            Method::Rk8 { step: 180.0 },
+            &Progress::default(),
+        )
+        .unwrap();
+        Vector6::from_column_slice(&tr.states[0])
+    }
+
+    #[test]
+    fn drag_consider_parameter_is_the_linearised_sensitivity_and_is_never_forgotten() {
+        use crate::density::Exponential;
+        // Certain density: the covariance growth comes from Cd*A/m alone. Its
+        // cross-covariance must equal drag_sigma * dx/d(ln Cd*A/m) (central differences of
+        // two deterministic runs), whatever the update interval (c is a constant of the
+        // object, unlike kappa).
+        // Also at 30 % over 3 days, where along-track spreads of 10 km make Cartesian
+        // sigma points at sqrt(3) sigma fail (DRAG_ALPHA).
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
+        for (sigma, days, tol) in [(0.02, 1, 1e-4), (0.3, 3, 1e-3)] {
+            let end = days as f64 * 86400.0;
+            let hourly = paper_config((1..=24 * days).map(|i| i as f64 * 3600.0).collect(), sigma);
+            let six_hourly =
+                paper_config((1..=4 * days).map(|i| i as f64 * 21600.0).collect(), sigma);
+            let eps: f64 = 1e-3;
+            let sens = (position_with_drag(&atm, &hourly, eps.exp(), end)
+                - position_with_drag(&atm, &hourly, (-eps).exp(), end))
+                / (2.0 * eps)
+                * sigma;
+            // Hundreds of metres at 2 % after a day, tens of km at 30 % after 3 days.
+            assert!(sens.fixed_rows::<3>(0).norm() > 50.0, "{}", sens.norm());
+            for cfg in [&hourly, &six_hourly] {
+                let out = ccsp(&atm, cfg, &Progress::default()).unwrap();
+                let d = Vector6::from_column_slice(out.drag_cross.last().unwrap());
+                let rel = (d - sens).fixed_rows::<3>(0).norm() / sens.fixed_rows::<3>(0).norm();
+                assert!(rel < tol, "D vs finite differences at {sigma}: {rel}");
+                // The position variance along D is D D^T plus the tiny initial covariance.
+                let p = Matrix6::from_fn(|i, j| out.covariances.last().unwrap()[i][j]);
+                let u = sens.fixed_rows::<3>(0).normalize();
+                let var = (u.transpose() * p.fixed_view::<3, 3>(0, 0) * u)[(0, 0)];
+                let expect = sens.fixed_rows::<3>(0).norm_squared();
+                assert!((var / expect - 1.0).abs() < 2.0 * tol, "{var} vs {expect}");
+                assert!(out.cross.iter().all(|c| c.iter().all(|&v| v == 0.0)));
+            }
+        }
+    }
+
+    #[test]
+    fn zero_drag_sigma_is_the_paper_filter() {
+        use crate::density::Exponential;
+        // drag_sigma = 0: no c points, D stays zero, and the result does not depend on
+        // anything of the second consider parameter.
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        let cfg = paper_config((1..=6).map(|i| i as f64 * 3600.0).collect(), 0.0);
+        let out = ccsp(&atm, &cfg, &Progress::default()).unwrap();
+        assert!(out.drag_cross.iter().all(|d| d.iter().all(|&v| v == 0.0)));
+        let with = ccsp(
+            &atm,
+            &paper_config(cfg.update_times.clone(), 0.1),
+            &Progress::default(),
+        )
+        .unwrap();
+        // The kappa part (means, kappa cross-covariance) is the same with the c points.
+        assert_eq!(out.means, with.means);
+        assert_eq!(out.cross, with.cross);
+        assert!(with.covariances.last().unwrap()[0][0] > out.covariances.last().unwrap()[0][0]);
+        let mut bad = cfg.clone();
+        bad.drag_sigma = -0.1;
+        assert!(ccsp(&atm, &bad, &Progress::default())
+            .unwrap_err()
+            .to_string()
+            .starts_with("drag_sigma = -0.1 is invalid"));
     }
 }

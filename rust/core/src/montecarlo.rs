@@ -10,7 +10,7 @@ use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{positive, CoreError};
 use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::{KappaLanes, KappaProcess};
-use crate::problem::{check_state, Problem};
+use crate::problem::{check_drag_sigma, check_state, drag_factor, Problem};
 use crate::progress::Progress;
 use crate::rng::MemberStream;
 use crate::simd::{dispatch_on, Kernel, SimdPath};
@@ -34,6 +34,25 @@ pub struct MonteCarloConfig {
     pub seed: u64,
     /// Also return the density each member sees at the output times.
     pub record_density: bool,
+    /// Relative 1-sigma of Cd*A/m (log-normal, see [`drag_factor`]): each member flies
+    /// with Cd*A/m times exp(drag_sigma c), c ~ N(0, 1) drawn from its own stream
+    /// ([`DRAG_DOMAIN`]); 0 gives every member the nominal value.
+    pub drag_sigma: f64,
+}
+
+/// Stream domain of the members' ballistic-coefficient draws ([`MemberStream::with_domain`]):
+/// apart from their kappa streams, so that turning `drag_sigma` on leaves each member's
+/// density path unchanged.
+pub const DRAG_DOMAIN: u64 = 1;
+
+/// Factor on Cd*A/m of `member` for `seed` and `drag_sigma` (1 when it is 0): depends
+/// only on these, never on the thread count or batch layout.
+pub fn member_drag_factor(seed: u64, member: u64, drag_sigma: f64) -> f64 {
+    if drag_sigma == 0.0 {
+        return 1.0;
+    }
+    let c = MemberStream::with_domain(seed, member, DRAG_DOMAIN).normal();
+    drag_factor(drag_sigma, c)
 }
 
 /// Results, row-major: member, output time, component.
@@ -51,6 +70,8 @@ pub struct MonteCarloOutput {
     pub decay_times: Vec<f64>,
     /// Integration step used, s.
     pub step: f64,
+    /// Factor on Cd*A/m of each member (all 1 when `drag_sigma` is 0).
+    pub drag_factors: Vec<f64>,
 }
 
 struct BatchOut<const W: usize> {
@@ -95,6 +116,7 @@ fn run<A: Atmosphere + ?Sized, const W: usize>(
     cfg.problem.validate()?;
     positive("step", cfg.max_step)?;
     cfg.kappa.check()?;
+    check_drag_sigma(cfg.drag_sigma)?;
     let h = cfg.kappa.integration_step(cfg.max_step);
     let plan = StepPlan::grid(&cfg.output_times, h)?;
     if cfg.members == 0 {
@@ -107,6 +129,9 @@ fn run<A: Atmosphere + ?Sized, const W: usize>(
     let mut positions = output_buffer(n, nt * 3)?;
     let mut velocities = output_buffer(n, nt * 3)?;
     let mut densities = output_buffer(if cfg.record_density { n } else { 0 }, nt)?;
+    let drag_factors: Vec<f64> = (0..n as u64)
+        .map(|m| member_drag_factor(cfg.seed, m, cfg.drag_sigma))
+        .collect();
 
     let results: Vec<BatchOut<W>> = (0..batches)
         .into_par_iter()
@@ -123,6 +148,7 @@ fn run<A: Atmosphere + ?Sized, const W: usize>(
                     plan: &plan,
                     first,
                     lanes,
+                    drag_factors: &drag_factors[first..first + lanes],
                 },
             )?;
             progress.add(lanes);
@@ -149,6 +175,7 @@ fn run<A: Atmosphere + ?Sized, const W: usize>(
         clipped,
         decay_times,
         step: h,
+        drag_factors,
     })
 }
 
@@ -178,6 +205,8 @@ struct Batch<'a, A: ?Sized, const W: usize> {
     plan: &'a StepPlan,
     first: usize,
     lanes: usize,
+    /// Factor on Cd*A/m of each real lane.
+    drag_factors: &'a [f64],
 }
 
 impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
@@ -192,6 +221,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
             plan,
             first,
             lanes,
+            drag_factors,
         } = self;
         let nt = cfg.output_times.len();
         let y0 = cfg.problem.y0;
@@ -220,8 +250,9 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
             })?;
         }
 
-        let mut dynamics =
-            Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, [cfg.problem.drag; W]);
+        let drag: [f64; W] =
+            std::array::from_fn(|l| cfg.problem.drag * drag_factors[l.min(lanes - 1)]);
+        let mut dynamics = Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, drag);
         dynamics.perturbation = cfg.perturbation;
         dynamics.zonal_degree = cfg.problem.zonal_degree;
         let spacing = cfg.kappa.node_spacing(h);
@@ -454,6 +485,7 @@ mod tests {
             members,
             seed: 5,
             record_density: true,
+            drag_sigma: 0.0,
         }
     }
 
@@ -618,5 +650,80 @@ mod tests {
         p.cancel.store(true, Ordering::Relaxed);
         let e = monte_carlo(&atm, &config(9, KappaProcess::Constant), &p).unwrap_err();
         assert_eq!(e, CoreError::Cancelled);
+    }
+
+    #[test]
+    fn members_fly_with_their_own_drag_factor() {
+        // Certain density: each member is the deterministic orbit with Cd*A/m times its
+        // factor, bit for bit, on every SIMD path; the factors depend only on seed and
+        // member index.
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
+        let mut cfg = config(11, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        cfg.drag_sigma = 0.2;
+        let runs: Vec<_> = SimdPath::available()
+            .into_iter()
+            .map(|p| monte_carlo_on(p, &atm, &cfg, &Progress::default()).unwrap())
+            .collect();
+        for r in &runs[1..] {
+            assert_eq!(r, &runs[0]);
+        }
+        let out = &runs[0];
+        for m in [0, 5, 10] {
+            let f = out.drag_factors[m];
+            assert_eq!(f, member_drag_factor(cfg.seed, m as u64, 0.2));
+            let mut problem = cfg.problem;
+            problem.drag *= f;
+            let det = propagate(
+                &atm,
+                &problem,
+                &cfg.output_times,
+                Method::Rk8 { step: 180.0 },
+                &Progress::default(),
+            )
+            .unwrap();
+            for (i, s) in det.states.iter().enumerate() {
+                for c in 0..3 {
+                    assert_eq!(out.positions[(m * 3 + i) * 3 + c], s[c], "member {m}");
+                }
+            }
+        }
+        let few = {
+            let mut c = cfg.clone();
+            c.members = 3;
+            monte_carlo(&atm, &c, &Progress::default()).unwrap()
+        };
+        assert_eq!(&few.drag_factors[..], &out.drag_factors[..3]);
+        // Zero sigma: every factor is exactly 1.
+        cfg.drag_sigma = 0.0;
+        let zero = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
+        assert!(zero.drag_factors.iter().all(|&f| f == 1.0));
+        cfg.drag_sigma = f64::INFINITY;
+        assert!(monte_carlo(&atm, &cfg, &Progress::default()).is_err());
+    }
+
+    #[test]
+    fn drag_factors_are_log_normal_and_leave_kappa_alone() {
+        // ln(factor) / sigma over 100k members: mean 0 and variance 1 within ~4.5 standard
+        // errors (0.0032 and 0.0045).
+        let n = 100_000u64;
+        let z: Vec<f64> = (0..n)
+            .map(|m| member_drag_factor(9, m, 0.3).ln() / 0.3)
+            .collect();
+        let mean = z.iter().sum::<f64>() / n as f64;
+        let var = z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!(mean.abs() < 0.015, "{mean}");
+        assert!((var - 1.0).abs() < 0.02, "{var}");
+        // The drag draws come from their own stream: a member's kappa path is unchanged.
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.3).unwrap();
+        let mut cfg = config(3, KappaProcess::Constant);
+        let without = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
+        cfg.drag_sigma = 0.1;
+        let with = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
+        // At t = 0 the density seen is mean + kappa sigma, the same with or without.
+        let (a, b) = (without.densities.unwrap(), with.densities.unwrap());
+        for m in 0..3 {
+            assert_eq!(a[m * 3], b[m * 3]);
+        }
+        assert_ne!(without.positions, with.positions);
     }
 }

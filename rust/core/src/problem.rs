@@ -44,6 +44,39 @@ impl Problem {
     }
 }
 
+/// Largest accepted relative 1-sigma (log-sigma) of the drag parameter: e^3 = 20x per
+/// sigma is far past any physical uncertainty of Cd*A/m.
+pub const MAX_DRAG_SIGMA: f64 = 3.0;
+
+/// Checks the relative 1-sigma of the drag parameter (`drag_sigma` of the Monte Carlo
+/// and the CCSP): finite, >= 0 and at most [`MAX_DRAG_SIGMA`].
+pub fn check_drag_sigma(drag_sigma: f64) -> Result<f64, CoreError> {
+    finite("drag_sigma", drag_sigma)?;
+    if !(0.0..=MAX_DRAG_SIGMA).contains(&drag_sigma) {
+        return Err(CoreError::invalid(
+            "drag_sigma",
+            drag_sigma,
+            format!(
+                "it is the relative 1-sigma of Cd*A/m (log-normal; 0.1 = 10 %) and must be \
+                 0 to {MAX_DRAG_SIGMA}"
+            ),
+        ));
+    }
+    Ok(drag_sigma)
+}
+
+/// The factor on Cd*A/m of a draw `c` ~ N(0, 1) of the ballistic-coefficient error:
+/// exp(`drag_sigma` c), a log-normal with median 1 (so Cd*A/m stays positive, and
+/// c = 0 is the nominal value exactly). For small `drag_sigma` it is 1 + drag_sigma c.
+#[inline]
+pub fn drag_factor(drag_sigma: f64, c: f64) -> f64 {
+    if drag_sigma == 0.0 || c == 0.0 {
+        1.0
+    } else {
+        (drag_sigma * c).exp()
+    }
+}
+
 /// Checks a state at `epoch` (s since J2000): finite, and above the surface and the floor
 /// altitude `floor` (m). Also used for the sampled initial states of Monte Carlo members.
 pub fn check_state(epoch: f64, y0: &[f64; 6], floor: f64) -> Result<(), CoreError> {
@@ -113,6 +146,17 @@ mod tests {
         assert!(bad(|p| p.floor_altitude = 450e3).contains("decay floor altitude of 450000 m"));
         assert!(bad(|p| p.zonal_degree = 7).starts_with("zonal_degree = 7 is invalid"));
         assert!(bad(|p| p.zonal_degree = 1).contains("2 (J2 only) to 6"));
+        assert_eq!(check_drag_sigma(0.0), Ok(0.0));
+        assert_eq!(check_drag_sigma(0.15), Ok(0.15));
+        assert!(check_drag_sigma(-0.1)
+            .unwrap_err()
+            .to_string()
+            .starts_with("drag_sigma = -0.1 is invalid"));
+        assert!(check_drag_sigma(f64::NAN).is_err());
+        assert!(check_drag_sigma(4.0).is_err());
+        assert_eq!(drag_factor(0.0, 1.3), 1.0);
+        assert_eq!(drag_factor(0.2, 0.0), 1.0);
+        assert!((drag_factor(0.2, -1.0) - (-0.2f64).exp()).abs() < 1e-16);
         let mut j6 = PAPER;
         j6.zonal_degree = 6;
         assert!(j6.validate().is_ok());

@@ -29,6 +29,17 @@ impl MemberStream {
         }
     }
 
+    /// Stream `domain` of member `index` for `seed`: independent of [`MemberStream::new`]'s
+    /// stream (domain 0 is that stream), so draws added for another purpose (a member's
+    /// ballistic-coefficient factor) leave its kappa draws unchanged.
+    pub fn with_domain(seed: u64, index: u64, domain: u64) -> Self {
+        let mut s = Self::new(seed, index);
+        if domain != 0 {
+            s.state = mix(s.state ^ mix(domain.wrapping_mul(GOLDEN)));
+        }
+        s
+    }
+
     /// Next uniform in (0, 1).
     #[inline]
     pub fn uniform(&mut self) -> f64 {
@@ -86,6 +97,16 @@ mod tests {
         };
         assert_eq!(a, b);
         assert_ne!(a, c);
+        let d: Vec<f64> = {
+            let mut s = MemberStream::with_domain(1, 0, 1);
+            (0..5).map(|_| s.normal()).collect()
+        };
+        let e: Vec<f64> = {
+            let mut s = MemberStream::with_domain(1, 0, 0);
+            (0..5).map(|_| s.normal()).collect()
+        };
+        assert_ne!(a, d);
+        assert_eq!(a, e);
         // Neighbouring members are uncorrelated: correlation of their first draws.
         let n = 20_000;
         let pairs: Vec<(f64, f64)> = (0..n)

@@ -13,10 +13,11 @@ use rhoprop_core::problem::Problem;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
 /// decayed_at (s, or None: when a sigma point crossed the floor; the outputs end before it),
-/// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), nt = updates + 1.
+/// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6),
+/// nt = updates + 1.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
-    scaling, perturbation, step, floor_altitude, zonal_degree = 2))]
+    scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -31,6 +32,7 @@ pub fn ccsp<'py>(
     step: f64,
     floor_altitude: f64,
     zonal_degree: u8,
+    drag_sigma: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
@@ -49,6 +51,7 @@ pub fn ccsp<'py>(
         perturbation,
         method: FixedMethod::Rk8,
         max_step: step,
+        drag_sigma,
     };
     let out = long_call(py, None, |progress| {
         with_atmosphere!(&atm, |a| core_ccsp(a, &cfg, progress))
@@ -68,6 +71,10 @@ pub fn ccsp<'py>(
     dict.set_item(
         "cross",
         Array2::from_shape_fn((nt, 6), |(i, j)| out.cross[i][j]).into_pyarray(py),
+    )?;
+    dict.set_item(
+        "drag_cross",
+        Array2::from_shape_fn((nt, 6), |(i, j)| out.drag_cross[i][j]).into_pyarray(py),
     )?;
     Ok(dict)
 }

@@ -20,11 +20,11 @@ const MAX_THREADS: usize = 1024;
 
 /// Runs a Monte Carlo ensemble; see `rhoprop.monte_carlo` for the documented API.
 /// Returns a dict of arrays: positions/velocities (n, nt, 3), densities (n, nt) or None,
-/// clipped (n,), decay_times (n,), step.
+/// clipped (n,), decay_times (n,), step, drag_factors (n,).
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, output_times, kappa, perturbation, method,
     step, members, seed, initial_covariance, floor_altitude, record_density, threads, progress,
-    zonal_degree = 2))]
+    zonal_degree = 2, drag_sigma = 0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn monte_carlo<'py>(
     py: Python<'py>,
@@ -45,6 +45,7 @@ pub fn monte_carlo<'py>(
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
     zonal_degree: u8,
+    drag_sigma: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
@@ -81,6 +82,7 @@ pub fn monte_carlo<'py>(
         members,
         seed,
         record_density,
+        drag_sigma,
     };
     let pool = match threads {
         Some(0) => return Err(PyValueError::new_err("threads must be >= 1")),
@@ -128,5 +130,9 @@ pub fn monte_carlo<'py>(
         Array1::from_vec(out.decay_times).into_pyarray(py),
     )?;
     dict.set_item("step", out.step)?;
+    dict.set_item(
+        "drag_factors",
+        Array1::from_vec(out.drag_factors).into_pyarray(py),
+    )?;
     Ok(dict)
 }
