@@ -141,12 +141,20 @@ def run_config(
     update_interval: float,
     fit_span: tuple[float, float] | None = None,
     drag_sigma: Any = "auto",
+    zonal_degree: int = 2,
 ) -> tuple[dict[int, dict[str, Any]], float, float]:
     """Predicted mean and covariance at each object's truth epoch; the load (and fit)
     time and the propagation time, s."""
     t0 = time.perf_counter()
     if config == "fit":
-        cat = catalog.load(path, fit=True, model=field, errors="skip", span=fit_span)
+        cat = catalog.load(
+            path,
+            fit=True,
+            model=field,
+            errors="skip",
+            span=fit_span,
+            zonal_degree=zonal_degree,
+        )
         cov: Any = "object"
     else:
         cat = catalog.load(path)
@@ -164,6 +172,7 @@ def run_config(
             progress=False,
             errors="record",
             drag_sigma=drag_sigma,
+            zonal_degree=zonal_degree,
             **({} if cov is None else {"initial_covariance": cov}),
         )
         return obj.norad_id, {
@@ -264,7 +273,14 @@ def main() -> None:
         "--drag-sigma",
         default="auto",
         help="relative 1-sigma of Cd*A/m propagated by the CCSP: 'auto' (default: the fit's, "
-        "at least 0.15; 0.15 without a fit) or a number (0: none, as before issue 16 item 3)",
+        "at least 0.08; 0.15 without a fit) or a number (0: none, as before issue 16 item 3)",
+    )
+    parser.add_argument(
+        "--zonal-degree",
+        type=int,
+        default=2,
+        help="zonal harmonics of the fit and the propagation: 2 (J2, default) to 6; 4 is "
+        "SGP4's own J2..J4",
     )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = parser.parse_args()
@@ -300,20 +316,32 @@ def main() -> None:
         print(f"Cd*A/m relative sigma: {drag_sigma}")
         for config in args.configs.split(","):
             pred, t_load, t_run = run_config(
-                config, path, field, truth, args.threads, args.update_interval, span, drag_sigma
+                config,
+                path,
+                field,
+                truth,
+                args.threads,
+                args.update_interval,
+                span,
+                drag_sigma,
+                args.zonal_degree,
             )
             results[config] = figures(pred, truth)
             results[config]["seconds"] = {"load": t_load, "propagation": t_run}
             show(config, results[config], t_load, t_run)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    name = f"catalog_realism_{int(args.update_interval)}s_drag_{args.drag_sigma}.json"
+    name = (
+        f"catalog_realism_{int(args.update_interval)}s_drag_{args.drag_sigma}"
+        f"_j{args.zonal_degree}.json"
+    )
     (out / name).write_text(
         json.dumps(
             {
                 "machine": info(),
                 "objects": len(ids),
                 "drag_sigma": args.drag_sigma,
+                "zonal_degree": args.zonal_degree,
                 "results": results,
             },
             indent=2,

@@ -231,7 +231,7 @@ def auto_update_times(result, obj) -> np.ndarray:
 
 
 def test_catalog_auto_rule_for_fitted_objects():
-    # "auto": the fit's formal relative sigma, at least 0.15, at most 1 (a fit whose prior
+    # "auto": the fit's formal relative sigma, at least 0.08, at most 1 (a fit whose prior
     # dominated reports several times Cd*A/m).
     import dataclasses
     from types import SimpleNamespace
@@ -239,13 +239,13 @@ def test_catalog_auto_rule_for_fitted_objects():
     cat = catalog.load(SAMPLE)
     objs = [
         dataclasses.replace(o, fit=SimpleNamespace(drag_sigma=rel * o.drag_parameter))
-        for o, rel in zip(cat.objects[:3], (0.05, 0.4, 6.0), strict=True)
+        for o, rel in zip(cat.objects[:3], (0.05, 0.1, 6.0), strict=True)
     ]
     r = catalog.propagate_catalog(
         objs, rp.scenarios.benchmark_exponential(0.2), END, output_step=1800.0, progress=False
     )
-    np.testing.assert_allclose(r.drag_sigma, [0.15, 0.4, 1.0], rtol=1e-12)
-    assert "relative 1-sigma 0.4, the fit's formal sigma" in r.covariance_note[1]
+    np.testing.assert_allclose(r.drag_sigma, [0.08, 0.1, 1.0], rtol=1e-12)
+    assert "relative 1-sigma 0.1, the fit's formal sigma" in r.covariance_note[1]
 
 
 def test_cli_catalog_drag_sigma(tmp_path, capsys):

@@ -45,7 +45,7 @@ from ..time import (
 )
 from .covariance import paper_covariance
 from .elements import CatalogObject
-from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA, _relative_sigma
+from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA
 
 if TYPE_CHECKING:
     import pandas
@@ -190,18 +190,32 @@ PROPAGATED_NOTE = (
 #: Largest relative Cd*A/m sigma of ``drag_sigma="auto"``: a fit whose prior dominated
 #: (``FitResult.drag_observable`` False) reports formal sigmas of several times Cd*A/m.
 AUTO_DRAG_SIGMA_MAX = 1.0
+#: Smallest relative Cd*A/m sigma of ``drag_sigma="auto"`` for a fitted object: the fit's
+#: formal sigma ignores how the density (and so the effective Cd*A/m) wanders after the
+#: fit span. 0.08 gives close to Gaussian 1/2/3-sigma fractions on the realism benchmark
+#: (docs/catalog-realism.md; chosen there, so in-sample); 0.15 overstates 1 sigma.
+AUTO_FITTED_DRAG_SIGMA_MIN = 0.08
+
+
+def _auto_drag_sigma(obj: CatalogObject) -> float:
+    """``drag_sigma="auto"`` before the cap: a fitted object's formal relative sigma but
+    at least :data:`AUTO_FITTED_DRAG_SIGMA_MIN`; without a fit (Cd*A/m from B*, which
+    absorbs SGP4's own density model) ``DEFAULT_DRAG_RELATIVE_SIGMA`` (0.15)."""
+    fit = obj.fit
+    if fit is not None and obj.drag_parameter > 0:
+        return max(float(fit.drag_sigma) / obj.drag_parameter, AUTO_FITTED_DRAG_SIGMA_MIN)
+    return DEFAULT_DRAG_RELATIVE_SIGMA
 
 
 def _drag_sigma(obj: CatalogObject, choice: Any) -> float:
-    """The relative 1-sigma of Cd*A/m of ``obj`` for ``drag_sigma=choice``: "auto" is the
-    rule of :func:`~rhoprop.catalog.reentry`, the fit's formal relative sigma but at least
-    ``DEFAULT_DRAG_RELATIVE_SIGMA`` (0.15), or 0.15 without a fit, and at most
-    ``AUTO_DRAG_SIGMA_MAX`` (1); a number for every object; a callable object -> number.
-    Checked like ``rp.ccsp``'s ``drag_sigma``."""
+    """The relative 1-sigma of Cd*A/m of ``obj`` for ``drag_sigma=choice``: "auto" is
+    :func:`_auto_drag_sigma` (the fit's formal relative sigma, at least 0.08; 0.15 without
+    a fit) capped at ``AUTO_DRAG_SIGMA_MAX`` (1); a number for every object; a callable
+    object -> number. Checked like ``rp.ccsp``'s ``drag_sigma``."""
     if isinstance(choice, str):
         if choice != "auto":
             raise ValueError(f"drag_sigma must be 'auto', a number or a callable, got {choice!r}")
-        value: Any = min(_relative_sigma(obj, None), AUTO_DRAG_SIGMA_MAX)
+        value: Any = min(_auto_drag_sigma(obj), AUTO_DRAG_SIGMA_MAX)
     elif callable(choice):
         value = choice(obj)
     else:
@@ -218,7 +232,7 @@ def _drag_note(obj: CatalogObject, sigma: float, choice: Any) -> str:
         return PROPAGATED_NOTE
     if isinstance(choice, str):
         why = (
-            f"the fit's formal sigma, at least {DEFAULT_DRAG_RELATIVE_SIGMA:g}, at most "
+            f"the fit's formal sigma, at least {AUTO_FITTED_DRAG_SIGMA_MIN:g}, at most "
             f"{AUTO_DRAG_SIGMA_MAX:g}"
             if obj.fit is not None
             else "assumed, no fit"
@@ -658,9 +672,9 @@ def propagate_catalog(
         drag_sigma: relative 1-sigma of each object's Cd*A/m (dimensionless, 0.15 =
             15 %), propagated as the CCSP's second consider parameter or sampled per Monte
             Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
-            fit's formal relative sigma but at least 0.15 (at most 1, for fits whose prior
-            dominated), or 0.15 for an object without a fit (the rule of
-            ``rp.catalog.reentry``); a number for every object (0: none,
+            fit's formal relative sigma but at least 0.08 (at most 1, for fits whose prior
+            dominated), or 0.15 for an object without a fit (as ``rp.catalog.reentry``);
+            a number for every object (0: none,
             the behaviour before issue 16); or a callable object -> number. Recorded in
             ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md).
 
