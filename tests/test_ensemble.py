@@ -175,7 +175,11 @@ def test_example_scenario_switches_method_with_one_word(tmp_path):
     path.write_text(text.replace('kind = "monte_carlo"', 'kind = "ccsp"'))
     sc = load_scenario(path)
     assert sc["method"] == "ccsp"
-    assert sc["options"] == {"perturbation": "additive", "update_interval": 3600.0}
+    assert sc["options"] == {
+        "perturbation": "additive",
+        "update_interval": 3600.0,
+        "drag_sigma": 0.0,
+    }
     # The sub-tables are checked for their own method's keys.
     path.write_text(text.replace("update_interval = 3600.0", "members = 3"))
     with pytest.raises(ScenarioError, match=r"method\.ccsp has unknown key"):

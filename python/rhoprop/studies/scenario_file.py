@@ -186,8 +186,8 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
 #: Settings of each method; the other method's settings may stay in the file (so switching
 #: ``kind`` is a one-word change) and are then ignored.
 METHOD_KEYS = {
-    "monte_carlo": {"members", "seed", "output_step", "kappa", "perturbation"},
-    "ccsp": {"update_interval", "perturbation"},
+    "monte_carlo": {"members", "seed", "output_step", "kappa", "perturbation", "drag_sigma"},
+    "ccsp": {"update_interval", "perturbation", "drag_sigma"},
 }
 
 
@@ -210,7 +210,10 @@ def _method_options(me: dict[str, Any], kind: str) -> dict[str, Any]:
         where = f"method.{kind}"
     if other in me:  # unused, but checked: a typo there should not wait for the switch
         _unknown(_get(me, "method", other, dict), f"method.{other}", METHOD_KEYS[other])
-    options: dict[str, Any] = {"perturbation": _get(table, where, "perturbation", str, "additive")}
+    options: dict[str, Any] = {
+        "perturbation": _get(table, where, "perturbation", str, "additive"),
+        "drag_sigma": _get(table, where, "drag_sigma", float, 0.0),
+    }
     if kind == "ccsp":
         options["update_interval"] = _get(table, where, "update_interval", float, 3600.0)
         return options
