@@ -273,3 +273,22 @@ def test_density_pc_refuses_what_it_cannot_do():
         density_pc(no_beta, {"m": model}, "m")
     with pytest.raises(ValueError, match="lead_time"):
         density_pc(msg, {"m": model}, "m", lead_time=10.0)
+
+
+def test_rhoprop_conjunction_reads_the_example_cdm(tmp_path, capsys):
+    from pathlib import Path
+
+    from rhoprop.cli import main
+
+    example = Path(__file__).parents[1] / "examples" / "conjunction.cdm"
+    out = tmp_path / "pc.json"
+    assert main(["conjunction", str(example), "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "mixture (density-model uncertainty)" in printed
+    figures = json.loads(out.read_text())
+    msg = cdm.read_cdm(example)
+    # The message's own Pc is recomputed as written; the mixture is the weighted mean.
+    assert figures["pc_message"] == pytest.approx(msg.collision_probability, rel=1e-9)
+    pcs = list(figures["pc_models"].values())
+    assert figures["pc_mixture"] == pytest.approx(sum(pcs) / len(pcs), rel=1e-12)
+    assert figures["lead_time_s"] == 2 * 86400.0 and figures["hard_body_radius_m"] == 15.0
