@@ -110,7 +110,8 @@ def main() -> None:
     print(f"first run, field sampling included: {first:.1f} s (field ~{first - wall:.1f} s)")
     field = model
     print(
-        f"local (objects on threads, sigma points on rayon): {len(cat)} objects x "
+        f"local (chunks of objects per core call, objects in parallel, each object's sigma "
+        f"points in one batch): {len(cat)} objects x "
         f"{args.days:g} days in {wall:.1f} s = {len(cat) / wall:.1f} objects/s"
     )
     if not args.dask:

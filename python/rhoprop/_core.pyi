@@ -29,6 +29,7 @@ __all__ = [
     "IntegrationError",
     "RhopropError",
     "ccsp",
+    "ccsp_many",
     "geodetic",
     "geodetic_to_fixed",
     "gmst",
@@ -132,6 +133,19 @@ def ccsp(
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
     Cd*A/m carried as the second consider parameter."""
+
+def ccsp_many(
+    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    objects: list[tuple[float, _F64, float, _F64, _F64, float, float]],
+    scaling: tuple[float, float],
+    perturbation: str,
+    floor_altitude: float,
+    zonal_degree: int = 2,
+    progress: Callable[[int], object] | None = None,
+) -> list[dict[str, Any] | Exception]:
+    """CCSP of several objects, each (epoch, state, drag, initial_covariance,
+    update_times, step, drag_sigma), in one call: per object the dict of ``ccsp`` or the
+    exception its run raised."""
 
 def monte_carlo(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,

@@ -25,10 +25,12 @@ from ..propagation import (
     monte_carlo,
     propagate,
 )
+from ..propagation.ccsp import ccsp_many
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
 from ..propagation.propagate import FIELD_MARGIN, zonal_degree_argument
 from ..propagation.results import (
+    CcspResult,
     dataset_attrs,
     epoch_coords,
     label_coords,
@@ -50,6 +52,9 @@ from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA
 if TYPE_CHECKING:
     import pandas
     import xarray
+
+#: Most objects per core call of a local CCSP run (:func:`_ccsp_chunk`).
+CCSP_CHUNK = 16
 
 #: The ``frame`` attribute of catalog datasets: states come from SGP4.
 CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
@@ -328,15 +333,18 @@ def _run_object(
     index: int,
     cfg: dict[str, Any],
     stop: threading.Event | None = None,
+    done: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Propagates one object to the common epochs; returns arrays for the result. With
     ``cfg["errors"] == "record"`` an error becomes status "failed"; else it is raised
     with the object named and chained to the cause. ``stop`` (local runs) ends the
-    object's Monte Carlo early after Ctrl-C in the caller."""
+    object's Monte Carlo early after Ctrl-C in the caller. ``done`` holds runs already
+    made for this object by :func:`_ccsp_chunk` (its mean orbit, its CCSP), used instead
+    of running them again."""
     if stop is not None and stop.is_set():
         raise KeyboardInterrupt("catalog run interrupted")
     try:
-        return _propagate_object(obj, model, epochs, index, cfg, stop)
+        return _propagate_object(obj, model, epochs, index, cfg, stop, done or {})
     except Exception as err:
         if cfg["errors"] == "raise":
             named = _object_error(err, obj)
@@ -362,6 +370,7 @@ def _propagate_object(
     index: int,
     cfg: dict[str, Any],
     stop: threading.Event | None,
+    done: dict[str, Any],
 ) -> dict[str, Any]:
     craft = Spacecraft(1.0, obj.drag_parameter)
     initial, _note = _initial_covariance(obj, cfg["initial_covariance"])
@@ -372,23 +381,20 @@ def _propagate_object(
     fraction = 0.0
     status, reason = "propagated", ""
     if cfg["method"] == "ccsp":
-        mean = propagate(
-            obj.state,
-            craft,
-            model,
-            float(offsets[-1]),
-            method="rk8",
-            floor_altitude=cfg["floor_altitude"],
-            zonal_degree=cfg["zonal_degree"],
-        )
-        decay = mean.decayed_at
-        k = int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
+        decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done)
         if k:
             means, covs, stopped = _ccsp_outputs(
-                obj, craft, model, offsets[:k], cfg, initial, cfg["drag_sigmas"][index]
+                obj,
+                craft,
+                model,
+                offsets[:k],
+                cfg,
+                initial,
+                cfg["drag_sigmas"][index],
+                done.get("ccsp"),
             )
-            done = len(means)
-            out_mean[:done], out_cov[:done] = means, covs
+            reached = len(means)
+            out_mean[:reached], out_cov[:reached] = means, covs
             if stopped:
                 status, reason = "shortened", stopped
     else:
@@ -435,6 +441,90 @@ def _propagate_object(
     }
 
 
+def _mean_orbit(
+    obj: CatalogObject,
+    craft: Spacecraft,
+    model: Any,
+    offsets: np.ndarray,
+    cfg: dict[str, Any],
+    done: dict[str, Any],
+) -> tuple[float | None, int]:
+    """The decay time of the mean orbit (s from the object's epoch, or None) and how many
+    of ``offsets`` come before it; the propagation is kept in ``done["mean"]``."""
+    if "mean" not in done:
+        done["mean"] = propagate(
+            obj.state,
+            craft,
+            model,
+            float(offsets[-1]),
+            method="rk8",
+            floor_altitude=cfg["floor_altitude"],
+            zonal_degree=cfg["zonal_degree"],
+        )
+    decay = done["mean"].decayed_at
+    return decay, int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
+
+
+def _ccsp_chunk(
+    model: Any,
+    chunk: list[tuple[int, CatalogObject]],
+    epochs: np.ndarray,
+    cfg: dict[str, Any],
+    stop: threading.Event | None = None,
+) -> list[tuple[int, dict[str, Any]]]:
+    """The CCSP objects of a chunk: each object's mean orbit first, then the CCSPs of all
+    of them in one core call (objects in parallel, each object's sigma points in one
+    batch; bit-identical to running each alone), then each object as
+    :func:`_run_object` with those runs reused. An object whose mean orbit or batched
+    CCSP raised runs again alone, so statuses, shortened runs, field widening and errors
+    are exactly those of the object-by-object run."""
+    done: dict[int, dict[str, Any]] = {i: {} for i, _ in chunk}
+    runs, owners = [], []
+    for i, obj in chunk:
+        if stop is not None and stop.is_set():
+            raise KeyboardInterrupt("catalog run interrupted")
+        craft = Spacecraft(1.0, obj.drag_parameter)
+        offsets = to_seconds(epochs, obj.state.epoch)
+        try:
+            initial, _note = _initial_covariance(obj, cfg["initial_covariance"])
+            _decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done[i])
+        except Exception:
+            continue  # raised again (or recorded) by _run_object
+        if k == 0 or offsets[k - 1] <= 0:
+            continue
+        runs.append(
+            {
+                "state": obj.state,
+                "spacecraft": craft,
+                "update_times": _update_times(offsets[:k], cfg["update_interval"]),
+                "initial_covariance": initial,
+                "drag_sigma": cfg["drag_sigmas"][i],
+            }
+        )
+        owners.append(i)
+
+    def check(_done: int) -> None:
+        # Called by the core about every 50 ms: ends the call once the caller stops.
+        if stop is not None and stop.is_set():
+            raise KeyboardInterrupt("catalog run interrupted")
+
+    if runs:
+        try:
+            outs = ccsp_many(
+                runs,
+                model,
+                floor_altitude=cfg["floor_altitude"],
+                zonal_degree=cfg["zonal_degree"],
+                progress=check,
+            )
+        except Exception:
+            outs = []  # every object runs alone, raising (or recording) as before
+        for i, out in zip(owners, outs, strict=False):
+            if not isinstance(out, Exception):
+                done[i]["ccsp"] = out
+    return [(i, _run_object(o, model, epochs, i, cfg, stop, done[i])) for i, o in chunk]
+
+
 def _iso(t: np.datetime64) -> str:
     return str(t.astype("datetime64[ms]")) + "Z"
 
@@ -451,11 +541,13 @@ def _ccsp_outputs(
     cfg: dict[str, Any],
     initial: np.ndarray | None,
     drag_sigma: float = 0.0,
+    first: CcspResult | None = None,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """CCSP means (k, 6) and covariances (k, 6, 6) at the first k of ``offsets`` (s from
     the object's epoch) it reached, and "" or why it stopped before the last. Only a
     covariance that stops being positive definite (near decay) or a sigma point that
-    comes down shortens the outputs; every other error is raised."""
+    comes down shortens the outputs; every other error is raised. ``first`` is the run
+    over all of ``offsets`` if already made (:func:`_ccsp_chunk`)."""
     state = obj.state
 
     def run(k: int) -> Any:
@@ -474,7 +566,7 @@ def _ccsp_outputs(
 
     k, why = len(offsets), ""
     try:
-        r = run(k)
+        r = first if first is not None and offsets[k - 1] > 0 else run(k)
     except RhopropError as err:
         found = _LOST_DEFINITENESS.search(str(err))
         if found is None or "positive definite" not in str(err):
@@ -516,7 +608,9 @@ def _run_chunk(
     model: Any, chunk: list[tuple[int, CatalogObject]], epochs: np.ndarray, cfg: dict[str, Any]
 ) -> list[tuple[int, dict[str, Any]]]:
     """A Dask task: run the objects of the chunk (the model arrives unpickled once per
-    worker)."""
+    worker); CCSPs in one core call per chunk."""
+    if cfg["method"] == "ccsp":
+        return _ccsp_chunk(model, chunk, epochs, cfg)
     return [(i, _run_object(o, model, epochs, i, cfg)) for i, o in chunk]
 
 
@@ -600,16 +694,32 @@ def _run_local(
     sigma points or members. Ctrl-C (or an error) cancels the objects not started and
     stops running Monte Carlos at once; a running CCSP finishes its object first."""
     stop = threading.Event()
-    pool = cf.ThreadPoolExecutor(max_workers=worker_count())
+    workers = worker_count()
+    pool = cf.ThreadPoolExecutor(max_workers=workers)
     results: dict[int, dict[str, Any]] = {}
     try:
-        futures = [
-            pool.submit(_run_object, o, shipped, epochs, i, cfg, stop) for i, o in enumerate(objs)
-        ]
-        for i, fut in enumerate(futures):
-            results[i] = fut.result()
-            if bar is not None:
-                bar(i + 1)
+        if cfg["method"] == "ccsp":
+            # Chunks of objects per core call (objects in parallel there), small enough
+            # that every worker gets several.
+            size = max(1, min(CCSP_CHUNK, -(-len(objs) // (4 * workers))))
+            indexed = list(enumerate(objs))
+            chunks = [
+                pool.submit(_ccsp_chunk, shipped, indexed[c : c + size], epochs, cfg, stop)
+                for c in range(0, len(indexed), size)
+            ]
+            for chunk in chunks:
+                results.update(chunk.result())
+                if bar is not None:
+                    bar(len(results))
+        else:
+            futures = [
+                pool.submit(_run_object, o, shipped, epochs, i, cfg, stop)
+                for i, o in enumerate(objs)
+            ]
+            for i, fut in enumerate(futures):
+                results[i] = fut.result()
+                if bar is not None:
+                    bar(i + 1)
     except BaseException:
         stop.set()
         pool.shutdown(wait=False, cancel_futures=True)

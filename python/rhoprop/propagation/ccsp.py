@@ -3,13 +3,15 @@ consider parameter (paper section 4, as made unambiguous in DESIGN.md section 6)
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import DensityModel
+from ..density.model import DensityModel, as_atmosphere
 from ..time import ut1_seconds
 from .montecarlo import drag_sigma_argument
 from .propagate import (
@@ -104,6 +106,71 @@ def ccsp(
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
     """
+    args, span = _arguments(
+        state,
+        spacecraft,
+        model,
+        duration,
+        update_interval=update_interval,
+        initial_covariance=initial_covariance,
+        scaling=scaling,
+        step=step,
+        floor_altitude=floor_altitude,
+        update_times=update_times,
+        zonal_degree=zonal_degree,
+        drag_sigma=drag_sigma,
+    )
+
+    def run(atmosphere: Any) -> dict[str, Any]:
+        return _core.ccsp(
+            atmosphere,
+            args.epoch,
+            state.state,
+            spacecraft.drag_parameter,
+            args.p0,
+            args.times,
+            args.scaling,
+            perturbation,
+            args.step,
+            args.floor,
+            args.degree,
+            args.drag_sigma,
+        )
+
+    out = run_in_field(model, state, span, args.floor, run)
+    return _result(state, out, args.drag_sigma)
+
+
+@dataclass(frozen=True)
+class _Arguments:
+    """The checked arguments of one CCSP run, as the core takes them."""
+
+    epoch: float
+    p0: np.ndarray
+    times: np.ndarray
+    scaling: tuple[float, float]
+    step: float
+    floor: float
+    degree: int
+    drag_sigma: float
+
+
+def _arguments(
+    state: Any,
+    spacecraft: Any,
+    model: Any,
+    duration: Any,
+    *,
+    update_interval: float,
+    initial_covariance: Any,
+    scaling: tuple[float, float],
+    step: float | None,
+    floor_altitude: float,
+    update_times: Any,
+    zonal_degree: int,
+    drag_sigma: float,
+) -> tuple[_Arguments, float]:
+    """Checks the arguments of :func:`ccsp`; returns them for the core and the span, s."""
     if not isinstance(state, OrbitState):
         raise TypeError(f"state must be an OrbitState, got {type(state).__name__}")
     if not isinstance(spacecraft, Spacecraft):
@@ -127,28 +194,21 @@ def ccsp(
     p0 = np.array(p0, dtype=float)
     if p0.shape != (6, 6):
         raise ValueError(f"initial_covariance must have shape (6, 6), got {p0.shape}")
-    floor = _validate.real("floor_altitude", floor_altitude)
-    degree = zonal_degree_argument(zonal_degree)
-    drag_sigma = drag_sigma_argument(drag_sigma)
-    epoch = ut1_seconds(state.epoch)
+    args = _Arguments(
+        epoch=ut1_seconds(state.epoch),
+        p0=p0,
+        times=times,
+        scaling=(l1, l2),
+        step=h,
+        floor=_validate.real("floor_altitude", floor_altitude),
+        degree=zonal_degree_argument(zonal_degree),
+        drag_sigma=drag_sigma_argument(drag_sigma),
+    )
+    return args, span
 
-    def run(atmosphere: Any) -> dict[str, Any]:
-        return _core.ccsp(
-            atmosphere,
-            epoch,
-            state.state,
-            spacecraft.drag_parameter,
-            p0,
-            times,
-            (l1, l2),
-            perturbation,
-            h,
-            floor,
-            degree,
-            drag_sigma,
-        )
 
-    out = run_in_field(model, state, span, floor, run)
+def _result(state: OrbitState, out: dict[str, Any], drag_sigma: float) -> CcspResult:
+    """The :class:`CcspResult` of the core's output dict."""
     # The binding reports decay as "decayed_at" (None when the filter ran to the end).
     decayed = out.get("decayed_at")
     moments = StateMoments(state.epoch, out["times"], out["means"], out["covariances"])
@@ -165,3 +225,66 @@ def ccsp(
         drag_sigma=drag_sigma,
         drag_cross_covariance=out["drag_cross"],
     )
+
+
+def ccsp_many(
+    runs: list[dict[str, Any]],
+    model: Any,
+    *,
+    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    zonal_degree: int = 2,
+    progress: Callable[[int], None] | None = None,
+) -> list[CcspResult | Exception]:
+    """The CCSP of several objects in one core call (a catalog chunk): each entry of
+    ``runs`` holds the keywords of :func:`ccsp` that differ per object (``state``,
+    ``spacecraft``, ``update_times``, ``initial_covariance``, ``drag_sigma``; optional
+    ``step``; scaling and perturbation are the defaults). Objects run in parallel, each
+    object's sigma points in one SIMD batch, and every result equals (bit for bit)
+    :func:`ccsp` of that object alone. Objects whose
+    core atmosphere differs (a model sampled per object) go in separate calls. Returns,
+    per object, its :class:`CcspResult` or the exception its run raised there (not
+    raised: the caller decides, e.g. repeats the object with :func:`ccsp`, which widens
+    a field an object left). ``progress(updates_done)`` is called about every 50 ms; an
+    exception from it stops the call and is raised, as is Ctrl-C."""
+    prepared = []
+    for run in runs:
+        state = run["state"]
+        args, span = _arguments(
+            state,
+            run["spacecraft"],
+            model,
+            None,
+            update_interval=3600.0,
+            initial_covariance=run.get("initial_covariance"),
+            scaling=(3.0, 3.0),
+            step=run.get("step"),
+            floor_altitude=floor_altitude,
+            update_times=run["update_times"],
+            zonal_degree=zonal_degree,
+            drag_sigma=run.get("drag_sigma", 0.0),
+        )
+        prepared.append((state, run["spacecraft"], args, as_atmosphere(model, state, span)))
+    results: list[CcspResult | Exception] = [RuntimeError("not run")] * len(prepared)
+    groups: dict[int, list[int]] = {}
+    for i, (_s, _c, _a, atmosphere) in enumerate(prepared):
+        groups.setdefault(id(atmosphere), []).append(i)
+    for members in groups.values():
+        atmosphere = prepared[members[0]][3]
+        first = prepared[members[0]][2]
+        objects = [
+            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, a.drag_sigma)
+            for s, c, a, _ in (prepared[i] for i in members)
+        ]
+        outs = _core.ccsp_many(
+            atmosphere,
+            objects,
+            first.scaling,
+            "additive",
+            first.floor,
+            first.degree,
+            progress,
+        )
+        for i, out in zip(members, outs, strict=True):
+            state, _c, args, _atm = prepared[i]
+            results[i] = out if isinstance(out, Exception) else _result(state, out, args.drag_sigma)
+    return results

@@ -9,6 +9,7 @@ use crate::integrators::{
 };
 use crate::problem::Problem;
 use crate::progress::Progress;
+use crate::simd::{dispatch, Kernel};
 use crate::CoreError;
 
 /// Integration method of a propagation.
@@ -79,6 +80,24 @@ impl<R> StepHooks<1, R> for Observer<'_> {
     }
 }
 
+/// One fixed-step propagation, run through the SIMD dispatch.
+struct FixedRun<'r, 'a, 'p, A: Atmosphere + ?Sized> {
+    scheme: FixedMethod,
+    dynamics: &'r mut Dynamics<'a, A, 1>,
+    y: &'r mut State<1>,
+    plan: &'r StepPlan,
+    observer: &'r mut Observer<'p>,
+}
+
+impl<A: Atmosphere + ?Sized> Kernel for FixedRun<'_, '_, '_, A> {
+    type Output = Result<Outcome, CoreError>;
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        drive(self.scheme, self.dynamics, self.y, self.plan, self.observer)
+    }
+}
+
 /// Propagates `problem` through the increasing `output_times` (s from the epoch, >= 0; or
 /// all <= 0 to go backwards with a fixed-step method). `progress.done` counts the output
 /// times reached; setting `progress.cancel` stops the run after the current step.
@@ -109,7 +128,15 @@ pub fn propagate<A: Atmosphere + ?Sized>(
                 _ => FixedMethod::Abm,
             };
             let plan = StepPlan::equal_steps(0.0, output_times, step)?;
-            drive(scheme, &mut dynamics, &mut y, &plan, &mut observer)?
+            // Compiled for the CPU's instruction set like the batch kernels (inline
+            // floor, FMA-free arithmetic: bit-identical on every path).
+            dispatch(FixedRun {
+                scheme,
+                dynamics: &mut dynamics,
+                y: &mut y,
+                plan: &plan,
+                observer: &mut observer,
+            })?
         }
         Method::Dop853(opts) => {
             integrate_adaptive(&mut dynamics, 0.0, &y, output_times, opts, &mut observer)?

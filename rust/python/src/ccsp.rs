@@ -6,8 +6,8 @@ use crate::long_call::long_call;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
-use rhoprop_core::ccsp::{ccsp as core_ccsp, CcspConfig};
+use pyo3::types::{PyDict, PyList};
+use rhoprop_core::ccsp::{ccsp as core_ccsp, ccsp_many as core_ccsp_many, CcspConfig, CcspOutput};
 use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::problem::Problem;
 
@@ -56,6 +56,81 @@ pub fn ccsp<'py>(
     let out = long_call(py, None, |progress| {
         with_atmosphere!(&atm, |a| core_ccsp(a, &cfg, progress))
     })?;
+    output_dict(py, out)
+}
+
+/// One object of `ccsp_many`: (epoch, state (6,), drag, initial_covariance (6, 6),
+/// update_times (k,), step, drag_sigma).
+type ObjectArgs<'py> = (
+    f64,
+    PyReadonlyArray1<'py, f64>,
+    f64,
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+    f64,
+    f64,
+);
+
+/// Runs the CCSP filter of several objects through one atmosphere in one call, objects in
+/// parallel with the GIL released (each object's sigma points in one batch); every
+/// result equals `ccsp` of that object alone. `objects` holds one tuple per object
+/// (epoch, state, drag, initial_covariance, update_times, step, drag_sigma); the other
+/// settings are shared. Returns a list with, per object, the dict of `ccsp` or the
+/// exception its run raised (not raised here). `progress(done)` is called about every
+/// 50 ms with the updates done over all objects; an exception from it (or Ctrl-C) stops
+/// the call and is raised.
+#[pyfunction]
+#[pyo3(signature = (atmosphere, objects, scaling, perturbation, floor_altitude,
+    zonal_degree = 2, progress = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn ccsp_many<'py>(
+    py: Python<'py>,
+    atmosphere: &Bound<'py, PyAny>,
+    objects: Vec<ObjectArgs<'py>>,
+    scaling: (f64, f64),
+    perturbation: &str,
+    floor_altitude: f64,
+    zonal_degree: u8,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let atm = AtmosphereRef::extract(atmosphere)?;
+    let perturbation = crate::arrays::perturbation(perturbation)?;
+    let cfgs = objects
+        .iter()
+        .map(|(epoch, state, drag, p0, times, step, drag_sigma)| {
+            Ok(CcspConfig {
+                problem: Problem {
+                    epoch: *epoch,
+                    y0: fixed::<6>("state", state)?,
+                    drag: *drag,
+                    floor_altitude,
+                    zonal_degree,
+                },
+                p0: crate::arrays::matrix6("initial_covariance", p0)?,
+                update_times: crate::arrays::vector("update_times", times)?.to_vec(),
+                scaling,
+                perturbation,
+                method: FixedMethod::Rk8,
+                max_step: *step,
+                drag_sigma: *drag_sigma,
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let outs = long_call(py, progress, |progress| {
+        with_atmosphere!(&atm, |a| core_ccsp_many(a, &cfgs, progress))
+    })?;
+    let list = PyList::empty(py);
+    for out in outs {
+        match out {
+            Ok(out) => list.append(output_dict(py, out)?)?,
+            Err(err) => list.append(crate::errors::to_py(err).into_value(py))?,
+        }
+    }
+    Ok(list)
+}
+
+/// The dict `ccsp` returns.
+fn output_dict(py: Python<'_>, out: CcspOutput) -> PyResult<Bound<'_, PyDict>> {
     let nt = out.times.len();
     let dict = PyDict::new(py);
     dict.set_item("decayed_at", out.decayed_at)?;

@@ -9,6 +9,7 @@ use pyo3::prelude::*;
 use rhoprop_core::density::{Atmosphere, Exponential, GriddedField};
 use rhoprop_core::frames::EarthRotation;
 use rhoprop_core::time::gmst;
+use std::borrow::Cow;
 use std::sync::Arc;
 
 /// (mean, sigma) arrays, kg/m^3.
@@ -80,14 +81,15 @@ impl PyGridded {
             )));
         }
         let nlon = a.shape()[3];
-        // A C-contiguous array is copied in one go; otherwise iterating the view yields the
-        // logical row-major order whatever the strides.
-        let ln_mean: Vec<f64> = a
+        // A C-contiguous array is read in place (the field copies it once, interleaved);
+        // otherwise iterating the view yields the logical row-major order whatever the
+        // strides.
+        let ln_mean: Cow<'_, [f64]> = a
             .as_slice()
-            .map_or_else(|| a.iter().copied().collect(), <[f64]>::to_vec);
-        let rel_sigma: Vec<f64> = b
+            .map_or_else(|| Cow::Owned(a.iter().copied().collect()), Cow::Borrowed);
+        let rel_sigma: Cow<'_, [f64]> = b
             .as_slice()
-            .map_or_else(|| b.iter().copied().collect(), <[f64]>::to_vec);
+            .map_or_else(|| Cow::Owned(b.iter().copied().collect()), Cow::Borrowed);
         GriddedField::new(
             epoch, time, altitude, latitude, lon0, nlon, ln_mean, rel_sigma,
         )

@@ -156,15 +156,18 @@ pub struct GriddedField {
     /// First longitude node in radians; nodes are `nlon` equal steps around the globe.
     lon0: f64,
     nlon: usize,
-    ln_mean: Vec<f64>,
-    rel_sigma: Vec<f64>,
+    /// (ln mean, rel sigma) per node, row-major [time][alt][lat][lon]: the two values a
+    /// lookup reads at a corner share a cache line (and so, mostly, do the longitude
+    /// neighbours'), halving the lines touched against two separate tables.
+    table: Vec<[f64; 2]>,
 }
 
 impl GriddedField {
     /// Builds a field. `epoch` in seconds since J2000; `time` nodes in seconds from
     /// `epoch` (non-decreasing, a repeated node marks a discontinuity); `alt` in metres (geodetic); `lat` in degrees (geodetic); longitude nodes
     /// at `lon0_deg + k * 360 / nlon` degrees, periodic. `ln_mean` (ln of kg/m^3) and
-    /// `rel_sigma` (sigma/mean, >= 0) are row-major [time][alt][lat][lon].
+    /// `rel_sigma` (sigma/mean, >= 0) are row-major [time][alt][lat][lon] (read, not
+    /// kept: the field stores them interleaved).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         epoch: f64,
@@ -173,9 +176,10 @@ impl GriddedField {
         lat_deg: (f64, f64, usize),
         lon0_deg: f64,
         nlon: usize,
-        ln_mean: Vec<f64>,
-        rel_sigma: Vec<f64>,
+        ln_mean: impl AsRef<[f64]>,
+        rel_sigma: impl AsRef<[f64]>,
     ) -> Result<Self, CoreError> {
+        let (ln_mean, rel_sigma) = (ln_mean.as_ref(), rel_sigma.as_ref());
         finite("field epoch", epoch)?;
         let time = TimeNodes::checked(time)?;
         let alt = Axis::checked("altitude", alt.0, alt.1, alt.2)?;
@@ -200,7 +204,7 @@ impl GriddedField {
             ));
         }
         let n = time.nodes.len() * alt.len * lat.len * nlon;
-        for (name, v) in [("ln_mean", &ln_mean), ("rel_sigma", &rel_sigma)] {
+        for (name, v) in [("ln_mean", ln_mean), ("rel_sigma", rel_sigma)] {
             if v.len() != n {
                 return Err(CoreError::shape(
                     name,
@@ -237,8 +241,11 @@ impl GriddedField {
             },
             lon0: lon0_deg.to_radians(),
             nlon,
-            ln_mean,
-            rel_sigma,
+            table: ln_mean
+                .iter()
+                .zip(rel_sigma)
+                .map(|(&m, &s)| [m, s])
+                .collect(),
         })
     }
 
@@ -293,8 +300,9 @@ impl GriddedField {
                     let row = (((it + dt) * na + ia + da) * nl + il + dl) * no;
                     let w = wt * wa * wl;
                     let (a, b) = (row + io0, row + io1);
-                    ln_m += w * ((1.0 - fo) * self.ln_mean[a] + fo * self.ln_mean[b]);
-                    rs += w * ((1.0 - fo) * self.rel_sigma[a] + fo * self.rel_sigma[b]);
+                    let (ca, cb) = (self.table[a], self.table[b]);
+                    ln_m += w * ((1.0 - fo) * ca[0] + fo * cb[0]);
+                    rs += w * ((1.0 - fo) * ca[1] + fo * cb[1]);
                 }
             }
         }
@@ -385,32 +393,89 @@ impl Atmosphere for GriddedField {
         }
         // Strides of the time, altitude and latitude neighbours in the table.
         let (st, sa, sl) = (na * nl * no, nl * no, no);
+        // Gather the 8 corners' (ln mean, rel sigma) and their longitude neighbours' per
+        // lane (zeros outside: inactive, nothing to interpolate), then interpolate in
+        // lane loops that vectorise, corner by corner in the order (time, altitude,
+        // latitude) of the scalar lookup, so every lane gets the same bits.
         let (mut ln_m, mut rs) = ([0.0; W], [0.0; W]);
+        if !(4..=8).contains(&W) {
+            // Interpolate lane by lane in place: a trajectory alone (the lane loops would
+            // not vectorise) or a wide sigma-point batch (16 or 18 lanes: the gathered
+            // corners cost more than the vector arithmetic saves, measured 5 % slower on
+            // the catalog benchmark; 20 % faster for the 8-lane Monte Carlo batches).
+            for l in 0..W {
+                if outside[l] {
+                    // Inactive and outside: nothing to interpolate (drag is off there).
+                    continue;
+                }
+                let (base, next) = (base_f[l] as usize, next_f[l] as isize);
+                let f = fo[l];
+                for (dt, wt) in [(0, 1.0 - ft), (st, ft)] {
+                    for (da, wa) in [(0, 1.0 - fa[l]), (sa, fa[l])] {
+                        for (dl, wl) in [(0, 1.0 - fl[l]), (sl, fl[l])] {
+                            let a = base + dt + da + dl;
+                            let b = a.wrapping_add_signed(next);
+                            let w = wt * wa * wl;
+                            let (ca, cb) = (self.table[a], self.table[b]);
+                            ln_m[l] += w * ((1.0 - f) * ca[0] + f * cb[0]);
+                            rs[l] += w * ((1.0 - f) * ca[1] + f * cb[1]);
+                        }
+                    }
+                }
+            }
+            self.finish(&outside, &ln_m, &rs, mean, sigma);
+            return Ok(());
+        }
+        let mut corners = [[[0.0; W]; 4]; 8];
         for l in 0..W {
             if outside[l] {
-                // Inactive and outside: nothing to interpolate (drag is off there).
                 continue;
             }
             // Exact: table sizes are far below 2^53.
             let (base, next) = (base_f[l] as usize, next_f[l] as isize);
-            let f = fo[l];
-            for (dt, wt) in [(0, 1.0 - ft), (st, ft)] {
-                for (da, wa) in [(0, 1.0 - fa[l]), (sa, fa[l])] {
-                    for (dl, wl) in [(0, 1.0 - fl[l]), (sl, fl[l])] {
-                        let a = base + dt + da + dl;
-                        let b = a.wrapping_add_signed(next);
-                        let w = wt * wa * wl;
-                        ln_m[l] += w * ((1.0 - f) * self.ln_mean[a] + f * self.ln_mean[b]);
-                        rs[l] += w * ((1.0 - f) * self.rel_sigma[a] + f * self.rel_sigma[b]);
-                    }
-                }
+            for (c, corner) in corners.iter_mut().enumerate() {
+                let a = base
+                    + if c & 4 != 0 { st } else { 0 }
+                    + if c & 2 != 0 { sa } else { 0 }
+                    + if c & 1 != 0 { sl } else { 0 };
+                let b = a.wrapping_add_signed(next);
+                let (ca, cb) = (self.table[a], self.table[b]);
+                corner[0][l] = ca[0];
+                corner[1][l] = cb[0];
+                corner[2][l] = ca[1];
+                corner[3][l] = cb[1];
             }
         }
+        for (c, corner) in corners.iter().enumerate() {
+            let wt = if c & 4 != 0 { ft } else { 1.0 - ft };
+            for l in 0..W {
+                let wa = if c & 2 != 0 { fa[l] } else { 1.0 - fa[l] };
+                let wl = if c & 1 != 0 { fl[l] } else { 1.0 - fl[l] };
+                let (w, f) = (wt * wa * wl, fo[l]);
+                ln_m[l] += w * ((1.0 - f) * corner[0][l] + f * corner[1][l]);
+                rs[l] += w * ((1.0 - f) * corner[2][l] + f * corner[3][l]);
+            }
+        }
+        self.finish(&outside, &ln_m, &rs, mean, sigma);
+        Ok(())
+    }
+}
+
+impl GriddedField {
+    /// Mean and sigma from the interpolated ln(mean) and rel sigma (zero outside).
+    #[inline(always)]
+    fn finish<const W: usize>(
+        &self,
+        outside: &[bool; W],
+        ln_m: &[f64; W],
+        rs: &[f64; W],
+        mean: &mut [f64; W],
+        sigma: &mut [f64; W],
+    ) {
         for l in 0..W {
             mean[l] = if outside[l] { 0.0 } else { exp(ln_m[l]) };
-            sigma[l] = rs[l] * mean[l];
+            sigma[l] = if outside[l] { 0.0 } else { rs[l] * mean[l] };
         }
-        Ok(())
     }
 }
 
@@ -557,6 +622,56 @@ mod tests {
         assert!(e.to_string().contains("altitude"), "{e}");
         f.mean_sigma_lanes(300.0, &xs, &ys, &zs, &[0.0, 0.0], &rot, &mut ml, &mut sl)
             .unwrap();
+    }
+
+    #[test]
+    fn every_batch_width_gives_each_lane_the_same_bits() {
+        // The in-place interpolation (1 and 18 lanes) and the gathered one (4 to 8
+        // lanes) agree bit for bit, lane by lane; an inactive lane outside the grid gets
+        // zero mean and sigma in both.
+        use crate::frames::{geodetic_to_fixed, Geodetic};
+        let f = affine_field();
+        let rot = EarthRotation::new(0.77);
+        let pos = |k: usize| {
+            let alt = if k == 5 {
+                100e3
+            } else {
+                305e3 + 9.1e3 * k as f64
+            };
+            rot.to_inertial(geodetic_to_fixed(Geodetic {
+                lat: (-58.0 + 6.9 * k as f64).to_radians(),
+                lon: (23.0 * k as f64).to_radians(),
+                alt,
+            }))
+        };
+        let active = |k: usize| if k == 5 { 0.0 } else { 1.0 };
+        fn run<const W: usize>(
+            f: &GriddedField,
+            rot: &EarthRotation,
+            pos: impl Fn(usize) -> [f64; 3],
+            active: impl Fn(usize) -> f64,
+        ) -> ([f64; W], [f64; W]) {
+            let (x, y, z) = (
+                std::array::from_fn(|l| pos(l)[0]),
+                std::array::from_fn(|l| pos(l)[1]),
+                std::array::from_fn(|l| pos(l)[2]),
+            );
+            let (mut m, mut s) = ([f64::NAN; W], [f64::NAN; W]);
+            let on = std::array::from_fn(&active);
+            f.mean_sigma_lanes(410.0, &x, &y, &z, &on, rot, &mut m, &mut s)
+                .unwrap();
+            (m, s)
+        }
+        let (m8, s8) = run::<8>(&f, &rot, pos, active);
+        let (m18, s18) = run::<18>(&f, &rot, |k| pos(k % 8), |k| active(k % 8));
+        for l in 0..18 {
+            assert_eq!(m18[l].to_bits(), m8[l % 8].to_bits(), "lane {l}");
+            assert_eq!(s18[l].to_bits(), s8[l % 8].to_bits(), "lane {l}");
+            let (m1, s1) = run::<1>(&f, &rot, |_| pos(l % 8), |_| active(l % 8));
+            assert_eq!(m1[0].to_bits(), m8[l % 8].to_bits(), "lane {l}");
+            assert_eq!(s1[0].to_bits(), s8[l % 8].to_bits(), "lane {l}");
+        }
+        assert!(m8[0] > 0.0 && m8[5] == 0.0 && s8[5] == 0.0);
     }
 
     #[test]
