@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import _validate
-from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..constants import DEFAULT_FLOOR_ALTITUDE, R_EARTH
 from ..density import DensityModel, SampledModel, altitude_band
 from ..errors import RhopropError
 from ..parallel import worker_count
@@ -450,7 +450,10 @@ def _mean_orbit(
     done: dict[str, Any],
 ) -> tuple[float | None, int]:
     """The decay time of the mean orbit (s from the object's epoch, or None) and how many
-    of ``offsets`` come before it; the propagation is kept in ``done["mean"]``."""
+    of ``offsets`` come before it; the propagation is kept in ``done["mean"]`` (None when
+    :func:`_ccsp_chunk` found the object clear of the floor: no decay)."""
+    if done.get("mean", False) is None:
+        return None, len(offsets)
     if "mean" not in done:
         done["mean"] = propagate(
             obj.state,
@@ -487,16 +490,17 @@ def _ccsp_chunk(
         offsets = to_seconds(epochs, obj.state.epoch)
         try:
             initial, _note = _initial_covariance(obj, cfg["initial_covariance"])
-            _decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done[i])
         except Exception:
             continue  # raised again (or recorded) by _run_object
-        if k == 0 or offsets[k - 1] <= 0:
+        if offsets[-1] <= 0:
             continue
+        # Optimistically over every output: the mean orbit (one lane, for its decay time)
+        # is needed only if the CCSP comes near the floor (checked below).
         runs.append(
             {
                 "state": obj.state,
                 "spacecraft": craft,
-                "update_times": _update_times(offsets[:k], cfg["update_interval"]),
+                "update_times": _update_times(offsets, cfg["update_interval"]),
                 "initial_covariance": initial,
                 "drag_sigma": cfg["drag_sigmas"][i],
             }
@@ -520,9 +524,26 @@ def _ccsp_chunk(
         except Exception:
             outs = []  # every object runs alone, raising (or recording) as before
         for i, out in zip(owners, outs, strict=False):
-            if not isinstance(out, Exception):
+            if not isinstance(out, Exception) and _clear_of_floor(out, cfg):
                 done[i]["ccsp"] = out
+                done[i]["mean"] = None  # the mean orbit cannot have come down
     return [(i, _run_object(o, model, epochs, i, cfg, stop, done[i])) for i, o in chunk]
+
+
+#: How far above the floor (m) a CCSP's mean must stay, at every update, for the mean
+#: orbit's decay check to be skipped: an orbit on its way down within the span has its
+#: sigma points come down (the CCSP stops) or its mean sinks towards the floor first.
+MEAN_ORBIT_MARGIN = 50e3
+
+
+def _clear_of_floor(result: CcspResult, cfg: dict[str, Any]) -> bool:
+    """Whether a CCSP ran to its end with its mean at least :data:`MEAN_ORBIT_MARGIN`
+    above the floor throughout (|r| - equatorial radius, a lower bound of the geodetic
+    altitude)."""
+    if result.decayed_at is not None:
+        return False
+    low = float(np.min(np.linalg.norm(result.mean[:, :3], axis=1))) - R_EARTH
+    return bool(low > float(cfg["floor_altitude"]) + MEAN_ORBIT_MARGIN)
 
 
 def _iso(t: np.datetime64) -> str:
