@@ -5,7 +5,14 @@ starts; the Python pools that run objects side by side (catalogs, fits, screenin
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import os
+import threading
+from collections.abc import Callable, Sequence
+from typing import TypeVar
+
+T = TypeVar("T")
+R = TypeVar("R")
 
 #: Environment variable of the default worker count.
 THREADS_ENV = "RHOPROP_THREADS"
@@ -37,3 +44,30 @@ def set_threads(threads: int) -> None:
     count = worker_count(threads)
     os.environ[THREADS_ENV] = str(count)
     os.environ["RAYON_NUM_THREADS"] = str(count)
+
+
+def map_in_threads(
+    fn: Callable[[T], R],
+    items: Sequence[T],
+    workers: int,
+    stop: threading.Event,
+    on_result: Callable[[int, R], object] | None = None,
+) -> list[R]:
+    """``fn`` over ``items`` on ``workers`` threads (the core releases the GIL), results
+    in input order; ``on_result(i, result)`` is called in order as each comes in (e.g. a
+    progress bar). An error or Ctrl-C sets ``stop`` (for ``fn`` to end early), cancels the
+    items not started and is raised."""
+    pool = cf.ThreadPoolExecutor(max_workers=workers)
+    results: list[R] = []
+    try:
+        futures = [pool.submit(fn, item) for item in items]
+        for i, fut in enumerate(futures):
+            results.append(fut.result())
+            if on_result is not None:
+                on_result(i, results[-1])
+    except BaseException:
+        stop.set()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    return results

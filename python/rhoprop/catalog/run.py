@@ -17,7 +17,7 @@ from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, R_EARTH
 from ..density import DensityModel, SampledModel, altitude_band
 from ..errors import RhopropError
-from ..parallel import worker_count
+from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import (
     Spacecraft,
@@ -716,36 +716,43 @@ def _run_local(
     stops running Monte Carlos at once; a running CCSP finishes its object first."""
     stop = threading.Event()
     workers = worker_count()
-    pool = cf.ThreadPoolExecutor(max_workers=workers)
     results: dict[int, dict[str, Any]] = {}
-    try:
-        if cfg["method"] == "ccsp":
-            # Chunks of objects per core call (objects in parallel there), small enough
-            # that every worker gets several.
-            size = max(1, min(CCSP_CHUNK, -(-len(objs) // (4 * workers))))
-            indexed = list(enumerate(objs))
-            chunks = [
-                pool.submit(_ccsp_chunk, shipped, indexed[c : c + size], epochs, cfg, stop)
-                for c in range(0, len(indexed), size)
-            ]
-            for chunk in chunks:
-                results.update(chunk.result())
-                if bar is not None:
-                    bar(len(results))
-        else:
-            futures = [
-                pool.submit(_run_object, o, shipped, epochs, i, cfg, stop)
-                for i, o in enumerate(objs)
-            ]
-            for i, fut in enumerate(futures):
-                results[i] = fut.result()
-                if bar is not None:
-                    bar(i + 1)
-    except BaseException:
-        stop.set()
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown()
+
+    def tick(_i: int, _result: object) -> None:
+        if bar is not None:
+            bar(len(results))
+
+    if cfg["method"] == "ccsp":
+        # Chunks of objects per core call (objects in parallel there), small enough that
+        # every worker gets several.
+        size = max(1, min(CCSP_CHUNK, -(-len(objs) // (4 * workers))))
+        indexed = list(enumerate(objs))
+        chunks = [indexed[c : c + size] for c in range(0, len(indexed), size)]
+
+        def chunk_done(i: int, done: list[tuple[int, dict[str, Any]]]) -> None:
+            results.update(done)
+            tick(i, done)
+
+        map_in_threads(
+            lambda chunk: _ccsp_chunk(shipped, chunk, epochs, cfg, stop),
+            chunks,
+            workers,
+            stop,
+            chunk_done,
+        )
+    else:
+
+        def object_done(i: int, result: dict[str, Any]) -> None:
+            results[i] = result
+            tick(i, result)
+
+        map_in_threads(
+            lambda item: _run_object(item[1], shipped, epochs, item[0], cfg, stop),
+            list(enumerate(objs)),
+            workers,
+            stop,
+            object_done,
+        )
     return results
 
 

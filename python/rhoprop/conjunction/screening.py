@@ -7,7 +7,6 @@ between samples (relative speed x half the spacing), so that no approach closer 
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -21,7 +20,7 @@ from ..catalog.elements import CatalogObject
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, MU, R_EARTH, R_POLE
 from ..density.model import as_atmosphere
 from ..errors import DecayError
-from ..parallel import worker_count
+from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft, propagate
 from ..propagation.propagate import (
@@ -647,20 +646,10 @@ def _run_threads(
         bar = shown
     else:
         bar = None
-    pool = cf.ThreadPoolExecutor(max_workers=workers)
-    results: list[dict[str, Any]] = []
     try:
-        futures = [pool.submit(one, o) for o in objs]
-        for i, fut in enumerate(futures):
-            results.append(fut.result())
-            if bar is not None:
-                bar(i + 1)
-    except BaseException:
-        stop.set()
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
+        return map_in_threads(
+            one, objs, workers, stop, None if bar is None else lambda i, _r: bar(i + 1)
+        )
     finally:
         if shown is not None:
             shown.close()
-    pool.shutdown()
-    return results

@@ -583,33 +583,7 @@ mod tests {
         use crate::density::Exponential;
         use std::sync::atomic::Ordering;
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
-        let mut p0 = [[0.0; 6]; 6];
-        for i in 0..6 {
-            p0[i][i] = if i < 3 { 1e-6 } else { 1e-12 };
-        }
-        let cfg = CcspConfig {
-            problem: Problem {
-                epoch: 8.4e7,
-                y0: [
-                    3782900.7032,
-                    -5441600.6779,
-                    -1420075.1327,
-                    -606.6600,
-                    1539.2559,
-                    -7488.3946,
-                ],
-                drag: 3.0912 * 0.0015,
-                floor_altitude: 120e3,
-                zonal_degree: 2,
-            },
-            p0,
-            update_times: vec![3600.0, 7200.0],
-            scaling: (3.0, 3.0),
-            perturbation: Perturbation::Additive,
-            method: FixedMethod::Rk8,
-            max_step: 180.0,
-            drag_sigma: 0.0,
-        };
+        let cfg = paper_config(vec![3600.0, 7200.0], 0.0);
         let p = Progress::default();
         p.cancel.store(true, Ordering::Relaxed);
         assert_eq!(ccsp(&atm, &cfg, &p).unwrap_err(), CoreError::Cancelled);
