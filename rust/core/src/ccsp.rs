@@ -28,7 +28,7 @@ use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::KappaLanes;
 use crate::problem::{check_drag_sigma, drag_factor, Problem};
 use crate::progress::Progress;
-use crate::simd::{dispatch_on, Kernel, SimdPath};
+use crate::simd::{dispatch_on, Aligned, Kernel, SimdPath};
 use nalgebra::{Cholesky, Matrix6, SMatrix, Vector6};
 
 type Matrix8 = SMatrix<f64, 8, 8>;
@@ -446,7 +446,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
             plan,
         } = self;
         let lanes = chunk.len();
-        let mut y: State<W> = [[0.0; W]; 6];
+        let mut state = Aligned::<State<W>>([[0.0; W]; 6]);
+        let y = &mut state.0;
         let mut kappa = KappaLanes::<W>::zero();
         let mut drag = [0.0; W];
         let problem = &cfg.problem;
@@ -466,10 +467,10 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
             epoch: problem.epoch,
             floor: problem.floor_altitude,
             lanes,
-            last: (plan.start(), y),
+            last: (plan.start(), *y),
             decayed_at: None,
         };
-        drive(cfg.method, &mut dynamics, &mut y, plan, &mut watch)?;
+        drive(cfg.method, &mut dynamics, y, plan, &mut watch)?;
         Ok((
             (0..lanes)
                 .map(|l| Vector6::from_fn(|c, _| y[c][l]))

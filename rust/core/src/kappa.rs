@@ -130,13 +130,15 @@ impl KappaProcess {
     }
 }
 
-/// Kappa of `W` lanes on the current node segment [t0, t1].
+/// Kappa of `W` lanes on the current node segment [t0, t1]. The lane arrays first, so
+/// that they keep the alignment of the struct that holds this one.
 #[derive(Debug, Clone, Copy)]
+#[repr(C)]
 pub struct KappaLanes<const W: usize> {
-    pub t0: f64,
-    pub t1: f64,
     pub k0: [f64; W],
     pub k1: [f64; W],
+    pub t0: f64,
+    pub t1: f64,
     pub linear: bool,
 }
 

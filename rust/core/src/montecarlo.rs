@@ -13,7 +13,7 @@ use crate::kappa::{KappaLanes, KappaProcess};
 use crate::problem::{check_drag_sigma, check_state, drag_factor, Problem};
 use crate::progress::Progress;
 use crate::rng::MemberStream;
-use crate::simd::{dispatch_on, Kernel, SimdPath};
+use crate::simd::{dispatch_on, Aligned, Kernel, SimdPath};
 use rayon::prelude::*;
 
 /// What to run.
@@ -227,7 +227,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
         let y0 = cfg.problem.y0;
         let mut streams: [MemberStream; W] =
             std::array::from_fn(|l| MemberStream::new(cfg.seed, (first + l.min(lanes - 1)) as u64));
-        let mut y: State<W> = [[0.0; W]; 6];
+        let mut state = Aligned::<State<W>>([[0.0; W]; 6]);
+        let y = &mut state.0;
         for l in 0..W {
             let mut s = y0;
             if let Some(f) = &cfg.initial_factor {
@@ -281,7 +282,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
             spacing,
             per_node: spacing.map_or(usize::MAX, |d| ((d / h).round() as usize).max(1)),
             frozen: [None; W],
-            last: (0.0, y),
+            last: (0.0, *y),
             out: BatchOut {
                 positions: vec![0.0; W * nt * 3],
                 velocities: vec![0.0; W * nt * 3],
@@ -290,7 +291,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
                 decay: [f64::INFINITY; W],
             },
         };
-        drive(cfg.method, &mut dynamics, &mut y, plan, &mut members)?;
+        drive(cfg.method, &mut dynamics, y, plan, &mut members)?;
         members.out.clipped = dynamics.clipped;
         Ok(members.out)
     }

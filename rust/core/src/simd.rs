@@ -89,6 +89,11 @@ impl SimdPath {
     }
 }
 
+/// A value that starts a cache line: batch states whose lane arrays vector loads read (a
+/// load that splits a cache line costs extra; see [`crate::dynamics::Dynamics`]).
+#[repr(C, align(64))]
+pub struct Aligned<T>(pub T);
+
 /// A unit of batch work that [`dispatch`] compiles once per instruction set. Implementors
 /// mark `run` `#[inline(always)]` so that it, and everything it inlines (steps, RHS, stage
 /// arithmetic), is generated inside each target-feature wrapper.

@@ -24,6 +24,15 @@ pub fn gmst(ut1: f64) -> f64 {
     (seconds / SECONDS_PER_DAY * TAU).rem_euclid(TAU)
 }
 
+/// Rate of [`gmst`], rad/s, at `ut1` seconds since J2000: one turn per UT1 day plus the
+/// derivative of the polynomial part.
+pub fn gmst_rate(ut1: f64) -> f64 {
+    let t = ut1 / SECONDS_PER_CENTURY;
+    let poly_rate =
+        (8640184.812866 + 2.0 * 0.093104 * t - 3.0 * 6.2e-6 * t * t) / SECONDS_PER_CENTURY;
+    (1.0 + poly_rate) * TAU / SECONDS_PER_DAY
+}
+
 /// Seconds since J2000 of a Julian date (UT1).
 pub fn seconds_since_j2000_from_jd(jd: f64) -> f64 {
     (jd - 2451545.0) * SECONDS_PER_DAY
@@ -32,6 +41,21 @@ pub fn seconds_since_j2000_from_jd(jd: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gmst_rate_matches_the_difference_of_gmst() {
+        // Central difference over +-5000 s (wide enough that gmst's own rounding, ~2e-14
+        // rad at these epochs, stays below 1e-12 relative).
+        for ut1 in [-4.0e8, 0.0, 7.8e8, 1.5e9] {
+            let mut d = gmst(ut1 + 5000.0) - gmst(ut1 - 5000.0);
+            if d < 0.0 {
+                d += TAU;
+            }
+            let fd = d / 10000.0;
+            let rate = gmst_rate(ut1);
+            assert!((rate - fd).abs() < 1e-12 * rate, "{ut1}: {rate} vs {fd}");
+        }
+    }
 
     #[test]
     fn gmst_vallado_example_3_5() {

@@ -1,6 +1,6 @@
 //! Exponential atmosphere: a standard analytic benchmark.
 
-use super::Atmosphere;
+use super::{Atmosphere, LaneMemory};
 use crate::constants::R_EARTH;
 use crate::error::{finite, positive, CoreError};
 use crate::frames::{norm, EarthRotation};
@@ -102,6 +102,7 @@ impl Atmosphere for Exponential {
         _rot: &EarthRotation,
         mean: &mut [f64; W],
         sigma: &mut [f64; W],
+        _memory: &mut LaneMemory<W>,
     ) -> Result<(), CoreError> {
         // Every lane, active or not: the arithmetic cannot fail and stays finite (exp
         // clamps), and a straight loop vectorises.

@@ -14,7 +14,7 @@
 //! covered.
 
 use super::exponential::exp;
-use super::Atmosphere;
+use super::{Atmosphere, LaneMemory};
 use crate::error::{finite, CoreError};
 use crate::frames::{geodetic, geodetic_lanes, EarthRotation};
 use std::f64::consts::TAU;
@@ -339,6 +339,7 @@ impl Atmosphere for GriddedField {
         rot: &EarthRotation,
         mean: &mut [f64; W],
         sigma: &mut [f64; W],
+        memory: &mut LaneMemory<W>,
     ) -> Result<(), CoreError> {
         let Some((it, ft)) = self.time.locate(ut1 - self.epoch) else {
             // Outside the time axis: the scalar lookup of an active lane says so.
@@ -426,11 +427,15 @@ impl Atmosphere for GriddedField {
             self.finish(&outside, &ln_m, &rs, mean, sigma);
             return Ok(());
         }
-        let mut corners = [[[0.0; W]; 4]; 8];
+        // The corners of each lane's cell: kept from the previous evaluation of this batch
+        // when the lane is still in the same cell (same time cell, same place), which
+        // consecutive stages mostly are; otherwise read from the table.
+        let corners = &mut memory.corners;
         for l in 0..W {
-            if outside[l] {
+            if outside[l] || memory.cell[l] == base_f[l] {
                 continue;
             }
+            memory.cell[l] = base_f[l];
             // Exact: table sizes are far below 2^53.
             let (base, next) = (base_f[l] as usize, next_f[l] as isize);
             for (c, corner) in corners.iter_mut().enumerate() {
@@ -600,6 +605,7 @@ mod tests {
                 &rot,
                 &mut ml,
                 &mut sl,
+                &mut LaneMemory::default(),
             )
             .unwrap();
             assert!(((ml[3] - m) / m).abs() < 1e-9, "{k}: {} vs {m}", ml[3]);
@@ -617,11 +623,31 @@ mod tests {
         let ys = [below[1], below[1]];
         let zs = [below[2], below[2]];
         let e = f
-            .mean_sigma_lanes(300.0, &xs, &ys, &zs, &[0.0, 1.0], &rot, &mut ml, &mut sl)
+            .mean_sigma_lanes(
+                300.0,
+                &xs,
+                &ys,
+                &zs,
+                &[0.0, 1.0],
+                &rot,
+                &mut ml,
+                &mut sl,
+                &mut LaneMemory::default(),
+            )
             .unwrap_err();
         assert!(e.to_string().contains("altitude"), "{e}");
-        f.mean_sigma_lanes(300.0, &xs, &ys, &zs, &[0.0, 0.0], &rot, &mut ml, &mut sl)
-            .unwrap();
+        f.mean_sigma_lanes(
+            300.0,
+            &xs,
+            &ys,
+            &zs,
+            &[0.0, 0.0],
+            &rot,
+            &mut ml,
+            &mut sl,
+            &mut LaneMemory::default(),
+        )
+        .unwrap();
     }
 
     #[test]
@@ -658,8 +684,18 @@ mod tests {
             );
             let (mut m, mut s) = ([f64::NAN; W], [f64::NAN; W]);
             let on = std::array::from_fn(&active);
-            f.mean_sigma_lanes(410.0, &x, &y, &z, &on, rot, &mut m, &mut s)
-                .unwrap();
+            f.mean_sigma_lanes(
+                410.0,
+                &x,
+                &y,
+                &z,
+                &on,
+                rot,
+                &mut m,
+                &mut s,
+                &mut LaneMemory::default(),
+            )
+            .unwrap();
             (m, s)
         }
         let (m8, s8) = run::<8>(&f, &rot, pos, active);
@@ -672,6 +708,45 @@ mod tests {
             assert_eq!(s1[0].to_bits(), s8[l % 8].to_bits(), "lane {l}");
         }
         assert!(m8[0] > 0.0 && m8[5] == 0.0 && s8[5] == 0.0);
+    }
+
+    #[test]
+    fn kept_corners_give_the_bits_of_a_fresh_lookup() {
+        // A batch walking through the field (staying in a cell, crossing cells and the
+        // time cell at 600 s, one lane leaving the grid) with its memory gets exactly
+        // what a lookup with fresh memory gets at every call.
+        use crate::frames::{geodetic_to_fixed, Geodetic};
+        let f = affine_field();
+        let mut memory = LaneMemory::<8>::default();
+        for k in 0..60 {
+            let ut1 = 100.0 + 19.0 * k as f64;
+            let rot = EarthRotation::new(0.01 * k as f64);
+            let pos: [[f64; 3]; 8] = std::array::from_fn(|l| {
+                let alt = if l == 2 && k % 9 == 4 {
+                    100e3
+                } else {
+                    305e3 + 1.3e3 * k as f64 + 5e3 * l as f64
+                };
+                rot.to_inertial(geodetic_to_fixed(Geodetic {
+                    lat: (-50.0 + 1.7 * k as f64 + l as f64).to_radians(),
+                    lon: (3.1 * k as f64 + 40.0 * l as f64).to_radians(),
+                    alt,
+                }))
+            });
+            let (x, y, z) = (pos.map(|p| p[0]), pos.map(|p| p[1]), pos.map(|p| p[2]));
+            let on = std::array::from_fn(|l| if l == 2 { 0.0 } else { 1.0 });
+            let (mut m, mut s) = ([0.0; 8], [0.0; 8]);
+            let (mut m0, mut s0) = ([0.0; 8], [0.0; 8]);
+            f.mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut m, &mut s, &mut memory)
+                .unwrap();
+            let fresh = &mut LaneMemory::default();
+            f.mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut m0, &mut s0, fresh)
+                .unwrap();
+            for l in 0..8 {
+                assert_eq!(m[l].to_bits(), m0[l].to_bits(), "call {k} lane {l}");
+                assert_eq!(s[l].to_bits(), s0[l].to_bits(), "call {k} lane {l}");
+            }
+        }
     }
 
     #[test]

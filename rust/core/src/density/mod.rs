@@ -13,6 +13,28 @@ pub use gridded::GriddedField;
 use crate::error::CoreError;
 use crate::frames::EarthRotation;
 
+/// What one batch keeps between its right-hand-side evaluations for an atmosphere that
+/// can reuse work from the previous stage: a field's cell corners per lane (consecutive
+/// stages of a step mostly fall in the same cell, so the 32 table reads are skipped).
+/// One per batch; it changes speed only, never a value.
+#[derive(Debug, Clone)]
+pub struct LaneMemory<const W: usize> {
+    /// Per lane: first table index of the cell whose corners are held (NaN: none).
+    pub(crate) cell: [f64; W],
+    /// Per corner (bits: time, altitude, latitude), per value (ln mean at the cell's
+    /// longitude and at the next, rel sigma at both), per lane.
+    pub(crate) corners: [[[f64; W]; 4]; 8],
+}
+
+impl<const W: usize> Default for LaneMemory<W> {
+    fn default() -> Self {
+        Self {
+            cell: [f64::NAN; W],
+            corners: [[[0.0; W]; 4]; 8],
+        }
+    }
+}
+
 /// A thermospheric density source: mean and 1-sigma density.
 pub trait Atmosphere: Sync {
     /// Mean density and its standard deviation, kg/m^3, at `ut1` seconds since J2000 and
@@ -27,9 +49,10 @@ pub trait Atmosphere: Sync {
 
     /// Mean and sigma for every lane of a batch at once (positions `x`, `y`, `z` per lane,
     /// m), written to `mean` and `sigma`. Lanes whose `active` entry is 0 (drag off, e.g.
-    /// a decayed member) may be skipped and keep what they held. The default asks
-    /// [`Atmosphere::mean_sigma`] lane by lane; analytic sources override it with
-    /// straight-line lane arithmetic that the compiler vectorises.
+    /// a decayed member) may be skipped and keep what they held. `memory` is the batch's
+    /// own (see [`LaneMemory`]). The default asks [`Atmosphere::mean_sigma`] lane by
+    /// lane; analytic sources override it with straight-line lane arithmetic that the
+    /// compiler vectorises.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn mean_sigma_lanes<const W: usize>(
@@ -42,6 +65,7 @@ pub trait Atmosphere: Sync {
         rot: &EarthRotation,
         mean: &mut [f64; W],
         sigma: &mut [f64; W],
+        _memory: &mut LaneMemory<W>,
     ) -> Result<(), CoreError> {
         for l in 0..W {
             if active[l] != 0.0 {

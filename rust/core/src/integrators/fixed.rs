@@ -72,7 +72,9 @@ impl<const W: usize> History<W> {
     }
 }
 
-/// Stage workspace for one batch, reused for every step.
+/// Stage workspace for one batch, reused for every step; cache-line aligned with the
+/// stage arrays first (see [`crate::dynamics::Dynamics`]).
+#[repr(C, align(64))]
 pub struct FixedStepper<const W: usize> {
     k: [State<W>; 12],
     tmp: State<W>,
