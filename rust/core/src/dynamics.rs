@@ -199,7 +199,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
         let rot = if self.atmosphere.uses_earth_rotation() {
             self.rotation.at(ut1)
         } else {
-            EarthRotation { cos: 1.0, sin: 0.0 }
+            EarthRotation::IDENTITY
         };
         let kj2 = -1.5 * J2 * MU * R_EARTH * R_EARTH;
         for l in 0..W {

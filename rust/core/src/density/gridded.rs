@@ -123,6 +123,25 @@ impl TimeNodes {
         self.nodes[self.nodes.len() - 1]
     }
 
+    /// [`TimeNodes::locate`], trying the cell `hint` first (the cell of the previous
+    /// stage, which the next one mostly shares) and updating it.
+    #[inline(always)]
+    fn locate_near(&self, t: f64, hint: &mut usize) -> Option<(usize, f64)> {
+        let i = *hint;
+        if i + 1 < self.nodes.len() {
+            let (lo, hi) = (self.nodes[i], self.nodes[i + 1]);
+            // The same cell as the search would find: lo <= t + snap < hi.
+            if lo <= t + STEP_SNAP && t + STEP_SNAP < hi {
+                return Some((i, ((t - lo) / (hi - lo)).clamp(0.0, 1.0)));
+            }
+        }
+        let found = self.locate(t);
+        if let Some((i, _)) = found {
+            *hint = i;
+        }
+        found
+    }
+
     /// Cell and fraction of `t`; at a repeated node the later cell (value after the jump).
     #[inline(always)]
     fn locate(&self, t: f64) -> Option<(usize, f64)> {
@@ -160,6 +179,9 @@ pub struct GriddedField {
     /// lookup reads at a corner share a cache line (and so, mostly, do the longitude
     /// neighbours'), halving the lines touched against two separate tables.
     table: Vec<[f64; 2]>,
+    /// Reciprocals of the altitude, latitude and longitude steps and of the longitude
+    /// count, for the lane lookup (computed once: four divisions per evaluation showed).
+    inv: [f64; 4],
 }
 
 impl GriddedField {
@@ -241,6 +263,12 @@ impl GriddedField {
             },
             lon0: lon0_deg.to_radians(),
             nlon,
+            inv: [
+                1.0 / alt.step,
+                1.0 / lat.step.to_radians(),
+                1.0 / (TAU / nlon as f64),
+                1.0 / nlon as f64,
+            ],
             table: ln_mean
                 .iter()
                 .zip(rel_sigma)
@@ -341,7 +369,10 @@ impl Atmosphere for GriddedField {
         sigma: &mut [f64; W],
         memory: &mut LaneMemory<W>,
     ) -> Result<(), CoreError> {
-        let Some((it, ft)) = self.time.locate(ut1 - self.epoch) else {
+        let Some((it, ft)) = self
+            .time
+            .locate_near(ut1 - self.epoch, &mut memory.time_cell)
+        else {
             // Outside the time axis: the scalar lookup of an active lane says so.
             for l in 0..W {
                 if active[l] != 0.0 {
@@ -352,17 +383,17 @@ impl Atmosphere for GriddedField {
         };
         let (na, nl, no) = (self.alt.len, self.lat.len, self.nlon);
         let (last_a, last_l, nof) = ((na - 1) as f64, (nl - 1) as f64, no as f64);
-        let step_lon = TAU / nof;
-        let (inv_alt, inv_lat, inv_lon) =
-            (1.0 / self.alt.step, 1.0 / self.lat.step, 1.0 / step_lon);
+        let [inv_alt, inv_lat, inv_lon, inv_nlon] = self.inv;
         // Straight-line lane loops (no clamp asserts, no integer work) so that they
         // vectorise: the geodetic position, then the cell and fractions.
-        let (mut lat, mut lon, mut alt) = ([0.0; W], [0.0; W], [0.0; W]);
+        // Latitude and altitude do not change under the rotation about z, so they come
+        // from the inertial position, and the longitude is its right ascension minus the
+        // rotation angle: the Earth rotation's sine and cosine stay off the critical path.
+        let (mut lat, mut ra, mut alt) = ([0.0; W], [0.0; W], [0.0; W]);
         for l in 0..W {
-            let (c, s) = (rot.cos, rot.sin);
-            let (xf, yf) = (c * x[l] + s * y[l], -s * x[l] + c * y[l]);
-            (lat[l], lon[l], alt[l]) = geodetic_lanes(xf, yf, z[l]);
+            (lat[l], ra[l], alt[l]) = geodetic_lanes(x[l], y[l], z[l]);
         }
+        let lon_origin = rot.angle + self.lon0;
         // Per lane: the cell's first table index and the longitude neighbour's offset (as
         // floats until the end), the fractions along altitude, latitude and longitude.
         let (mut base_f, mut next_f) = ([0.0; W], [0.0; W]);
@@ -378,8 +409,8 @@ impl Atmosphere for GriddedField {
             let il = ul.floor().max(0.0).min(last_l - 1.0);
             fa[l] = (ua - ia).clamp(0.0, 1.0);
             fl[l] = (ul - il).clamp(0.0, 1.0);
-            let uo = (lon[l] - self.lon0) * inv_lon;
-            let uo = uo - (uo * (1.0 / nof)).floor() * nof;
+            let uo = (ra[l] - lon_origin) * inv_lon;
+            let uo = uo - (uo * inv_nlon).floor() * nof;
             let io = uo.floor().max(0.0).min(nof - 1.0);
             fo[l] = uo - io;
             // Offset of the next longitude node: +1, or back to node 0 past the last.
@@ -708,6 +739,26 @@ mod tests {
             assert_eq!(s1[0].to_bits(), s8[l % 8].to_bits(), "lane {l}");
         }
         assert!(m8[0] > 0.0 && m8[5] == 0.0 && s8[5] == 0.0);
+    }
+
+    #[test]
+    fn time_cell_from_a_hint_is_the_searched_one() {
+        // Repeated nodes (jumps) included; every hint, times on, near and between nodes.
+        let nodes =
+            TimeNodes::checked(vec![0.0, 600.0, 600.0, 1200.0, 1800.0, 1800.0, 2400.0]).unwrap();
+        for k in 0..=2600 {
+            let t = -100.0 + k as f64 + if k % 3 == 0 { -0.5e-6 } else { 0.0 };
+            let want = nodes.locate(t);
+            for hint0 in 0..8 {
+                let mut hint = hint0;
+                let got = nodes.locate_near(t, &mut hint);
+                assert_eq!(
+                    got.map(|(i, f)| (i, f.to_bits())),
+                    want.map(|(i, f)| (i, f.to_bits())),
+                    "t {t} hint {hint0}"
+                );
+            }
+        }
     }
 
     #[test]

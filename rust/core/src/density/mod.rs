@@ -24,6 +24,8 @@ pub struct LaneMemory<const W: usize> {
     /// Per corner (bits: time, altitude, latitude), per value (ln mean at the cell's
     /// longitude and at the next, rel sigma at both), per lane.
     pub(crate) corners: [[[f64; W]; 4]; 8],
+    /// The field's time cell of the previous evaluation (a hint).
+    pub(crate) time_cell: usize,
 }
 
 impl<const W: usize> Default for LaneMemory<W> {
@@ -31,6 +33,7 @@ impl<const W: usize> Default for LaneMemory<W> {
         Self {
             cell: [f64::NAN; W],
             corners: [[[0.0; W]; 4]; 8],
+            time_cell: 0,
         }
     }
 }
