@@ -352,9 +352,11 @@ impl Atmosphere for GriddedField {
 
     /// The batch lookup of the integrators: the time cell once for all lanes, then per
     /// lane the branch-free geodetic conversion ([`geodetic_lanes`]), the cell and the
-    /// weights in straight-line lane loops that vectorise, 32 table reads and the lane
-    /// `exp`. Agrees with [`GriddedField::at_geodetic`] to ~1e-9 relative. A lane outside
-    /// the grid goes through the scalar lookup, which raises the error naming the axis.
+    /// fractions in straight-line lane loops that vectorise, the cell's interpolation
+    /// coefficients (kept in `memory` while the lane stays in the cell), their nested
+    /// evaluation and the lane `exp`. Every batch width gives a lane the same bits; agrees
+    /// with [`GriddedField::at_geodetic`] to ~1e-9 relative. A lane outside the grid goes
+    /// through the scalar lookup, which raises the error naming the axis.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn mean_sigma_lanes<const W: usize>(
@@ -403,8 +405,9 @@ impl Atmosphere for GriddedField {
         for l in 0..W {
             let ua = (alt[l] - self.alt.start) * inv_alt;
             let ul = (lat[l] - self.lat.start) * inv_lat;
+            // `&`, not `&&`: no branches in a lane loop.
             outside[l] =
-                !(ua >= -1e-9 && ua <= last_a + 1e-9 && ul >= -1e-9 && ul <= last_l + 1e-9);
+                !((ua >= -1e-9) & (ua <= last_a + 1e-9) & (ul >= -1e-9) & (ul <= last_l + 1e-9));
             let ia = ua.floor().max(0.0).min(last_a - 1.0);
             let il = ul.floor().max(0.0).min(last_l - 1.0);
             fa[l] = (ua - ia).clamp(0.0, 1.0);
@@ -425,43 +428,10 @@ impl Atmosphere for GriddedField {
         }
         // Strides of the time, altitude and latitude neighbours in the table.
         let (st, sa, sl) = (na * nl * no, nl * no, no);
-        // Gather the 8 corners' (ln mean, rel sigma) and their longitude neighbours' per
-        // lane (zeros outside: inactive, nothing to interpolate), then interpolate in
-        // lane loops that vectorise, corner by corner in the order (time, altitude,
-        // latitude) of the scalar lookup, so every lane gets the same bits.
-        let (mut ln_m, mut rs) = ([0.0; W], [0.0; W]);
-        if !(4..=8).contains(&W) {
-            // Interpolate lane by lane in place: a trajectory alone (the lane loops would
-            // not vectorise) or a wide sigma-point batch (16 or 18 lanes: the gathered
-            // corners cost more than the vector arithmetic saves, measured 5 % slower on
-            // the catalog benchmark; 20 % faster for the 8-lane Monte Carlo batches).
-            for l in 0..W {
-                if outside[l] {
-                    // Inactive and outside: nothing to interpolate (drag is off there).
-                    continue;
-                }
-                let (base, next) = (base_f[l] as usize, next_f[l] as isize);
-                let f = fo[l];
-                for (dt, wt) in [(0, 1.0 - ft), (st, ft)] {
-                    for (da, wa) in [(0, 1.0 - fa[l]), (sa, fa[l])] {
-                        for (dl, wl) in [(0, 1.0 - fl[l]), (sl, fl[l])] {
-                            let a = base + dt + da + dl;
-                            let b = a.wrapping_add_signed(next);
-                            let w = wt * wa * wl;
-                            let (ca, cb) = (self.table[a], self.table[b]);
-                            ln_m[l] += w * ((1.0 - f) * ca[0] + f * cb[0]);
-                            rs[l] += w * ((1.0 - f) * ca[1] + f * cb[1]);
-                        }
-                    }
-                }
-            }
-            self.finish(&outside, &ln_m, &rs, mean, sigma);
-            return Ok(());
-        }
-        // The corners of each lane's cell: kept from the previous evaluation of this batch
-        // when the lane is still in the same cell (same time cell, same place), which
-        // consecutive stages mostly are; otherwise read from the table.
-        let corners = &mut memory.corners;
+        // Each lane's cell as trilinear coefficients in (altitude, latitude, longitude)
+        // fractions, per time node and value: rebuilt from the 16 table entries only when
+        // the lane has left the cell it had at the previous stage (mostly it has not).
+        let coef = &mut memory.coef;
         for l in 0..W {
             if outside[l] || memory.cell[l] == base_f[l] {
                 continue;
@@ -469,50 +439,68 @@ impl Atmosphere for GriddedField {
             memory.cell[l] = base_f[l];
             // Exact: table sizes are far below 2^53.
             let (base, next) = (base_f[l] as usize, next_f[l] as isize);
-            for (c, corner) in corners.iter_mut().enumerate() {
-                let a = base
-                    + if c & 4 != 0 { st } else { 0 }
-                    + if c & 2 != 0 { sa } else { 0 }
-                    + if c & 1 != 0 { sl } else { 0 };
-                let b = a.wrapping_add_signed(next);
-                let (ca, cb) = (self.table[a], self.table[b]);
-                corner[0][l] = ca[0];
-                corner[1][l] = cb[0];
-                corner[2][l] = ca[1];
-                corner[3][l] = cb[1];
+            for dt in 0..2 {
+                // v[value][k], k = 4 * altitude bit + 2 * latitude bit + longitude bit.
+                let mut v = [[0.0; 8]; 2];
+                for k in 0..4 {
+                    let a = base + dt * st + (k >> 1) * sa + (k & 1) * sl;
+                    let (ca, cb) = (self.table[a], self.table[a.wrapping_add_signed(next)]);
+                    for q in 0..2 {
+                        v[q][2 * k] = ca[q];
+                        v[q][2 * k + 1] = cb[q];
+                    }
+                }
+                for (q, v) in v.iter().enumerate() {
+                    let c = trilinear_coefficients(v);
+                    for (k, ck) in c.iter().enumerate() {
+                        coef[(2 * dt + q) * 8 + k][l] = *ck;
+                    }
+                }
             }
         }
-        for (c, corner) in corners.iter().enumerate() {
-            let wt = if c & 4 != 0 { ft } else { 1.0 - ft };
-            for l in 0..W {
-                let wa = if c & 2 != 0 { fa[l] } else { 1.0 - fa[l] };
-                let wl = if c & 1 != 0 { fl[l] } else { 1.0 - fl[l] };
-                let (w, f) = (wt * wa * wl, fo[l]);
-                ln_m[l] += w * ((1.0 - f) * corner[0][l] + f * corner[1][l]);
-                rs[l] += w * ((1.0 - f) * corner[2][l] + f * corner[3][l]);
+        // Evaluate in a lane loop that vectorises: per value, the trilinear polynomial at
+        // both time nodes (nested, 7 products and sums each), then linear in time.
+        let (mut ln_m, mut rs) = ([0.0; W], [0.0; W]);
+        for l in 0..W {
+            let (a, b, o) = (fa[l], fl[l], fo[l]);
+            let mut v = [0.0; 4];
+            for (q, vq) in v.iter_mut().enumerate() {
+                let c = |k: usize| coef[q * 8 + k][l];
+                let upper = c(4) + o * c(5) + b * (c(6) + o * c(7));
+                *vq = c(0) + o * c(1) + b * (c(2) + o * c(3)) + a * upper;
             }
+            // q = 2 dt + value: v[0], v[1] at the first time node, v[2], v[3] at the next.
+            ln_m[l] = v[0] + ft * (v[2] - v[0]);
+            rs[l] = v[1] + ft * (v[3] - v[1]);
         }
-        self.finish(&outside, &ln_m, &rs, mean, sigma);
+        // Mean and sigma, zero outside the grid. The lane exp runs for every lane and an
+        // AND with a bit mask zeroes the outside ones: a branch here left the exp scalar
+        // (a fifth of a field Monte Carlo on the AVX2 path).
+        for l in 0..W {
+            let keep = if outside[l] { 0 } else { u64::MAX };
+            mean[l] = f64::from_bits(exp(ln_m[l]).to_bits() & keep);
+            sigma[l] = f64::from_bits((rs[l] * mean[l]).to_bits() & keep);
+        }
         Ok(())
     }
 }
 
-impl GriddedField {
-    /// Mean and sigma from the interpolated ln(mean) and rel sigma (zero outside).
-    #[inline(always)]
-    fn finish<const W: usize>(
-        &self,
-        outside: &[bool; W],
-        ln_m: &[f64; W],
-        rs: &[f64; W],
-        mean: &mut [f64; W],
-        sigma: &mut [f64; W],
-    ) {
-        for l in 0..W {
-            mean[l] = if outside[l] { 0.0 } else { exp(ln_m[l]) };
-            sigma[l] = if outside[l] { 0.0 } else { rs[l] * mean[l] };
+/// Coefficients c of the trilinear interpolant of the corner values `v` (index
+/// k = 4 a + 2 b + o over the altitude, latitude and longitude bits), such that
+/// f(a, b, o) = c0 + o c1 + b (c2 + o c3) + a (c4 + o c5 + b (c6 + o c7)).
+#[inline(always)]
+fn trilinear_coefficients(v: &[f64; 8]) -> [f64; 8] {
+    // Differences along longitude, then latitude, then altitude (each step turns the
+    // values at bit = 1 into differences), which gives exactly the form above.
+    let mut c = *v;
+    for bit in [1, 2, 4] {
+        for k in 0..8 {
+            if k & bit != 0 {
+                c[k] -= c[k - bit];
+            }
         }
     }
+    c
 }
 
 #[cfg(test)]
@@ -683,9 +671,8 @@ mod tests {
 
     #[test]
     fn every_batch_width_gives_each_lane_the_same_bits() {
-        // The in-place interpolation (1 and 18 lanes) and the gathered one (4 to 8
-        // lanes) agree bit for bit, lane by lane; an inactive lane outside the grid gets
-        // zero mean and sigma in both.
+        // A trajectory (1 lane), a Monte Carlo batch (8) and a CCSP batch (18) give each
+        // lane the same bits; an inactive lane outside the grid gets zero mean and sigma.
         use crate::frames::{geodetic_to_fixed, Geodetic};
         let f = affine_field();
         let rot = EarthRotation::new(0.77);
