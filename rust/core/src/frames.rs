@@ -88,7 +88,8 @@ impl RotationCache {
     /// Rotation at `ut1` seconds since J2000.
     #[inline(always)]
     pub fn at(&mut self, ut1: f64) -> EarthRotation {
-        let centre = (ut1 / (2.0 * ROTATION_BUCKET)).round() * (2.0 * ROTATION_BUCKET);
+        // A product, not a division: this is on every stage's path to the longitudes.
+        let centre = (ut1 * (0.5 / ROTATION_BUCKET)).round() * (2.0 * ROTATION_BUCKET);
         if centre != self.centre {
             self.centre = centre;
             self.base = EarthRotation::new(gmst(centre));
