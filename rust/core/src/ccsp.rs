@@ -165,7 +165,7 @@ pub fn ccsp_many<A: Atmosphere + ?Sized>(
 /// How the sigma points of one update are batched.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Grouping {
-    /// Batches of the SIMD path's lane count, run in parallel (the layout before issue
+    /// Batches of 8 lanes, run in parallel (the layout before issue
     /// 14; kept for the test that every batching gives the same bits).
     #[cfg_attr(not(test), allow(dead_code))]
     Lanes,
@@ -335,10 +335,7 @@ fn propagate_points<A: Atmosphere + ?Sized>(
             _ => whole_batch::<A, POINTS_DRAG>(path, atmosphere, cfg, points, &plan),
         };
     }
-    match path.lanes() {
-        8 => propagate_points_in::<A, 8>(path, atmosphere, cfg, points, t0, t1, progress),
-        _ => propagate_points_in::<A, 4>(path, atmosphere, cfg, points, t0, t1, progress),
-    }
+    propagate_points_in::<A, 8>(path, atmosphere, cfg, points, t0, t1, progress)
 }
 
 fn propagate_points_in<A: Atmosphere + ?Sized, const W: usize>(

@@ -42,9 +42,9 @@ const ZONALS: [f64; 7] = [0.0, 0.0, J2, J3, J4, J5, J6];
 
 /// Two-body + J2 (+ J3..J6 on request) + drag for a batch of members sharing one epoch
 /// and atmosphere.
-/// Lane arrays come first and the struct is aligned to a cache line, so that with 8 (or 4)
-/// lanes every lane array starts on a 64 (32)-byte boundary and vector loads never split
-/// a cache line (a misplaced `drag` cost 10 % on the AVX-512 path).
+/// Lane arrays come first and the struct is aligned to a cache line, so that with 8, 16 or
+/// 32 lanes every lane array starts on a 64-byte boundary and vector loads never split a
+/// cache line (a misplaced `drag` cost 10 % on the AVX-512 path).
 #[repr(C, align(64))]
 pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     /// Drag parameter Cd * A / m per lane, m^2/kg (0 switches drag off in that lane).

@@ -13,7 +13,7 @@ use crate::kappa::{KappaLanes, KappaProcess};
 use crate::problem::{check_drag_sigma, check_state, drag_factor, Problem};
 use crate::progress::Progress;
 use crate::rng::MemberStream;
-use crate::simd::{dispatch_on, Aligned, Kernel, SimdPath};
+use crate::simd::{batch_width, dispatch_on, Aligned, Kernel, SimdPath, BATCH_WIDTHS};
 use rayon::prelude::*;
 
 /// What to run.
@@ -92,18 +92,36 @@ pub fn monte_carlo<A: Atmosphere + ?Sized>(
     monte_carlo_on(SimdPath::detect(), atmosphere, cfg, progress)
 }
 
-/// [`monte_carlo`] on a given instruction-set path (batches of [`SimdPath::lanes`]
-/// members). Every path gives bit-identical results: members draw from their own streams
-/// and lanes never mix.
+/// [`monte_carlo`] on a given instruction-set path, in batches of
+/// [`batch_width`] members. Every path and width gives bit-identical results: members
+/// draw from their own streams and lanes never mix.
 pub fn monte_carlo_on<A: Atmosphere + ?Sized>(
     path: SimdPath,
     atmosphere: &A,
     cfg: &MonteCarloConfig,
     progress: &Progress,
 ) -> Result<MonteCarloOutput, CoreError> {
-    match path.lanes() {
+    let width = batch_width(cfg.members, rayon::current_num_threads());
+    monte_carlo_in(path, width, atmosphere, cfg, progress)
+}
+
+/// [`monte_carlo_on`] in batches of `width` members (one of [`BATCH_WIDTHS`]).
+pub fn monte_carlo_in<A: Atmosphere + ?Sized>(
+    path: SimdPath,
+    width: usize,
+    atmosphere: &A,
+    cfg: &MonteCarloConfig,
+    progress: &Progress,
+) -> Result<MonteCarloOutput, CoreError> {
+    match width {
+        32 => run::<A, 32>(path, atmosphere, cfg, progress),
+        16 => run::<A, 16>(path, atmosphere, cfg, progress),
         8 => run::<A, 8>(path, atmosphere, cfg, progress),
-        _ => run::<A, 4>(path, atmosphere, cfg, progress),
+        _ => Err(CoreError::invalid(
+            "batch width",
+            width as f64,
+            format!("must be one of {BATCH_WIDTHS:?}"),
+        )),
     }
 }
 
@@ -491,19 +509,22 @@ mod tests {
     }
 
     #[test]
-    fn every_simd_path_gives_the_same_bits() {
-        // 8-lane AVX-512, 4-lane AVX2 and portable batches: same members, same numbers,
-        // including a batch only partly filled (11 members) and decays.
+    fn every_simd_path_and_batch_width_gives_the_same_bits() {
+        // AVX-512, AVX2 and portable code, in batches of 8, 16 and 32: same members, same
+        // numbers, including batches only partly filled (45 members) and decays.
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.3).unwrap();
-        let mut cfg = config(11, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        let mut cfg = config(45, KappaProcess::GaussMarkov { half_life: 1080.0 });
         cfg.output_times = vec![0.0, 1000.0, 7200.0];
-        let runs: Vec<_> = SimdPath::available()
-            .into_iter()
-            .map(|p| monte_carlo_on(p, &atm, &cfg, &Progress::default()).unwrap())
-            .collect();
+        let mut runs = Vec::new();
+        for p in SimdPath::available() {
+            for w in BATCH_WIDTHS {
+                runs.push(monte_carlo_in(p, w, &atm, &cfg, &Progress::default()).unwrap());
+            }
+        }
         for r in &runs[1..] {
             assert_eq!(r, &runs[0]);
         }
+        assert!(monte_carlo_in(SimdPath::Portable, 4, &atm, &cfg, &Progress::default()).is_err());
     }
 
     #[test]

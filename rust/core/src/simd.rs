@@ -1,22 +1,33 @@
-//! SIMD lane width and runtime dispatch. Batch code is written once, generic over the lane
-//! count `W` with plain lane loops; [`dispatch_on`] compiles it once more per instruction
-//! set (AVX-512F, AVX2 + FMA) and runs the copy the CPU supports, so the wheel stays
-//! portable and the 8-lane kernels run (and are tested) on any machine. Both x86 paths
-//! run batches of 8: one 8-wide register per operation on AVX-512, two 4-wide ones on
-//! AVX2, whose independent halves hide the latency of the right-hand side's serial
-//! square roots and divisions (8 lanes on AVX2 measured 8 % faster than 4 with the
-//! exponential atmosphere and 6 % with a field; the portable build keeps 4, where 8 was
-//! 5-20 % slower).
+//! SIMD batch width and runtime dispatch. Batch code is written once, generic over the
+//! lane count `W` with plain lane loops; [`dispatch_on`] compiles it once more per
+//! instruction set (AVX-512F, AVX2 + FMA) and runs the copy the CPU supports, so the wheel
+//! stays portable and the wide kernels run (and are tested) on any machine.
 //!
-//! Results are bit-identical on every path: Rust never contracts a * b + c into an FMA on
-//! its own and lanes never mix, so the instruction set changes speed only. The
-//! environment variable `RHOPROP_SIMD` (`avx512`, `avx2`, `portable`) picks a slower path
-//! than the best one, for benchmarks and tests; a path the CPU lacks is ignored.
-
+//! A batch is wider than a register: the right-hand side is a chain of square roots,
+//! divisions and polynomials that each stage waits on, so one register's worth of members
+//! leaves the vector units idle while the chain completes; 32 members (four AVX-512
+//! registers, eight AVX2 ones per value) keep enough independent work in flight. Measured
+//! on one thread, 64 members x 1 day (`cargo bench -p rhoprop-core --bench core -- '1
+//! thread'`), exponential / field: AVX-512 8 lanes 4.55 / 7.89 ms, 16 lanes 2.42 / 5.34,
+//! 32 lanes 2.13 / 4.80; AVX2 8 lanes 3.91 / 9.14, 16 3.37 / 7.57, 32 3.07 / 7.15.
+//! [`batch_width`] picks the width per run.
+//!
 use std::sync::OnceLock;
 
-/// Members (or sigma points) per batch on the portable path.
-pub const LANES: usize = 4;
+/// Batch widths of the Monte Carlo engine, widest first.
+pub const BATCH_WIDTHS: [usize; 3] = [32, 16, 8];
+
+/// Members per batch for a run of `members` on `threads` worker threads: the widest of
+/// [`BATCH_WIDTHS`] that still gives every thread a batch (a wider batch is cheaper per
+/// member, an idle thread costs more), at least the narrowest. Results do not depend on
+/// it: lanes never mix.
+pub fn batch_width(members: usize, threads: usize) -> usize {
+    let narrowest = BATCH_WIDTHS[BATCH_WIDTHS.len() - 1];
+    BATCH_WIDTHS
+        .into_iter()
+        .find(|&w| members.div_ceil(w) >= threads.max(1))
+        .unwrap_or(narrowest)
+}
 
 /// The instruction set batch kernels run with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,20 +87,12 @@ impl SimdPath {
         }
     }
 
-    /// Members per batch on this path.
-    pub fn lanes(self) -> usize {
-        match self {
-            SimdPath::Avx512 | SimdPath::Avx2Fma => 8,
-            SimdPath::Portable => LANES,
-        }
-    }
-
     /// Short name for logs and benchmarks.
     pub fn name(self) -> &'static str {
         match self {
-            SimdPath::Avx512 => "avx512f (8 lanes)",
-            SimdPath::Avx2Fma => "avx2+fma (8 lanes)",
-            SimdPath::Portable => "portable (4 lanes)",
+            SimdPath::Avx512 => "avx512f",
+            SimdPath::Avx2Fma => "avx2+fma",
+            SimdPath::Portable => "portable",
         }
     }
 }
@@ -147,13 +150,24 @@ unsafe fn run_avx2_fma<K: Kernel>(kernel: K) -> K::Output {
 mod tests {
     use super::*;
 
-    struct Sum([f64; LANES]);
+    struct Sum([f64; 4]);
     impl Kernel for Sum {
         type Output = f64;
         #[inline(always)]
         fn run(self) -> f64 {
             self.0.iter().map(|x| x * 3.0 + 1.0).sum()
         }
+    }
+
+    #[test]
+    fn batch_width_fills_the_threads() {
+        assert_eq!(batch_width(1000, 2), 32);
+        assert_eq!(batch_width(1000, 40), 16);
+        assert_eq!(batch_width(1000, 64), 8);
+        assert_eq!(batch_width(11, 1), 32);
+        assert_eq!(batch_width(11, 2), 8);
+        assert_eq!(batch_width(5, 8), 8);
+        assert_eq!(batch_width(100, 0), 32);
     }
 
     #[test]
