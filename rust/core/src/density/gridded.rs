@@ -352,9 +352,9 @@ impl Atmosphere for GriddedField {
 
     /// The batch lookup of the integrators: the time cell once for all lanes, then per
     /// lane the branch-free geodetic conversion ([`geodetic_lanes`]), the cell and the
-    /// fractions in straight-line lane loops that vectorise, the cell's interpolation
-    /// coefficients (kept in `memory` while the lane stays in the cell), their nested
-    /// evaluation and the lane `exp`. Every batch width gives a lane the same bits; agrees
+    /// fractions in straight-line lane loops that vectorise, the cell's 16 corners (kept in
+    /// `memory` while the lane stays in the cell), nested linear interpolation and the lane
+    /// `exp`. Every batch width gives a lane the same bits; agrees
     /// with [`GriddedField::at_geodetic`] to ~1e-9 relative. A lane outside the grid goes
     /// through the scalar lookup, which raises the error naming the axis.
     #[allow(clippy::too_many_arguments)]
@@ -428,10 +428,10 @@ impl Atmosphere for GriddedField {
         }
         // Strides of the time, altitude and latitude neighbours in the table.
         let (st, sa, sl) = (na * nl * no, nl * no, no);
-        // Each lane's cell as trilinear coefficients in (altitude, latitude, longitude)
-        // fractions, per time node and value: rebuilt from the 16 table entries only when
-        // the lane has left the cell it had at the previous stage (mostly it has not).
-        let coef = &mut memory.coef;
+        // Each lane's cell corners, per time node and value: read from the table only when
+        // the lane has left the cell it had at the previous stage (mostly it has not). Just
+        // the reads here: this runs lane by lane, so the arithmetic goes in the lane loop.
+        let corners = &mut memory.corners;
         for l in 0..W {
             if outside[l] || memory.cell[l] == base_f[l] {
                 continue;
@@ -440,34 +440,28 @@ impl Atmosphere for GriddedField {
             // Exact: table sizes are far below 2^53.
             let (base, next) = (base_f[l] as usize, next_f[l] as isize);
             for dt in 0..2 {
-                // v[value][k], k = 4 * altitude bit + 2 * latitude bit + longitude bit.
-                let mut v = [[0.0; 8]; 2];
                 for k in 0..4 {
+                    // k = 2 * altitude bit + latitude bit; the longitude pair side by side.
                     let a = base + dt * st + (k >> 1) * sa + (k & 1) * sl;
                     let (ca, cb) = (self.table[a], self.table[a.wrapping_add_signed(next)]);
                     for q in 0..2 {
-                        v[q][2 * k] = ca[q];
-                        v[q][2 * k + 1] = cb[q];
-                    }
-                }
-                for (q, v) in v.iter().enumerate() {
-                    let c = trilinear_coefficients(v);
-                    for (k, ck) in c.iter().enumerate() {
-                        coef[(2 * dt + q) * 8 + k][l] = *ck;
+                        corners[(2 * dt + q) * 8 + 2 * k][l] = ca[q];
+                        corners[(2 * dt + q) * 8 + 2 * k + 1][l] = cb[q];
                     }
                 }
             }
         }
-        // Evaluate in a lane loop that vectorises: per value, the trilinear polynomial at
-        // both time nodes (nested, 7 products and sums each), then linear in time.
+        // Interpolate in a lane loop that vectorises, per value and time node: along
+        // longitude, latitude, altitude (nested linear steps), then along time.
         let (mut ln_m, mut rs) = ([0.0; W], [0.0; W]);
         for l in 0..W {
             let (a, b, o) = (fa[l], fl[l], fo[l]);
             let mut v = [0.0; 4];
             for (q, vq) in v.iter_mut().enumerate() {
-                let c = |k: usize| coef[q * 8 + k][l];
-                let upper = c(4) + o * c(5) + b * (c(6) + o * c(7));
-                *vq = c(0) + o * c(1) + b * (c(2) + o * c(3)) + a * upper;
+                let c = |k: usize| corners[q * 8 + k][l];
+                let lerp = |x: f64, y: f64, f: f64| x + f * (y - x);
+                let e: [f64; 4] = std::array::from_fn(|k| lerp(c(2 * k), c(2 * k + 1), o));
+                *vq = lerp(lerp(e[0], e[1], b), lerp(e[2], e[3], b), a);
             }
             // q = 2 dt + value: v[0], v[1] at the first time node, v[2], v[3] at the next.
             ln_m[l] = v[0] + ft * (v[2] - v[0]);
@@ -483,24 +477,6 @@ impl Atmosphere for GriddedField {
         }
         Ok(())
     }
-}
-
-/// Coefficients c of the trilinear interpolant of the corner values `v` (index
-/// k = 4 a + 2 b + o over the altitude, latitude and longitude bits), such that
-/// f(a, b, o) = c0 + o c1 + b (c2 + o c3) + a (c4 + o c5 + b (c6 + o c7)).
-#[inline(always)]
-fn trilinear_coefficients(v: &[f64; 8]) -> [f64; 8] {
-    // Differences along longitude, then latitude, then altitude (each step turns the
-    // values at bit = 1 into differences), which gives exactly the form above.
-    let mut c = *v;
-    for bit in [1, 2, 4] {
-        for k in 0..8 {
-            if k & bit != 0 {
-                c[k] -= c[k - bit];
-            }
-        }
-    }
-    c
 }
 
 #[cfg(test)]

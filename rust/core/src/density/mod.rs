@@ -14,17 +14,16 @@ use crate::error::CoreError;
 use crate::frames::EarthRotation;
 
 /// What one batch keeps between its right-hand-side evaluations for an atmosphere that
-/// can reuse work from the previous stage: a field's cell per lane, as interpolation
-/// coefficients (consecutive stages of a step mostly fall in the same cell, so its 16
-/// table reads and their differences are skipped).
+/// can reuse work from the previous stage: a field's cell corners per lane (consecutive
+/// stages of a step mostly fall in the same cell, so its 16 table reads are skipped).
 /// One per batch; it changes speed only, never a value.
 #[derive(Debug, Clone)]
 pub struct LaneMemory<const W: usize> {
     /// Per lane: first table index of the cell whose corners are held (NaN: none).
     pub(crate) cell: [f64; W],
-    /// The cell's trilinear coefficients per (time node, value) pair and coefficient,
-    /// per lane (see the field's lane lookup).
-    pub(crate) coef: [[f64; W]; 32],
+    /// The cell's corner values per (time node, value) pair and corner (4 altitude bit
+    /// + 2 latitude bit + longitude bit), per lane.
+    pub(crate) corners: [[f64; W]; 32],
     /// The field's time cell of the previous evaluation (a hint).
     pub(crate) time_cell: usize,
 }
@@ -33,7 +32,7 @@ impl<const W: usize> Default for LaneMemory<W> {
     fn default() -> Self {
         Self {
             cell: [f64::NAN; W],
-            coef: [[0.0; W]; 32],
+            corners: [[0.0; W]; 32],
             time_cell: 0,
         }
     }
