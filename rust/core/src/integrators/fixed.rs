@@ -50,10 +50,13 @@ fn adams_coefficients() -> ([f64; ABM_STEPS], [f64; ABM_STEPS + 1]) {
     (ab, am)
 }
 
-/// Back values of f for the multistep method: newest first.
+/// Back values of f for the multistep method, a ring: [`History::back`] `(j)` is the value
+/// `j` steps back (a ring, not a shifted array: shifting moved nine batch states a step).
 struct History<const W: usize> {
     f: [State<W>; ABM_STEPS],
-    /// Values held (the newest at index 0).
+    /// Slot of the newest value.
+    head: usize,
+    /// Values held.
     len: usize,
     /// Where the next step must start, its size and the RHS generation for the values
     /// to be usable.
@@ -66,9 +69,15 @@ struct History<const W: usize> {
 
 impl<const W: usize> History<W> {
     fn push(&mut self, f: &State<W>) {
-        self.f.copy_within(0..ABM_STEPS - 1, 1);
-        self.f[0] = *f;
+        self.head = (self.head + ABM_STEPS - 1) % ABM_STEPS;
+        self.f[self.head] = *f;
         self.len = (self.len + 1).min(ABM_STEPS);
+    }
+
+    /// The value `j` steps back (0: the newest).
+    #[inline(always)]
+    fn back(&self, j: usize) -> &State<W> {
+        &self.f[(self.head + j) % ABM_STEPS]
     }
 }
 
@@ -157,6 +166,7 @@ impl<const W: usize> FixedStepper<W> {
             let (ab, am) = adams_coefficients();
             Box::new(History {
                 f: [[[0.0; W]; 6]; ABM_STEPS],
+                head: 0,
                 len: 0,
                 t_next: f64::NAN,
                 h: f64::NAN,
@@ -175,36 +185,40 @@ impl<const W: usize> FixedStepper<W> {
         }
         if hist.len < ABM_STEPS {
             // Start-up: an RK8 step whose first stage is the newest back value.
-            self.k[0] = hist.f[0];
+            self.k[0] = *hist.back(0);
             self.rk8_stages(rhs, t, h, y)?;
             *y = self.tmp;
             rhs.eval(t + h, y, &mut self.k[0])?;
         } else {
             // Predict (Adams-Bashforth), evaluate, correct (Adams-Moulton), evaluate.
+            // Each component's sum in a local accumulator, in the same order as a pass
+            // per coefficient would add (see `combine`).
             let (ab, am) = (hist.ab, hist.am);
             let mut pred = *y;
-            for (j, &b) in ab.iter().enumerate() {
-                let hb = h * b;
-                for c in 0..6 {
+            for c in 0..6 {
+                let mut acc = y[c];
+                for (j, &b) in ab.iter().enumerate() {
+                    let (hb, fj) = (h * b, &hist.back(j)[c]);
                     for l in 0..W {
-                        pred[c][l] += hb * hist.f[j][c][l];
+                        acc[l] += hb * fj[l];
                     }
                 }
+                pred[c] = acc;
             }
             rhs.eval(t + h, &pred, &mut self.k[1])?;
             let mut corr = *y;
             for c in 0..6 {
+                let mut acc = y[c];
                 for l in 0..W {
-                    corr[c][l] += h * am[0] * self.k[1][c][l];
+                    acc[l] += h * am[0] * self.k[1][c][l];
                 }
-            }
-            for (j, &b) in am[1..].iter().enumerate() {
-                let hb = h * b;
-                for c in 0..6 {
+                for (j, &b) in am[1..].iter().enumerate() {
+                    let (hb, fj) = (h * b, &hist.back(j)[c]);
                     for l in 0..W {
-                        corr[c][l] += hb * hist.f[j][c][l];
+                        acc[l] += hb * fj[l];
                     }
                 }
+                corr[c] = acc;
             }
             *y = corr;
             rhs.eval(t + h, y, &mut self.k[0])?;
