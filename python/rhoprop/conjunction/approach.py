@@ -171,16 +171,23 @@ class _Dynamics:
         if track.craft is None or track.model is None:
             raise AssertionError("re-propagation without a model")  # guarded by callers
         s0 = OrbitState(add_seconds(self.ref, t0), state[:3], state[3:])
-        tr = propagate(
-            s0,
-            track.craft,
-            track.model,
+        tr = self.forward(s0, track.craft, track.model, span, step)
+        return t0 + tr.times, tr.positions, tr.velocities
+
+    def forward(
+        self, state: OrbitState, craft: Spacecraft, model: Any, span: float, step: float | None
+    ) -> Trajectory:
+        """``propagate`` of ``state`` over ``span`` s with this screening's floor and zonal
+        degree (outputs every ``step`` s, or the end only)."""
+        return propagate(
+            state,
+            craft,
+            model,
             span,
             output_step=step,
             floor_altitude=self.floor,
             zonal_degree=self.degree,
         )
-        return t0 + tr.times, tr.positions, tr.velocities
 
     def state_at(self, track: _Track, t: float) -> np.ndarray | None:
         """The exact state of ``track`` at ``t``: a sample, or propagated from the last

@@ -22,7 +22,7 @@ from ..density.model import as_atmosphere
 from ..errors import DecayError
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
-from ..propagation import OrbitState, Spacecraft, propagate
+from ..propagation import OrbitState, Spacecraft
 from ..propagation.propagate import (
     MAX_STEP_FRACTION,
     check_model,
@@ -221,14 +221,7 @@ def _coarse_track(
     lead = seconds_between(obj.state.epoch, start)
     state0 = obj.state
     if lead > 1e-9:
-        tr = propagate(
-            obj.state,
-            obj.craft,
-            obj.model,
-            lead,
-            floor_altitude=dyn.floor,
-            zonal_degree=dyn.degree,
-        )
+        tr = dyn.forward(obj.state, obj.craft, obj.model, lead, None)
         if tr.decayed_at is not None:
             empty = np.empty((0, 3))
             gone = _Track(obj.name, obj.object_id, obj.craft, np.empty(0), empty, empty)
@@ -251,15 +244,7 @@ def _coarse_track(
             dyn.degree,
         )
         state0 = OrbitState(start, states[-1, :3], states[-1, 3:])
-    tr = propagate(
-        state0,
-        obj.craft,
-        obj.model,
-        span,
-        output_step=grid_step,
-        floor_altitude=dyn.floor,
-        zonal_degree=dyn.degree,
-    )
+    tr = dyn.forward(state0, obj.craft, obj.model, span, grid_step)
     track = _Track(
         obj.name, obj.object_id, obj.craft, tr.times, tr.positions, tr.velocities, obj.model
     )

@@ -597,24 +597,12 @@ class CcspResult:
         data = moment_vars(
             ("epoch",), self.mean, self.covariance, INERTIAL_FRAME, self.rtn_covariance
         )
-        data["cross_covariance"] = (
-            ("epoch", "state"),
-            np.asarray(self.cross_covariance, dtype=float),
-            {
-                "units": "m (x, y, z), m/s (vx, vy, vz)",
-                "long_name": "covariance of the state with the normalised density offset kappa",
-                "frame": INERTIAL_FRAME,
-            },
+        data["cross_covariance"] = _cross_covariance_var(
+            self.cross_covariance, "the normalised density offset kappa"
         )
         if self.drag_cross_covariance is not None:
-            data["drag_cross_covariance"] = (
-                ("epoch", "state"),
-                np.asarray(self.drag_cross_covariance, dtype=float),
-                {
-                    "units": "m (x, y, z), m/s (vx, vy, vz)",
-                    "long_name": "covariance of the state with the normalised Cd*A/m error",
-                    "frame": INERTIAL_FRAME,
-                },
+            data["drag_cross_covariance"] = _cross_covariance_var(
+                self.drag_cross_covariance, "the normalised Cd*A/m error"
             )
         ds: xarray.Dataset = xr.Dataset(
             data,
@@ -632,3 +620,17 @@ class CcspResult:
             ),
         )
         return ds
+
+
+def _cross_covariance_var(values: Any, with_what: str) -> tuple[Any, ...]:
+    """An xarray variable (dims, values, attributes) of the state's covariance with a
+    consider parameter, per epoch."""
+    return (
+        ("epoch", "state"),
+        np.asarray(values, dtype=float),
+        {
+            "units": "m (x, y, z), m/s (vx, vy, vz)",
+            "long_name": f"covariance of the state with {with_what}",
+            "frame": INERTIAL_FRAME,
+        },
+    )
