@@ -42,6 +42,7 @@ const ZONALS: [f64; 7] = [0.0, 0.0, J2, J3, J4, J5, J6];
 
 /// Two-body + J2 (+ J3..J6 on request) + drag for a batch of members sharing one epoch
 /// and atmosphere.
+///
 /// Lane arrays come first and the struct is aligned to a cache line, so that with 8, 16 or
 /// 32 lanes every lane array starts on a 64-byte boundary and vector loads never split a
 /// cache line (a misplaced `drag` cost 10 % on the AVX-512 path).
@@ -95,6 +96,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Dynamics<'_, A, W> {
     /// Density (kg/m^3) that lane `l` sees at `t` s from the epoch in state `y`.
     pub fn density(&self, t: f64, y: &State<W>, l: usize) -> Result<f64, CoreError> {
         let ut1 = self.epoch + t;
+        // The rotation the stages see (bucketed GMST), not GMST directly.
         let rot = RotationCache::default().at(ut1);
         let (mean, sigma) = self
             .atmosphere
