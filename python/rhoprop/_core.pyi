@@ -25,6 +25,7 @@ __all__ = [
     "WGS84_F",
     "DensityFieldError",
     "ExponentialAtmosphere",
+    "FieldTile",
     "GriddedAtmosphere",
     "IntegrationError",
     "RhopropError",
@@ -99,8 +100,36 @@ class GriddedAtmosphere:
         ln_mean: _F64,
         rel_sigma: _F64,
     ) -> Self: ...
+    @staticmethod
+    def from_tiles(
+        epoch: float, tiles: list[FieldTile], extrapolate_above: bool
+    ) -> GriddedAtmosphere:
+        """A field of tiles that follow each other in time on one spatial grid."""
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the values of the field's tiles."""
     def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
         """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
+
+@final
+class FieldTile:
+    """One time window of a sampled field (an atlas tile)."""
+
+    def __new__(
+        cls,
+        time: _F64,
+        altitude: tuple[float, float, int],
+        latitude: tuple[float, float, int],
+        lon0: float,
+        ln_mean: _F64,
+        rel_sigma: _F64,
+    ) -> Self: ...
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the values held."""
+    @property
+    def span(self) -> tuple[float, float]:
+        """First and last time node, s."""
 
 def propagate(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,

@@ -335,22 +335,12 @@ def _fit_all(
     import concurrent.futures as cf
     import dataclasses
 
-    from ..density import SampledModel, altitude_band
+    from ..density import SampledModel
     from .covariance import tle_accuracy, tle_covariance
     from .fit import fit_element_set
 
     objs = cat.objects
-    atmosphere = model
-    if isinstance(model, SampledModel):
-        lows, highs = zip(
-            *(altitude_band(o.state.position, o.state.velocity) for o in objs), strict=True
-        )
-        start = min(o.state.epoch for o in objs) + np.timedelta64(int(span[0] * 1e9), "ns")
-        end = max(o.state.epoch for o in objs) + np.timedelta64(int(span[1] * 1e9), "ns")
-        # Over a day before its epoch an orbit near reentry was tens of km higher.
-        atmosphere = model.field(
-            start, end, altitude_range=(max(min(lows) - 50e3, 0.0), max(highs) + 150e3)
-        )
+    atmosphere = model.atlas if isinstance(model, SampledModel) else model
 
     def one(obj: CatalogObject) -> CatalogObject | Exception:
         try:
@@ -372,8 +362,11 @@ def _fit_all(
             fit=f,
         )
 
+    # In epoch order, so that the fits running at once share their day tiles.
+    order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
     with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
-        fitted = list(pool.map(one, objs))
+        ran = list(pool.map(one, [objs[i] for i in order]))
+    fitted = [ran[k] for k in np.argsort(order)]
     kept: list[CatalogObject] = []
     for obj, res in zip(objs, fitted, strict=True):
         if isinstance(res, CatalogObject):

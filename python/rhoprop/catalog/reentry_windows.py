@@ -25,11 +25,9 @@ from typing import Any
 import numpy as np
 
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density import SampledModel, altitude_band
 from ..parallel import worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.kappa import GaussMarkov, KappaProcess
-from ..propagation.propagate import FIELD_MARGIN
 from ..time import add_seconds
 from .elements import CatalogObject
 
@@ -133,8 +131,8 @@ def reentry(
         objects: a :class:`~rhoprop.catalog.Catalog` or list of
             :class:`~rhoprop.catalog.CatalogObject` (fitted ones give their own Cd*A/m
             uncertainty).
-        model: density model (sampled once into one field for all objects over their
-            epochs to the horizon, down to 50 km below the floor) or a field/atmosphere.
+        model: density model (a sampled one serves each object the day tiles of its own
+            span from its atlas, :mod:`rhoprop.density.atlas`) or a field/atmosphere.
         n: members per object (a multiple of ``groups`` is used: rounded up).
         horizon: how far to look, s after each object's epoch, or a ``timedelta``
             (default 30 days).
@@ -160,16 +158,6 @@ def reentry(
     total = per_group * int(groups)
     span = _seconds(horizon)
     process = kappa or GaussMarkov()
-    atmosphere = model
-    if isinstance(model, SampledModel):
-        highs = [altitude_band(o.state.position, o.state.velocity)[1] for o in objs]
-        start = min(o.state.epoch for o in objs)
-        end = add_seconds(max(o.state.epoch for o in objs), span)
-        atmosphere = model.field(
-            start,
-            end,
-            altitude_range=(max(floor_altitude - FIELD_MARGIN, 0.0), max(highs) + FIELD_MARGIN),
-        )
     probabilities = (np.arange(groups) + 0.5) / groups
 
     def one(i: int, obj: CatalogObject) -> tuple[np.ndarray, float, float]:
@@ -181,7 +169,7 @@ def reentry(
             mc = monte_carlo(
                 obj.state,
                 Spacecraft(1.0, float(value)),
-                atmosphere,
+                model,
                 span,
                 n=per_group,
                 kappa=process,
@@ -194,8 +182,11 @@ def reentry(
             times.append(np.asarray(mc.decay_times, dtype=float))
         return np.concatenate(times), obj.drag_parameter, rel
 
+    # In epoch order, so that objects running at once share their day tiles.
+    order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
     with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
-        done = list(pool.map(one, range(len(objs)), objs))
+        ran = list(pool.map(one, order, [objs[i] for i in order]))
+    done = [ran[k] for k in np.argsort(order)]
     nat = np.datetime64("NaT", "ns")
     med, lo, hi = (np.full(len(objs), nat) for _ in range(3))
     fraction = np.zeros(len(objs))

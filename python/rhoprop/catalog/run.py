@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, R_EARTH
-from ..density import DensityModel, SampledModel, altitude_band
+from ..density import DensityModel, SampledModel
 from ..errors import RhopropError
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
@@ -28,7 +28,7 @@ from ..propagation import (
 from ..propagation.ccsp import ccsp_many
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
-from ..propagation.propagate import FIELD_MARGIN, zonal_degree_argument
+from ..propagation.propagate import zonal_degree_argument
 from ..propagation.results import (
     CcspResult,
     dataset_attrs,
@@ -294,22 +294,13 @@ def _initial_covariance(obj: CatalogObject, choice: Any) -> tuple[np.ndarray | N
     return cov, note
 
 
-def _shipped_model(
-    model: Any, objects: list[CatalogObject], end: np.datetime64, floor: float
-) -> Any:
-    """The atmosphere for all objects, as an object that pickles itself (``__reduce__``)
-    to travel to Dask workers: a sampled model becomes one field from the earliest epoch
-    to the end, covering every object's altitude band and reaching down to
-    ``FIELD_MARGIN`` below the floor (and as much above the highest band), so that an
-    object that comes down is reported as decayed rather than leaving the field; other
-    models travel as they are."""
+def _shipped_model(model: Any) -> Any:
+    """The atmosphere for all objects, as an object that pickles as a reference to travel
+    to Dask workers: a sampled model becomes its :class:`~rhoprop.density.atlas.Atlas`
+    (each object then gets the day tiles of its own span, every altitude included, so an
+    object that comes down is reported as decayed); other models travel as they are."""
     if isinstance(model, SampledModel):
-        lows, highs = zip(
-            *(altitude_band(o.state.position, o.state.velocity) for o in objects), strict=True
-        )
-        start = min(o.state.epoch for o in objects)
-        bottom = max(min(min(lows), floor - FIELD_MARGIN), 0.0)
-        return model.field(start, end, altitude_range=(bottom, max(highs) + FIELD_MARGIN))
+        return model.atlas
     if not callable(getattr(model, "atmosphere", None)):
         raise TypeError(
             f"model must be a density model or DensityField, got {type(model).__name__}"
@@ -704,6 +695,12 @@ def common_epochs(objects: list[CatalogObject], end: np.datetime64, step: float)
     return offsets_to_epochs(end, offsets)
 
 
+def by_epoch(objs: list[CatalogObject]) -> list[tuple[int, CatalogObject]]:
+    """(index, object) pairs in epoch order: chunks of objects close in time share their
+    atlas tiles, so the tiles in use at once stay few however the epochs spread."""
+    return sorted(enumerate(objs), key=lambda item: item[1].state.epoch)
+
+
 def _run_local(
     objs: list[CatalogObject],
     shipped: Any,
@@ -726,7 +723,7 @@ def _run_local(
         # Chunks of objects per core call (objects in parallel there), small enough that
         # every worker gets several.
         size = max(1, min(CCSP_CHUNK, -(-len(objs) // (4 * workers))))
-        indexed = list(enumerate(objs))
+        indexed = by_epoch(objs)
         chunks = [indexed[c : c + size] for c in range(0, len(indexed), size)]
 
         def chunk_done(i: int, done: list[tuple[int, dict[str, Any]]]) -> None:
@@ -863,13 +860,13 @@ def propagate_catalog(
         for o, sig in zip(objs, cfg["drag_sigmas"], strict=True)
     ]
     epochs = common_epochs(objs, end64, step)
-    shipped = _shipped_model(model, objs, end64, floor)
+    shipped = _shipped_model(model)
     bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
     try:
         if client is None:
             results = _run_local(objs, shipped, epochs, cfg, bar)
         else:
-            indexed = list(enumerate(objs))
+            indexed = by_epoch(objs)
             chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
             results = _run_on_dask(client, shipped, chunks, epochs, cfg, bar)
     finally:

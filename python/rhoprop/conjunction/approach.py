@@ -20,7 +20,6 @@ before this: radial ranges and a coarse-grid distance filter.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -29,14 +28,9 @@ import numpy as np
 
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density import SampledModel, altitude_band
-from ..density.field import FieldResolution
+from ..density import SampledModel
 from ..propagation import OrbitState, Spacecraft, Trajectory, propagate
-from ..propagation.propagate import (
-    FIELD_MARGIN,
-    check_model,
-    zonal_degree_argument,
-)
+from ..propagation.propagate import check_model, zonal_degree_argument
 from ..time import add_seconds, to_seconds
 
 __all__ = [
@@ -50,13 +44,6 @@ DEFAULT_FINE_STEP = 1.0
 #: Largest output spacing that :func:`closest_approach` refines by interpolation alone
 #: (without ``model``), s: the cubic Hermite error is below 0.1 mm in LEO there.
 MAX_INTERPOLATION_SPACING = 10.0
-#: Sampled models: tops of the altitude tiers that share a density field, m (see
-#: :func:`_models_for`).
-FIELD_TIERS = (1000e3, 4000e3, math.inf)
-#: Sampled models: the fields of the higher tiers have at most this many altitude nodes and
-#: time nodes at least this far apart (s).
-HIGH_BAND_NODES = 60
-HIGH_BAND_TIME = 3 * 3600.0
 #: Longest bracket re-propagated at once, s (a minimum on a boundary between two is found
 #: in one of them and counted once).
 MAX_BRACKET = 6 * 3600.0
@@ -331,41 +318,10 @@ def _spacecraft_pair(spacecraft: Any) -> tuple[Spacecraft | None, Spacecraft | N
 def _models_for(
     model: Any, states: Sequence[OrbitState], start: Any, end: Any, floor: float
 ) -> list[Any]:
-    """The model to propagate each of ``states`` with over [start, end]. A sampled model
-    is sampled once per altitude tier of :data:`FIELD_TIERS`: the objects whose altitude
-    band (perigee - 50 km to apogee + 25 km) tops out below 1,000 km share one field at
-    the model's resolution reaching :data:`FIELD_MARGIN` below the floor (so that decay is
-    reported); each higher tier (eccentric orbits) gets one field from its lowest perigee
-    band with at most :data:`HIGH_BAND_NODES` altitude nodes and time nodes at least
-    :data:`HIGH_BAND_TIME` s apart (a band to GEO at 25 km would need 1,600 nodes). Other
-    models are used as they are."""
-    if not isinstance(model, SampledModel):
-        return [model] * len(states)
-    bands = [altitude_band(s.position, s.velocity) for s in states]
-    out: list[Any] = [None] * len(states)
-    base = model.resolution or FieldResolution()
-    below = 0.0
-    for k, top_limit in enumerate(FIELD_TIERS):
-        group = [i for i, b in enumerate(bands) if below < b[1] <= top_limit]
-        below = top_limit
-        if not group:
-            continue
-        bottom = max(min(bands[i][0] for i in group), 0.0)
-        top = max(bands[i][1] for i in group) + FIELD_MARGIN
-        res = None
-        if k == 0:
-            bottom = max(min(bottom, floor - FIELD_MARGIN), 0.0)
-        else:
-            res = FieldResolution(
-                time=max(base.time, HIGH_BAND_TIME),
-                altitude=max(base.altitude, (top - bottom) / HIGH_BAND_NODES),
-                latitude=base.latitude,
-                longitude=base.longitude,
-            )
-        sampled = model.field(start, end, altitude_range=(bottom, top), resolution=res)
-        for i in group:
-            out[i] = sampled
-    return out
+    """The model to propagate each of ``states`` with over [start, end]: a sampled model's
+    atlas (day tiles over every altitude, extrapolated above the ceiling, so LEO, HEO and
+    GEO objects share it) or the model as it is."""
+    return [model.atlas if isinstance(model, SampledModel) else model] * len(states)
 
 
 def closest_approach(

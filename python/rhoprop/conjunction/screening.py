@@ -228,7 +228,7 @@ def _coarse_track(
             return gone, tr.decayed_at - lead
         state0 = OrbitState(start, tr.positions[-1], tr.velocities[-1])
     elif lead < -1e-9:
-        atmosphere = as_atmosphere(obj.model, obj.state, -lead)
+        atmosphere = as_atmosphere(obj.model, obj.state, lead)  # backwards: lead < 0
         # The core integrates backwards with the fixed-step RK8 only (as the debiasing's
         # backward orbit does); 30 s steps keep it at the millimetre level over days.
         _t, states, _d, _e, _c = _core.propagate(

@@ -214,6 +214,7 @@ def time_nodes(span: float, step: float, breaks: np.ndarray) -> tuple[np.ndarray
     for k, (a, b) in enumerate(itertools.pairwise(edges)):
         n = max(1, int(np.ceil((b - a) / step - 1e-9)))
         seg = a + (b - a) * np.arange(n + 1) / n
+        seg[-1] = b  # exactly: a + (b - a) may round above b, and the next segment starts at b
         nodes.extend(seg)
         left.extend([False] * n + [k < len(edges) - 2])
     return np.array(nodes), np.array(left)

@@ -113,6 +113,10 @@ class JacchiaRoberts(PointModel):
         before = epochs - np.where(left, np.timedelta64(1, "us"), np.timedelta64(0, "us"))
         return super()._grid_values(before, left, alt, lat, lon)
 
+    def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
+        first, last = self.space_weather.span
+        return first + _KP_LAG, last  # Kp of t - 3 h
+
     def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
         blocks = np.arange(start - _CADENCE, end + 2 * _CADENCE, _CADENCE).astype("datetime64[ns]")
         digest = hashlib.sha256(np.ascontiguousarray(self.drivers(blocks)).tobytes())

@@ -392,6 +392,9 @@ class Jb2008(PointModel):
         shift = np.where(left, -1, 1).astype("timedelta64[ns]")
         return super()._grid_values(epochs + shift, left, alt, lat, lon)
 
+    def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
+        return self.indices.span
+
     def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
         return {
             "model": "jb2008",

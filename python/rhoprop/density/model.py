@@ -3,7 +3,8 @@
 A stochastic density model answers ``mean_std(times, lat, lon, alt)`` (UTC datetime64,
 geodetic WGS-84 degrees and metres) with mean and standard deviation in kg/m^3, and gives
 the core an atmosphere it can evaluate without calling back into Python through
-``atmosphere(state, duration)``: an analytic core atmosphere or a sampled density field.
+``atmosphere(state, duration)``: an analytic core atmosphere or a field of the model's
+density atlas (:mod:`rhoprop.density.atlas`).
 """
 
 from __future__ import annotations
@@ -14,8 +15,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from .. import _core
-from ..time import EpochLike, add_seconds
-from ._inputs import altitude_band
+from ..time import EpochLike
+from .atlas import Atlas
 from .field import DensityField, FieldResolution, sample_field
 
 #: Core atmosphere objects the propagator evaluates directly.
@@ -90,11 +91,36 @@ class SampledModel(abc.ABC):
             cache=cache,
         )
 
+    #: Lowest altitude of the model's atlas grid, m (below any decay floor; a model that
+    #: is not defined that low sets its own: 90 km for JB2008 and Jacchia-Roberts).
+    lowest_altitude: float = 50e3
+    #: Highest altitude the model is defined at, m; the atlas ceiling is the lower of this
+    #: and :data:`~rhoprop.density.atlas.DEFAULT_CEILING` (above it: extrapolated).
+    highest_altitude: float = float("inf")
+
+    @property
+    def atlas(self) -> Atlas:
+        """The model's :class:`~rhoprop.density.atlas.Atlas` (made once per model)."""
+        atlas = self.__dict__.get("_atlas")
+        if atlas is None or atlas.resolution != (self.resolution or FieldResolution()):
+            atlas = Atlas(self)
+            self.__dict__["_atlas"] = atlas
+        return atlas
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The atlas (locks, weak references) is made again where the model arrives.
+        state = dict(self.__dict__)
+        state.pop("_atlas", None)
+        return state
+
     def atmosphere(self, state: Any, duration: float) -> Any:
-        """The sampled field covering ``duration`` s of the orbit from ``state``."""
-        end = add_seconds(state.epoch, duration, round_up=True)
-        band = altitude_band(state.position, state.velocity)
-        return self.field(state.epoch, end, altitude_range=band).core
+        """The core field of the atlas's day tiles covering ``duration`` s from ``state``
+        (negative: backwards), every altitude included."""
+        return self.atlas.atmosphere(state, duration)
+
+    def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
+        """(first, last) UTC epochs the model's drivers cover, or None (every time)."""
+        return None
 
     def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
         """A JSON-able description identifying the sampled values, or None (no caching)."""

@@ -258,6 +258,13 @@ class Msis(SampledModel):
 
     # -- sampling into a field -------------------------------------------------------------
 
+    #: NRLMSIS is defined down to the ground: the atlas grid starts there, so a run that
+    #: comes down overshoots into the grid, never below it.
+    lowest_altitude = 0.0
+
+    def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
+        return self.space_weather.span
+
     def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
         first = start.astype("datetime64[h]") - start.astype("datetime64[h]").astype(int) % 3
         steps = np.arange(first, end + DRIVER_CADENCE, DRIVER_CADENCE).astype("datetime64[ns]")

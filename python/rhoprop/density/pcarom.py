@@ -229,6 +229,19 @@ class PcaRom(SampledModel):
             std[b] = rho.std(axis=1, ddof=1)
         return mean.reshape(m.shape), std.reshape(m.shape)
 
+    @property
+    def lowest_altitude(self) -> float:  # type: ignore[override]
+        """The ROM's lowest altitude node, m (the atlas grid starts there)."""
+        return float(self.alt[0])
+
+    @property
+    def highest_altitude(self) -> float:  # type: ignore[override]
+        """The ROM's highest altitude node, m (the atlas ceiling; extrapolated above)."""
+        return float(self.alt[-1])
+
+    def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
+        return self.epochs[0].astype("datetime64[ns]"), self.epochs[-1].astype("datetime64[ns]")
+
     def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
         """sha256 of the axes, grid and coefficient arrays, with the method (and samples
         and seed for "sampling"); None for "sampling" with ``seed=None``."""

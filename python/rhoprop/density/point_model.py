@@ -62,6 +62,8 @@ class PointModel(SampledModel):
     FLOOR: ClassVar[float] = 90e3
     #: Name in error messages.
     NAME: ClassVar[str] = ""
+    #: The atlas grid starts at the models' floor.
+    lowest_altitude = 90e3
     uncertainty: ActivitySigma
 
     @abc.abstractmethod

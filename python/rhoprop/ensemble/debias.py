@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core, _validate, frames
-from ..density import DensityModel, SampledModel, altitude_band, as_atmosphere
+from ..density import DensityModel, as_atmosphere
 from ..propagation import OrbitState, Spacecraft
-from ..time import add_seconds, offsets_to_epochs, ut1_seconds
+from ..time import offsets_to_epochs, ut1_seconds
 
 #: Cadence of the density samples along the backward orbit, s.
 DEBIAS_CADENCE = 60.0
@@ -23,12 +23,7 @@ def backward_orbit(
     """The mean orbit through ``model`` propagated backwards over ``window`` s before the
     epoch (RK8, 180 s or shorter steps). Returns (epochs (k,), inertial positions (k, 3) m)
     at every ``cadence`` s from the epoch back to ``epoch - window``."""
-    start = add_seconds(state.epoch, -window)
-    if isinstance(model, SampledModel):
-        band = altitude_band(state.position, state.velocity, below=25e3, above=25e3)
-        atmosphere = model.field(start, state.epoch, altitude_range=band).core
-    else:
-        atmosphere = as_atmosphere(model, state, window)
+    atmosphere = as_atmosphere(model, state, -window)
     times = -np.arange(0.0, window + 0.5 * cadence, cadence)
     times[-1] = -window
     t, states, _decayed, _, _ = _core.propagate(

@@ -470,13 +470,22 @@ class GaussianMixture:
         return x
 
     def _merge(self, points: np.ndarray, radius: float) -> np.ndarray:
-        """Points (m, d) merged greedily, highest density first, within ``radius``."""
+        """Points (m, d) merged greedily, highest density first, within ``radius`` or with
+        no dip of the density between them (two stops of the iteration on one flat,
+        nearly degenerate mode, where mean-shift and Newton converge slowly)."""
         order = np.argsort(-self.logpdf(points), kind="stable")
         kept: list[np.ndarray] = []
         for p in points[order]:
-            if all(np.linalg.norm(p - q) >= radius for q in kept):
+            if all(np.linalg.norm(p - q) >= radius and self._dip(p, q) for q in kept):
                 kept.append(p)
         return np.array(kept)
+
+    def _dip(self, p: np.ndarray, q: np.ndarray, samples: int = 33) -> bool:
+        """Whether the log-density falls below both ends somewhere on the segment p-q."""
+        f = np.linspace(0.0, 1.0, samples)[1:-1, None]
+        inner = self.logpdf(p[None, :] + f * (q - p)[None, :])
+        ends = self.logpdf(np.stack([p, q]))
+        return bool(np.min(inner) < np.min(ends) - 1e-12)
 
     def _scaled_gradient(self, x: np.ndarray) -> np.ndarray:
         """Gradient of the density divided by the density at x (d,):

@@ -14,10 +14,8 @@ import numpy as np
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
-from ..density import altitude_band
-from ..density.model import CoreAtmosphere, DensityModel, SampledModel, as_atmosphere
-from ..errors import DensityFieldError
-from ..time import add_seconds, ut1_seconds
+from ..density.model import CoreAtmosphere, DensityModel, as_atmosphere
+from ..time import ut1_seconds
 from .results import Trajectory, trajectory_from_core
 from .state import OrbitState, Spacecraft
 
@@ -45,9 +43,6 @@ MAX_STEPS = _core.MAX_STEPS
 MAX_ZONAL_DEGREE = 6
 #: Default limit on the memory of a run's results, bytes (8 GiB).
 DEFAULT_MAX_MEMORY = 8 * 2**30
-#: How far below the floor altitude a widened density field reaches, m: sigma points and
-#: members that decay inside a step dip below the floor before the decay is located.
-FIELD_MARGIN = 50e3
 
 
 def output_grid(duration: float, output_step: float | None) -> np.ndarray:
@@ -181,46 +176,16 @@ def check_memory(estimate: float, limit: float, what: str) -> None:
         )
 
 
-def _wider_atmosphere(
-    model: Any, state: OrbitState, span: float, floor: float, first: Any, err: Exception
-) -> Any:
-    """A sampled model's field re-sampled from :data:`FIELD_MARGIN` below the floor
-    altitude, and as much higher at the top, when ``err`` says the run left the first
-    field in altitude and a wider field can help; else None. Near decay the spread of
-    members or sigma points grows radially both ways, hence the symmetric widening."""
-    if not isinstance(model, SampledModel) or "altitude" not in str(err):
-        return None
-    low, high = altitude_band(state.position, state.velocity)
-    bottom = max(floor - FIELD_MARGIN, 0.0)
-    if low <= bottom:
-        return None
-    end = add_seconds(state.epoch, span, round_up=True)
-    band = (bottom, high + (low - bottom))
-    wider = model.field(state.epoch, end, altitude_range=band).core
-    return None if wider is first else wider
-
-
 def run_in_field(
     model: Any, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
 ) -> T:
     """``run(atmosphere)`` with the core atmosphere of ``model`` for ``span`` s from
-    ``state``. A sampled field covers the orbit's altitude band from 50 km below perigee
-    to 25 km above apogee; an object (or member, or sigma point) that comes down leaves
-    it and raises DensityFieldError, and then the run is repeated once with the band
-    widened down to :data:`FIELD_MARGIN` below the floor (and up by as much), so that
-    decay is reported, not an error. A second failure raises, chained to the first."""
+    ``state`` (negative: backwards). A sampled model's atmosphere is the field of its
+    atlas's day tiles over the span, every altitude from the model's lowest one up
+    (:mod:`rhoprop.density.atlas`), so an object that comes down reaches the floor inside
+    the field and is reported as decayed. ``floor`` (m) is the run's decay floor."""
     check_model(model)
-    atmosphere = as_atmosphere(model, state, span)
-    try:
-        return run(atmosphere)
-    except DensityFieldError as err:
-        wider = _wider_atmosphere(model, state, span, floor, atmosphere, err)
-        if wider is None:
-            raise
-        try:
-            return run(wider)
-        except DensityFieldError as again:
-            raise again from err
+    return run(as_atmosphere(model, state, span))
 
 
 def model_argument(model: Any, density: Any, function: str) -> Any:

@@ -6,7 +6,7 @@ use numpy::ndarray::Array1;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray4};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use rhoprop_core::density::{Atmosphere, Exponential, GriddedField};
+use rhoprop_core::density::{Atmosphere, Exponential, FieldTile, GriddedField};
 use rhoprop_core::frames::EarthRotation;
 use rhoprop_core::time::gmst;
 use std::borrow::Cow;
@@ -43,7 +43,7 @@ impl PyExponential {
 
 /// Density sampled on a (time, altitude, latitude, longitude) grid of ln(mean) and
 /// sigma/mean, interpolated multilinearly; periodic in longitude; an error outside.
-#[pyclass(frozen, name = "GriddedAtmosphere", module = "rhoprop._core")]
+#[pyclass(frozen, weakref, name = "GriddedAtmosphere", module = "rhoprop._core")]
 pub struct PyGridded(pub Arc<GriddedField>);
 
 #[pymethods]
@@ -60,41 +60,35 @@ impl PyGridded {
         ln_mean: PyReadonlyArray4<'_, f64>,
         rel_sigma: PyReadonlyArray4<'_, f64>,
     ) -> PyResult<Self> {
-        let a = ln_mean.as_array();
-        let b = rel_sigma.as_array();
-        if a.shape() != b.shape() {
-            return Err(PyValueError::new_err(format!(
-                "ln_mean {:?} and rel_sigma {:?} must have the same shape",
-                a.shape(),
-                b.shape()
-            )));
-        }
-        let time: Vec<f64> = time.as_array().to_vec();
-        let expect = [time.len(), altitude.2, latitude.2];
-        if a.shape()[..3] != expect {
-            return Err(PyValueError::new_err(format!(
-                "ln_mean has shape {:?}, expected ({}, {}, {}, nlon) from the axes",
-                a.shape(),
-                expect[0],
-                expect[1],
-                expect[2]
-            )));
-        }
-        let nlon = a.shape()[3];
-        // A C-contiguous array is read in place (the field copies it once, interleaved);
-        // otherwise iterating the view yields the logical row-major order whatever the
-        // strides.
-        let ln_mean: Cow<'_, [f64]> = a
-            .as_slice()
-            .map_or_else(|| Cow::Owned(a.iter().copied().collect()), Cow::Borrowed);
-        let rel_sigma: Cow<'_, [f64]> = b
-            .as_slice()
-            .map_or_else(|| Cow::Owned(b.iter().copied().collect()), Cow::Borrowed);
+        let (time, nlon, ln_mean, rel_sigma) =
+            tile_arrays(time, altitude, latitude, &ln_mean, &rel_sigma)?;
         GriddedField::new(
             epoch, time, altitude, latitude, lon0, nlon, ln_mean, rel_sigma,
         )
         .map(|f| Self(Arc::new(f)))
         .map_err(to_py)
+    }
+
+    /// A field of `tiles` (each starting where the one before ends, one spatial grid;
+    /// times in s from `epoch`). `extrapolate_above`: above the top altitude node ln(mean)
+    /// continues along the top cell's slope and sigma/mean is held, instead of an error.
+    #[staticmethod]
+    #[pyo3(signature = (epoch, tiles, extrapolate_above))]
+    fn from_tiles(
+        epoch: f64,
+        tiles: Vec<PyRef<'_, PyFieldTile>>,
+        extrapolate_above: bool,
+    ) -> PyResult<Self> {
+        let tiles = tiles.iter().map(|t| t.0.clone()).collect();
+        GriddedField::from_tiles(epoch, tiles, extrapolate_above)
+            .map(|f| Self(Arc::new(f)))
+            .map_err(to_py)
+    }
+
+    /// Bytes of the values of the field's tiles.
+    #[getter]
+    fn nbytes(&self) -> usize {
+        self.0.tiles().iter().map(|t| t.bytes()).sum()
     }
 
     /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s
@@ -106,6 +100,91 @@ impl PyGridded {
         positions: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<MeanSigma<'py>> {
         mean_sigma_at(py, self.0.as_ref(), ut1, positions)
+    }
+}
+
+/// Values read from a tile's arrays: time nodes, longitude count, ln_mean and rel_sigma
+/// as row-major slices (borrowed when C-contiguous).
+type TileArrays<'a> = (Vec<f64>, usize, Cow<'a, [f64]>, Cow<'a, [f64]>);
+
+/// The arrays of a field or tile checked against its axes.
+fn tile_arrays<'a>(
+    time: PyReadonlyArray1<'_, f64>,
+    altitude: (f64, f64, usize),
+    latitude: (f64, f64, usize),
+    ln_mean: &'a PyReadonlyArray4<'_, f64>,
+    rel_sigma: &'a PyReadonlyArray4<'_, f64>,
+) -> PyResult<TileArrays<'a>> {
+    let a = ln_mean.as_array();
+    let b = rel_sigma.as_array();
+    if a.shape() != b.shape() {
+        return Err(PyValueError::new_err(format!(
+            "ln_mean {:?} and rel_sigma {:?} must have the same shape",
+            a.shape(),
+            b.shape()
+        )));
+    }
+    let time: Vec<f64> = time.as_array().to_vec();
+    let expect = [time.len(), altitude.2, latitude.2];
+    if a.shape()[..3] != expect {
+        return Err(PyValueError::new_err(format!(
+            "ln_mean has shape {:?}, expected ({}, {}, {}, nlon) from the axes",
+            a.shape(),
+            expect[0],
+            expect[1],
+            expect[2]
+        )));
+    }
+    let nlon = a.shape()[3];
+    // A C-contiguous array is read in place (the tile copies it once, interleaved);
+    // otherwise iterating the view yields the logical row-major order whatever the
+    // strides.
+    let ln_mean: Cow<'a, [f64]> = a
+        .to_slice()
+        .map_or_else(|| Cow::Owned(a.iter().copied().collect()), Cow::Borrowed);
+    let rel_sigma: Cow<'a, [f64]> = b
+        .to_slice()
+        .map_or_else(|| Cow::Owned(b.iter().copied().collect()), Cow::Borrowed);
+    Ok((time, nlon, ln_mean, rel_sigma))
+}
+
+/// One time window of a sampled field (an atlas tile), shared by the fields composed
+/// from it without a copy.
+#[pyclass(frozen, weakref, name = "FieldTile", module = "rhoprop._core")]
+pub struct PyFieldTile(pub Arc<FieldTile>);
+
+#[pymethods]
+impl PyFieldTile {
+    /// `time` nodes in s on the composed field's time axis, `altitude` (start m, step m,
+    /// count), `latitude` (start deg, step deg, count), `lon0` deg, values
+    /// (nt, nalt, nlat, nlon).
+    #[new]
+    #[pyo3(signature = (time, altitude, latitude, lon0, ln_mean, rel_sigma))]
+    fn new(
+        time: PyReadonlyArray1<'_, f64>,
+        altitude: (f64, f64, usize),
+        latitude: (f64, f64, usize),
+        lon0: f64,
+        ln_mean: PyReadonlyArray4<'_, f64>,
+        rel_sigma: PyReadonlyArray4<'_, f64>,
+    ) -> PyResult<Self> {
+        let (time, nlon, ln_mean, rel_sigma) =
+            tile_arrays(time, altitude, latitude, &ln_mean, &rel_sigma)?;
+        FieldTile::new(time, altitude, latitude, lon0, nlon, ln_mean, rel_sigma)
+            .map(|t| Self(Arc::new(t)))
+            .map_err(to_py)
+    }
+
+    /// Bytes of the values held.
+    #[getter]
+    fn nbytes(&self) -> usize {
+        self.0.bytes()
+    }
+
+    /// First and last time node, s.
+    #[getter]
+    fn span(&self) -> (f64, f64) {
+        self.0.span()
     }
 }
 

@@ -30,6 +30,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add_class::<density::PyExponential>()?;
     m.add_class::<density::PyGridded>()?;
+    m.add_class::<density::PyFieldTile>()?;
     m.add_function(wrap_pyfunction!(propagation::propagate, m)?)?;
     m.add_function(wrap_pyfunction!(montecarlo::monte_carlo, m)?)?;
     m.add_function(wrap_pyfunction!(ccsp::ccsp, m)?)?;

@@ -18,6 +18,7 @@ use super::{Atmosphere, LaneMemory};
 use crate::error::{finite, CoreError};
 use crate::frames::{geodetic, geodetic_lanes, EarthRotation};
 use std::f64::consts::TAU;
+use std::sync::Arc;
 
 /// A uniform axis: `len` nodes at `start + i * step`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -163,11 +164,12 @@ impl TimeNodes {
     }
 }
 
-/// Density sampled on a (time, altitude, latitude, longitude) grid.
+/// One time window of a sampled field (an atlas tile: for example one UTC day): its own
+/// time nodes, on the time axis of the fields it goes into, and the values on them. Tiles
+/// are shared (`Arc`) between the fields composed from them, so a field over a few days
+/// of a long catalog costs no copy of the values.
 #[derive(Debug, Clone, PartialEq)]
-pub struct GriddedField {
-    /// Epoch of the time axis, seconds since J2000 (UT1).
-    epoch: f64,
+pub struct FieldTile {
     time: TimeNodes,
     alt: Axis,
     /// Latitude axis in radians.
@@ -179,20 +181,16 @@ pub struct GriddedField {
     /// lookup reads at a corner share a cache line (and so, mostly, do the longitude
     /// neighbours'), halving the lines touched against two separate tables.
     table: Vec<[f64; 2]>,
-    /// Reciprocals of the altitude, latitude and longitude steps and of the longitude
-    /// count, for the lane lookup (computed once: four divisions per evaluation showed).
-    inv: [f64; 4],
 }
 
-impl GriddedField {
-    /// Builds a field. `epoch` in seconds since J2000; `time` nodes in seconds from
-    /// `epoch` (non-decreasing, a repeated node marks a discontinuity); `alt` in metres (geodetic); `lat` in degrees (geodetic); longitude nodes
-    /// at `lon0_deg + k * 360 / nlon` degrees, periodic. `ln_mean` (ln of kg/m^3) and
-    /// `rel_sigma` (sigma/mean, >= 0) are row-major [time][alt][lat][lon] (read, not
-    /// kept: the field stores them interleaved).
+impl FieldTile {
+    /// Builds a tile. `time` nodes in seconds on the field's time axis (non-decreasing, a
+    /// repeated node marks a discontinuity); `alt` in metres (geodetic); `lat` in degrees
+    /// (geodetic); longitude nodes at `lon0_deg + k * 360 / nlon` degrees, periodic.
+    /// `ln_mean` (ln of kg/m^3) and `rel_sigma` (sigma/mean, >= 0) are row-major
+    /// [time][alt][lat][lon] (read, not kept: the tile stores them interleaved).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
-        epoch: f64,
         time: Vec<f64>,
         alt: (f64, f64, usize),
         lat_deg: (f64, f64, usize),
@@ -202,7 +200,6 @@ impl GriddedField {
         rel_sigma: impl AsRef<[f64]>,
     ) -> Result<Self, CoreError> {
         let (ln_mean, rel_sigma) = (ln_mean.as_ref(), rel_sigma.as_ref());
-        finite("field epoch", epoch)?;
         let time = TimeNodes::checked(time)?;
         let alt = Axis::checked("altitude", alt.0, alt.1, alt.2)?;
         let lat = Axis::checked("latitude", lat_deg.0, lat_deg.1, lat_deg.2)?;
@@ -253,7 +250,6 @@ impl GriddedField {
             ));
         }
         Ok(Self {
-            epoch,
             time,
             alt,
             lat: Axis {
@@ -263,18 +259,160 @@ impl GriddedField {
             },
             lon0: lon0_deg.to_radians(),
             nlon,
-            inv: [
-                1.0 / alt.step,
-                1.0 / lat.step.to_radians(),
-                1.0 / (TAU / nlon as f64),
-                1.0 / nlon as f64,
-            ],
             table: ln_mean
                 .iter()
                 .zip(rel_sigma)
                 .map(|(&m, &s)| [m, s])
                 .collect(),
         })
+    }
+
+    /// First and last time node, s.
+    pub fn span(&self) -> (f64, f64) {
+        (self.time.start(), self.time.end())
+    }
+
+    /// Bytes of the values held.
+    pub fn bytes(&self) -> usize {
+        self.table.len() * std::mem::size_of::<[f64; 2]>()
+    }
+
+    /// Whether `other` has the same spatial grid.
+    fn same_grid(&self, other: &Self) -> bool {
+        self.alt == other.alt
+            && self.lat == other.lat
+            && self.lon0 == other.lon0
+            && self.nlon == other.nlon
+    }
+}
+
+/// Density sampled on a (time, altitude, latitude, longitude) grid: one tile, or tiles
+/// that follow each other in time on one spatial grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GriddedField {
+    /// Epoch of the time axis, seconds since J2000 (UT1).
+    epoch: f64,
+    /// Every tile's nodes in order; where one tile ends the next begins at the same node,
+    /// so the boundary is a repeated node (a step, if the values differ).
+    time: TimeNodes,
+    /// Per time cell: its tile and the cell's index within the tile.
+    cells: Vec<(u32, u32)>,
+    tiles: Vec<Arc<FieldTile>>,
+    /// Table index at which each tile's values would start if the tables were one (as a
+    /// float, for the lane memory's cell key: unique across tiles).
+    offsets: Vec<f64>,
+    alt: Axis,
+    /// Latitude axis in radians.
+    lat: Axis,
+    lon0: f64,
+    nlon: usize,
+    /// Reciprocals of the altitude, latitude and longitude steps and of the longitude
+    /// count, for the lane lookup (computed once: four divisions per evaluation showed).
+    inv: [f64; 4],
+    /// Above the top altitude node: ln(mean) continues along the top cell's slope (an
+    /// exponential with the local scale height) and sigma/mean keeps its top value;
+    /// without it, an error.
+    extrapolate_above: bool,
+}
+
+impl GriddedField {
+    /// Builds a field of one tile. `epoch` in seconds since J2000; `time` nodes in seconds
+    /// from `epoch`; the other arguments as [`FieldTile::new`]. An error above the grid.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        epoch: f64,
+        time: Vec<f64>,
+        alt: (f64, f64, usize),
+        lat_deg: (f64, f64, usize),
+        lon0_deg: f64,
+        nlon: usize,
+        ln_mean: impl AsRef<[f64]>,
+        rel_sigma: impl AsRef<[f64]>,
+    ) -> Result<Self, CoreError> {
+        let tile = FieldTile::new(time, alt, lat_deg, lon0_deg, nlon, ln_mean, rel_sigma)?;
+        Self::from_tiles(epoch, vec![Arc::new(tile)], false)
+    }
+
+    /// A field from `tiles` (times in seconds from `epoch`), each starting where the one
+    /// before ends, on one spatial grid. With `extrapolate_above`, altitudes above the top
+    /// node are served by the top cell's ln(mean) slope and sigma/mean (see the module
+    /// doc) instead of an error.
+    pub fn from_tiles(
+        epoch: f64,
+        tiles: Vec<Arc<FieldTile>>,
+        extrapolate_above: bool,
+    ) -> Result<Self, CoreError> {
+        finite("field epoch", epoch)?;
+        let Some(first) = tiles.first().cloned() else {
+            return Err(CoreError::invalid(
+                "tiles",
+                0.0,
+                "a field needs at least one tile",
+            ));
+        };
+        let mut nodes = Vec::new();
+        let mut cells = Vec::new();
+        let mut offsets = Vec::with_capacity(tiles.len());
+        let mut offset = 0usize;
+        for (k, tile) in tiles.iter().enumerate() {
+            if !tile.same_grid(&first) {
+                return Err(CoreError::invalid(
+                    format!("tile {k}"),
+                    k as f64,
+                    "has another altitude, latitude or longitude grid than tile 0",
+                ));
+            }
+            if let Some(&last) = nodes.last() {
+                if tile.time.start() != last {
+                    return Err(CoreError::invalid(
+                        format!("tile {k} start"),
+                        tile.time.start(),
+                        format!("must equal the end of tile {} ({last} s)", k - 1),
+                    ));
+                }
+                // The zero-width cell at the boundary (never located: a repeated node
+                // takes the later cell).
+                cells.push((k as u32, 0));
+            }
+            let n = tile.time.nodes.len();
+            nodes.extend_from_slice(&tile.time.nodes);
+            cells.extend((0..n - 1).map(|i| (k as u32, i as u32)));
+            offsets.push(offset as f64);
+            offset += tile.table.len();
+        }
+        let time = TimeNodes::checked(nodes)?;
+        let (alt, lat, nlon) = (first.alt, first.lat, first.nlon);
+        Ok(Self {
+            epoch,
+            time,
+            cells,
+            offsets,
+            alt,
+            lat,
+            lon0: first.lon0,
+            nlon,
+            inv: [
+                1.0 / alt.step,
+                1.0 / lat.step,
+                1.0 / (TAU / nlon as f64),
+                1.0 / nlon as f64,
+            ],
+            extrapolate_above,
+            tiles,
+        })
+    }
+
+    /// The tiles, in time order.
+    pub fn tiles(&self) -> &[Arc<FieldTile>] {
+        &self.tiles
+    }
+
+    /// Tile, its values and the cell within it of global time cell `it`.
+    #[inline(always)]
+    fn cell(&self, it: usize) -> (usize, &[[f64; 2]], usize) {
+        let (k, local) = self.cells[it];
+        let k = k as usize;
+        (k, &self.tiles[k].table, local as usize)
     }
 
     /// Mean and sigma at `ut1` seconds since J2000 and geodetic (lat, lon) in rad, alt m.
@@ -301,10 +439,17 @@ impl GriddedField {
             max: self.time.end(),
             t,
         })?;
-        let (ia, fa) = self
-            .alt
-            .locate(alt)
-            .ok_or_else(|| outside("altitude (m)", alt, &self.alt, 1.0))?;
+        let above = self.extrapolate_above && alt > self.alt.end();
+        let (ia, fa_s, fa_m) = if above {
+            let ia = self.alt.len - 2;
+            (ia, 1.0, (alt - self.alt.start) / self.alt.step - ia as f64)
+        } else {
+            let (ia, fa) = self
+                .alt
+                .locate(alt)
+                .ok_or_else(|| outside("altitude (m)", alt, &self.alt, 1.0))?;
+            (ia, fa, fa)
+        };
         let (il, fl) = self.lat.locate(lat).ok_or_else(|| {
             outside(
                 "latitude (deg)",
@@ -319,18 +464,18 @@ impl GriddedField {
         let fo = u - io0 as f64;
         let io1 = if io0 + 1 == self.nlon { 0 } else { io0 + 1 };
 
+        let (_, table, it) = self.cell(it);
         let (na, nl, no) = (self.alt.len, self.lat.len, self.nlon);
         let mut ln_m = 0.0;
         let mut rs = 0.0;
         for (dt, wt) in [(0, 1.0 - ft), (1, ft)] {
-            for (da, wa) in [(0, 1.0 - fa), (1, fa)] {
+            for (da, wm, ws) in [(0, 1.0 - fa_m, 1.0 - fa_s), (1, fa_m, fa_s)] {
                 for (dl, wl) in [(0, 1.0 - fl), (1, fl)] {
                     let row = (((it + dt) * na + ia + da) * nl + il + dl) * no;
-                    let w = wt * wa * wl;
                     let (a, b) = (row + io0, row + io1);
-                    let (ca, cb) = (self.table[a], self.table[b]);
-                    ln_m += w * ((1.0 - fo) * ca[0] + fo * cb[0]);
-                    rs += w * ((1.0 - fo) * ca[1] + fo * cb[1]);
+                    let (ca, cb) = (table[a], table[b]);
+                    ln_m += wt * wm * wl * ((1.0 - fo) * ca[0] + fo * cb[0]);
+                    rs += wt * ws * wl * ((1.0 - fo) * ca[1] + fo * cb[1]);
                 }
             }
         }
@@ -383,8 +528,15 @@ impl Atmosphere for GriddedField {
             }
             return Ok(());
         };
+        let (tile, table, local) = self.cell(it);
         let (na, nl, no) = (self.alt.len, self.lat.len, self.nlon);
         let (last_a, last_l, nof) = ((na - 1) as f64, (nl - 1) as f64, no as f64);
+        // The altitude cell index above which a lane is outside (infinite: extrapolated).
+        let top_a = if self.extrapolate_above {
+            f64::INFINITY
+        } else {
+            last_a + 1e-9
+        };
         let [inv_alt, inv_lat, inv_lon, inv_nlon] = self.inv;
         // Straight-line lane loops (no clamp asserts, no integer work) so that they
         // vectorise: the geodetic position, then the cell and fractions.
@@ -399,18 +551,22 @@ impl Atmosphere for GriddedField {
         // Per lane: the cell's first table index and the longitude neighbour's offset (as
         // floats until the end), the fractions along altitude, latitude and longitude.
         let (mut base_f, mut next_f) = ([0.0; W], [0.0; W]);
-        let (mut fa, mut fl, mut fo) = ([0.0; W], [0.0; W], [0.0; W]);
+        // fa: the altitude fraction of sigma/mean (held above the top), fm: of ln(mean)
+        // (beyond 1 above the top: the top cell's slope continued). Equal inside.
+        let (mut fa, mut fm, mut fl, mut fo) = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
         let mut outside = [false; W];
-        let it_f = it as f64;
+        // The cell key of the lane memory is unique across tiles: the tile's offset plus
+        // the index within its table.
+        let (it_f, offset) = (local as f64, self.offsets[tile]);
         for l in 0..W {
             let ua = (alt[l] - self.alt.start) * inv_alt;
             let ul = (lat[l] - self.lat.start) * inv_lat;
             // `&`, not `&&`: no branches in a lane loop.
-            outside[l] =
-                !((ua >= -1e-9) & (ua <= last_a + 1e-9) & (ul >= -1e-9) & (ul <= last_l + 1e-9));
+            outside[l] = !((ua >= -1e-9) & (ua <= top_a) & (ul >= -1e-9) & (ul <= last_l + 1e-9));
             let ia = ua.floor().max(0.0).min(last_a - 1.0);
             let il = ul.floor().max(0.0).min(last_l - 1.0);
             fa[l] = (ua - ia).clamp(0.0, 1.0);
+            fm[l] = if ua > last_a { ua - ia } else { fa[l] };
             fl[l] = (ul - il).clamp(0.0, 1.0);
             let uo = (ra[l] - lon_origin) * inv_lon;
             let uo = uo - (uo * inv_nlon).floor() * nof;
@@ -418,7 +574,7 @@ impl Atmosphere for GriddedField {
             fo[l] = uo - io;
             // Offset of the next longitude node: +1, or back to node 0 past the last.
             next_f[l] = if io + 1.0 == nof { 1.0 - nof } else { 1.0 };
-            base_f[l] = ((it_f * na as f64 + ia) * nl as f64 + il) * nof + io;
+            base_f[l] = offset + ((it_f * na as f64 + ia) * nl as f64 + il) * nof + io;
         }
         for l in 0..W {
             if outside[l] && active[l] != 0.0 {
@@ -438,12 +594,12 @@ impl Atmosphere for GriddedField {
             }
             memory.cell[l] = base_f[l];
             // Exact: table sizes are far below 2^53.
-            let (base, next) = (base_f[l] as usize, next_f[l] as isize);
+            let (base, next) = ((base_f[l] - offset) as usize, next_f[l] as isize);
             for dt in 0..2 {
                 for k in 0..4 {
                     // k = 2 * altitude bit + latitude bit; the longitude pair side by side.
                     let a = base + dt * st + (k >> 1) * sa + (k & 1) * sl;
-                    let (ca, cb) = (self.table[a], self.table[a.wrapping_add_signed(next)]);
+                    let (ca, cb) = (table[a], table[a.wrapping_add_signed(next)]);
                     for q in 0..2 {
                         corners[(2 * dt + q) * 8 + 2 * k][l] = ca[q];
                         corners[(2 * dt + q) * 8 + 2 * k + 1][l] = cb[q];
@@ -455,12 +611,14 @@ impl Atmosphere for GriddedField {
         // longitude, latitude, altitude (nested linear steps), then along time.
         let (mut ln_m, mut rs) = ([0.0; W], [0.0; W]);
         for l in 0..W {
-            let (a, b, o) = (fa[l], fl[l], fo[l]);
+            let (b, o) = (fl[l], fo[l]);
             let mut v = [0.0; 4];
             for (q, vq) in v.iter_mut().enumerate() {
                 let c = |k: usize| corners[q * 8 + k][l];
                 let lerp = |x: f64, y: f64, f: f64| x + f * (y - x);
                 let e: [f64; 4] = std::array::from_fn(|k| lerp(c(2 * k), c(2 * k + 1), o));
+                // Even q: ln(mean), odd: sigma/mean.
+                let a = if q % 2 == 0 { fm[l] } else { fa[l] };
                 *vq = lerp(lerp(e[0], e[1], b), lerp(e[2], e[3], b), a);
             }
             // q = 2 dt + value: v[0], v[1] at the first time node, v[2], v[3] at the next.
@@ -830,5 +988,174 @@ mod tests {
             .contains("must not decrease"));
         assert!(time(vec![0.0, 1.0, 1.0, 1.0, 2.0]).is_err());
         assert!(time(vec![0.0, 0.0, 2.0]).is_err());
+    }
+
+    /// The affine field's values on time nodes `nodes` (s), as one tile.
+    fn affine_tile(nodes: &[f64]) -> FieldTile {
+        let (na, nl, no) = (4, 5, 8);
+        let mut ln_mean = Vec::new();
+        let mut rel = Vec::new();
+        for &t in nodes {
+            for ia in 0..na {
+                for il in 0..nl {
+                    for io in 0..no {
+                        let h = 300e3 + ia as f64 * 50e3;
+                        let lat = -60.0 + il as f64 * 30.0;
+                        ln_mean.push(-20.0 - h / 60e3 + 1e-4 * t + 0.01 * lat + 0.001 * io as f64);
+                        rel.push(0.1 + 1e-6 * t + 1e-7 * h);
+                    }
+                }
+            }
+        }
+        FieldTile::new(
+            nodes.to_vec(),
+            (300e3, 50e3, na),
+            (-60.0, 30.0, nl),
+            0.0,
+            no,
+            ln_mean,
+            rel,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn tiles_give_the_bits_of_one_field_with_the_same_nodes() {
+        // Two tiles meeting at 600 s against one field whose time axis repeats 600 s:
+        // the same lookups, scalar and lanes, bit for bit.
+        use crate::frames::{geodetic_to_fixed, Geodetic};
+        let tiles = vec![
+            Arc::new(affine_tile(&[0.0, 300.0, 600.0])),
+            Arc::new(affine_tile(&[600.0, 1200.0])),
+        ];
+        let tiled = GriddedField::from_tiles(100.0, tiles, false).unwrap();
+        let whole = {
+            let t = affine_tile(&[0.0, 300.0, 600.0, 600.0, 1200.0]);
+            GriddedField::from_tiles(100.0, vec![Arc::new(t)], false).unwrap()
+        };
+        let mut m1 = LaneMemory::<8>::default();
+        let mut m2 = LaneMemory::<8>::default();
+        for k in 0..80 {
+            let ut1 = 100.0 + 15.0 * k as f64;
+            let rot = EarthRotation::new(0.02 * k as f64);
+            let pos: [[f64; 3]; 8] = std::array::from_fn(|l| {
+                rot.to_inertial(geodetic_to_fixed(Geodetic {
+                    lat: (-50.0 + 1.1 * k as f64 + l as f64).to_radians(),
+                    lon: (4.1 * k as f64 + 40.0 * l as f64).to_radians(),
+                    alt: 305e3 + 1.3e3 * k as f64 + 2e3 * l as f64,
+                }))
+            });
+            let (x, y, z) = (pos.map(|p| p[0]), pos.map(|p| p[1]), pos.map(|p| p[2]));
+            let on = [1.0; 8];
+            let (mut a, mut b) = ([0.0; 8], [0.0; 8]);
+            let (mut c, mut d) = ([0.0; 8], [0.0; 8]);
+            tiled
+                .mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut a, &mut b, &mut m1)
+                .unwrap();
+            whole
+                .mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut c, &mut d, &mut m2)
+                .unwrap();
+            for l in 0..8 {
+                assert_eq!(a[l].to_bits(), c[l].to_bits(), "call {k} lane {l}");
+                assert_eq!(b[l].to_bits(), d[l].to_bits(), "call {k} lane {l}");
+                let (ms, ss) = tiled.mean_sigma(ut1, pos[l], &rot).unwrap();
+                let (mw, sw) = whole.mean_sigma(ut1, pos[l], &rot).unwrap();
+                assert_eq!((ms.to_bits(), ss.to_bits()), (mw.to_bits(), sw.to_bits()));
+            }
+        }
+    }
+
+    #[test]
+    fn tiles_must_follow_each_other_on_one_grid() {
+        let gap = GriddedField::from_tiles(
+            0.0,
+            vec![
+                Arc::new(affine_tile(&[0.0, 600.0])),
+                Arc::new(affine_tile(&[700.0, 1200.0])),
+            ],
+            false,
+        )
+        .unwrap_err();
+        assert!(
+            gap.to_string().contains("must equal the end of tile 0"),
+            "{gap}"
+        );
+        let other = FieldTile::new(
+            vec![600.0, 1200.0],
+            (300e3, 25e3, 2),
+            (-60.0, 30.0, 5),
+            0.0,
+            8,
+            vec![0.0; 160],
+            vec![0.1; 160],
+        )
+        .unwrap();
+        let e = GriddedField::from_tiles(
+            0.0,
+            vec![Arc::new(affine_tile(&[0.0, 600.0])), Arc::new(other)],
+            false,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("another altitude"), "{e}");
+        assert!(GriddedField::from_tiles(0.0, vec![], false).is_err());
+    }
+
+    #[test]
+    fn above_the_top_ln_mean_follows_the_top_slope_and_sigma_is_held() {
+        // The affine field tops out at 450 km; ln(mean) falls by 1 per 60 km, so above the
+        // top the extrapolation is exact, and sigma/mean keeps its value at 450 km.
+        use crate::frames::{geodetic_to_fixed, Geodetic};
+        let tile = Arc::new(affine_tile(&[0.0, 600.0, 1200.0]));
+        let f = GriddedField::from_tiles(100.0, vec![tile.clone()], true).unwrap();
+        let strict = GriddedField::from_tiles(100.0, vec![tile], false).unwrap();
+        let (t, lat) = (500.0, 12.0f64);
+        for h in [450e3, 450e3 + 1.0, 600e3, 1500e3, 36000e3] {
+            let (m, s) = f.at_geodetic(100.0 + t, lat.to_radians(), 0.0, h).unwrap();
+            let expect = -20.0 - h / 60e3 + 1e-4 * t + 0.01 * lat;
+            assert!(
+                (m.ln() - expect).abs() < 1e-9,
+                "{h}: {} vs {expect}",
+                m.ln()
+            );
+            let rel = 0.1 + 1e-6 * t + 1e-7 * 450e3;
+            assert!((s / m - rel).abs() < 1e-12, "{h}");
+        }
+        assert!(strict.at_geodetic(600.0, 0.2, 0.0, 460e3).is_err());
+        // Lanes above the top: the scalar value, and the bits of every batch width.
+        let rot = EarthRotation::new(0.3);
+        let pos = |l: usize| {
+            rot.to_inertial(geodetic_to_fixed(Geodetic {
+                lat: (-40.0 + 9.0 * l as f64).to_radians(),
+                lon: (30.0 * l as f64).to_radians(),
+                alt: 420e3 + 200e3 * l as f64,
+            }))
+        };
+        let (x, y, z): ([f64; 8], [f64; 8], [f64; 8]) = (
+            std::array::from_fn(|l| pos(l)[0]),
+            std::array::from_fn(|l| pos(l)[1]),
+            std::array::from_fn(|l| pos(l)[2]),
+        );
+        let (mut m, mut s) = ([0.0; 8], [0.0; 8]);
+        f.mean_sigma_lanes(
+            700.0,
+            &x,
+            &y,
+            &z,
+            &[1.0; 8],
+            &rot,
+            &mut m,
+            &mut s,
+            &mut LaneMemory::default(),
+        )
+        .unwrap();
+        for l in 0..8 {
+            let (ms, ss) = f.mean_sigma(700.0, pos(l), &rot).unwrap();
+            assert!(
+                ((m[l] - ms) / ms).abs() < 1e-9,
+                "lane {l}: {} vs {ms}",
+                m[l]
+            );
+            assert!(((s[l] - ss) / ss).abs() < 1e-9, "lane {l}");
+        }
     }
 }

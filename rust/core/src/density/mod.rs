@@ -8,7 +8,7 @@ pub mod jacchia_roberts;
 pub mod jb2008;
 
 pub use exponential::Exponential;
-pub use gridded::GriddedField;
+pub use gridded::{FieldTile, GriddedField};
 
 use crate::error::CoreError;
 use crate::frames::EarthRotation;
