@@ -1,16 +1,20 @@
 """Catalog throughput: a LEO catalog propagated with the CCSP filter for 3 days through one
-NRLMSIS 2.1 field, locally and (with --dask) on a 2-worker Dask LocalCluster; field
+NRLMSIS 2.1 atlas (day tiles), locally and (with --dask) on a 2-worker Dask LocalCluster; field
 sampling timed separately. The catalog is synthetic (generated here with sgp4's exporter:
 circular-ish orbits 350-800 km, inclinations 40-98 deg, B* 1e-5..5e-4, epochs spread over
 a day) or, with --real, the CelesTrak snapshot of 2023-11-13 in the reference data
-(objects with perigee below 700 km and B* > 0, manoeuvring constellations excluded).
+(objects with perigee below 700 km and B* > 0, manoeuvring constellations excluded; with
+--below-km 1000 every object whose altitude at its epoch is below 1,000 km, as it comes).
+Prints the peak RSS and the atlas's peak tile memory.
 
-Run:  python benches/catalog.py [--objects 2000] [--real [--data ../shared/data]] [--dask]
+Run:  python benches/catalog.py [--objects 2000] [--real [--data ../shared/data]
+                                [--below-km 1000]] [--dask]
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import gzip
 import os
 import tempfile
@@ -22,7 +26,7 @@ from sgp4 import exporter
 from sgp4.api import WGS72, Satrec
 
 import rhoprop as rp
-from machine import describe
+from machine import describe, peak_rss_mb
 from rhoprop import catalog
 
 JD_EPOCH = 2452524.0  # 2002-09-06 12:00 UTC
@@ -76,6 +80,45 @@ def leo_subset(text: str, limit: int) -> str:
     return "\n".join(out) + "\n"
 
 
+def below_subset(text: str, km: float) -> str:
+    """Every 3-line element set whose SGP4 altitude at its own epoch is below ``km`` (the
+    selection a user makes first: HEO objects near perigee, stale epochs and manoeuvring
+    constellations included)."""
+    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
+    out: list[str] = []
+    for k in range(0, len(lines) - 2, 3):
+        name, l1, l2 = lines[k : k + 3]
+        if not (l1.startswith("1 ") and l2.startswith("2 ")):
+            continue
+        sat = Satrec.twoline2rv(l1, l2)
+        err, r, _v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
+        if err == 0 and np.linalg.norm(r) - 6378.137 < km:
+            out += [name, l1, l2]
+    return "\n".join(out) + "\n"
+
+
+def fit_all(snapshot: Path) -> None:
+    """Fits every element set of a whole snapshot through NRLMSIS 2.1's atlas."""
+    model = rp.density.Msis("2.1")
+    t0 = time.perf_counter()
+    cat = catalog.load(snapshot, errors="skip", fit=True, model=model)
+    wall = time.perf_counter() - t0
+    fitted = sum(o.fit is not None for o in cat)
+    notes = collections.Counter(
+        "fit failed" if "fit failed" in o.covariance_note else "fitted" if o.fit else "not fitted"
+        for o in cat
+    )
+    memory = rp.density.atlas.field_memory()
+    print(
+        f"load(fit=True): {len(cat)} objects kept ({fitted} fitted; {dict(notes)}), "
+        f"{len(cat.skipped)} skipped, in {wall:.0f} s = {len(cat) / wall:.1f} objects/s"
+    )
+    print(
+        f"peak RSS {peak_rss_mb():.0f} MB; atlas: peak {memory.peak / 1e6:.0f} MB of tiles, "
+        f"budget {memory.budget / 1e6:.0f} MB"
+    )
+
+
 def main() -> None:
     print(describe())
     parser = argparse.ArgumentParser(description=__doc__)
@@ -88,16 +131,38 @@ def main() -> None:
         help="reference data directory (default $RHOPROP_TEST_DATA or ../shared/data)",
     )
     parser.add_argument("--dask", action="store_true", help="also run on a Dask LocalCluster")
+    parser.add_argument(
+        "--below-km",
+        type=float,
+        default=None,
+        help="with --real: every object whose altitude at its epoch is below this (km), "
+        "no other filter (--objects ignored)",
+    )
+    parser.add_argument(
+        "--fit-all",
+        action="store_true",
+        help="instead: load(fit=True, model=Msis('2.1')) on the whole 2023-11-13 snapshot "
+        "(time, objects fitted, peak RSS)",
+    )
     args = parser.parse_args()
+    if args.fit_all:
+        fit_all(Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz")
+        return
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "catalog.tle"
         if args.real:
             snapshot = Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz"
-            path.write_text(leo_subset(gzip.open(snapshot, "rt").read(), args.objects))
+            text = gzip.open(snapshot, "rt").read()
+            if args.below_km is not None:
+                path.write_text(below_subset(text, args.below_km))
+            else:
+                path.write_text(leo_subset(text, args.objects))
         else:
             path.write_text(synthetic_tle(args.objects))
         cat = catalog.load(path, errors="skip")
     print(f"{len(cat)} objects ({'real snapshot' if args.real else 'synthetic'})")
+    epochs = np.array([o.state.epoch for o in cat])
+    print(f"epochs from {epochs.min()} to {epochs.max()}")
     end = max(o.state.epoch for o in cat) + np.timedelta64(int(args.days * 86400), "s")
     model = rp.density.Msis("2.1")
     t0 = time.perf_counter()
@@ -108,7 +173,13 @@ def main() -> None:
     local = catalog.propagate_catalog(cat, model, end, progress=False, errors="record")
     wall = time.perf_counter() - t0
     print(f"first run, field sampling included: {first:.1f} s (field ~{first - wall:.1f} s)")
+    memory = rp.density.atlas.field_memory()
+    print(
+        f"peak RSS {peak_rss_mb():.0f} MB; atlas: peak {memory.peak / 1e6:.0f} MB of tiles, "
+        f"{memory.tiles} alive, budget {memory.budget / 1e6:.0f} MB"
+    )
     field = model
+    print(f"statuses: {dict(collections.Counter(local.status.tolist()))}")
     print(
         f"local (chunks of objects per core call, objects in parallel, each object's sigma "
         f"points in one batch): {len(cat)} objects x "

@@ -326,8 +326,9 @@ def main() -> None:
         start = min(o.state.epoch for o in cat) - np.timedelta64(3, "D")
         end = max(t["epoch"] for t in truth.values()) + np.timedelta64(1, "h")
         t0 = time.perf_counter()
-        field = Msis("2.1").field(start, end, altitude_range=(70e3, 900e3))
-        print(f"NRLMSIS 2.1 field {start} .. {end}: {time.perf_counter() - t0:.1f} s")
+        field = Msis("2.1")
+        field.atlas.field(start, end)  # the day tiles, sampled (or read) once
+        print(f"NRLMSIS 2.1 atlas {start} .. {end}: {time.perf_counter() - t0:.1f} s")
         span = None
         if args.fit_span:
             start_s, end_s = (float(x) for x in args.fit_span.split(","))

@@ -15,7 +15,6 @@ import numpy as np
 
 import rhoprop as rp
 from machine import describe, info
-from rhoprop.density import altitude_band
 
 
 def median_time(fn, repeat: int) -> float:
@@ -35,13 +34,11 @@ def main() -> None:
     state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
     duration = rp.scenarios.PAPER_DURATION
     end = state.epoch + np.timedelta64(int(duration), "s")
-    field = rp.density.Msis("2.1").field(
-        state.epoch, end, altitude_range=altitude_band(state.position, state.velocity)
-    )
+    field = rp.density.Msis("2.1").atlas.field(state.epoch, end)  # the day tiles
     results = {}
     for name, atmosphere in (
         ("exponential", rp.scenarios.benchmark_exponential(0.2)),
-        ("NRLMSIS 2.1 field", field),
+        ("NRLMSIS 2.1 atlas", field),
     ):
         cc = median_time(lambda a=atmosphere: rp.ccsp(state, craft, a, duration), args.repeat)
         mc = median_time(

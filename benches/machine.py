@@ -29,3 +29,10 @@ def describe() -> str:
     """One line: 'CPU: <model>, <n> cores; SIMD path: <path>'."""
     i = info()
     return f"CPU: {i['cpu']}, {i['cores']} cores; SIMD path: {i['simd_path']}"
+
+
+def peak_rss_mb() -> float:
+    """Peak resident memory of this process so far, MB."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

@@ -13,7 +13,6 @@ import numpy as np
 
 import rhoprop as rp
 from machine import describe
-from rhoprop.density import altitude_band
 
 
 def main() -> None:
@@ -23,9 +22,7 @@ def main() -> None:
     args = parser.parse_args()
     state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
     end = state.epoch + np.timedelta64(3, "D")
-    field = rp.density.Msis("2.1").field(
-        state.epoch, end, altitude_range=altitude_band(state.position, state.velocity)
-    )
+    field = rp.density.Msis("2.1").atlas.field(state.epoch, end)  # the day tiles
     walls = {}
     for threads in (1, 2):
         runs = []

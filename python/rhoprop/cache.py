@@ -181,8 +181,10 @@ def _evict(directory: Path, cap: int, keep: Path) -> None:
 
 def cache_info(override: str | os.PathLike[str] | None = None) -> dict[str, Any]:
     """What the cache holds: its directory, the size cap (bytes), and per subfolder
-    (``fields`` for sampled density fields, downloads such as the space-weather record
-    and JB2008 indices) the number of files and their bytes."""
+    (``tiles`` for the density atlas's day tiles, ``fields`` for fields sampled by
+    :meth:`~rhoprop.density.SampledModel.field`, downloads such as the space-weather
+    record and JB2008 indices) the number of files and their bytes, and under ``tiles``
+    the atlas's tiles by model: its description, days, files and bytes."""
     root = cache_dir(override)
     parts: dict[str, dict[str, int]] = {}
     if root.is_dir():
@@ -193,23 +195,31 @@ def cache_info(override: str | os.PathLike[str] | None = None) -> dict[str, Any]
                 part = parts.setdefault(key, {"files": 0, "bytes": 0})
                 part["files"] += 1
                 part["bytes"] += path.stat().st_size
+    from .density.atlas import tiles_on_disk
+
     return {
         "directory": str(root),
         "max_bytes_per_folder": max_bytes(),
         "parts": parts,
         "total_bytes": sum(p["bytes"] for p in parts.values()),
+        "tiles": tiles_on_disk(root / "tiles"),
     }
 
 
 def clear_cache(
     override: str | os.PathLike[str] | None = None, *, everything: bool = False
 ) -> tuple[int, int]:
-    """Deletes the sampled density fields (``fields/*.npz``), or with ``everything`` every
+    """Deletes the sampled density fields and atlas tiles (``fields/*.npz``,
+    ``tiles/*/*.npz``), or with ``everything`` every
     file rhoprop keeps in the cache (also the downloaded space-weather record and JB2008
     indices, which ``rhoprop data refresh`` fetches again). Returns (files, bytes)
     deleted."""
     root = cache_dir(override)
-    pattern = root.rglob("*") if everything else (root / "fields").glob("*.npz")
+    pattern = (
+        root.rglob("*")
+        if everything
+        else [*(root / "fields").glob("*.npz"), *(root / "tiles").glob("*/*.npz")]
+    )
     files = n_bytes = 0
     for path in sorted(pattern, reverse=True):
         if path.is_file() or path.is_symlink():

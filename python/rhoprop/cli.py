@@ -15,6 +15,7 @@ from .catalog.job import MODEL_NAMES
 
 
 def _paper(args: argparse.Namespace) -> int:
+    from .catalog.job import atlas_line
     from .studies.report import run_paper
 
     out = args.out or ("rhoprop-paper-quick" if args.quick else "rhoprop-paper")
@@ -26,6 +27,7 @@ def _paper(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         command=args.command_line,
     )
+    print(atlas_line())
     return 0
 
 
@@ -121,7 +123,7 @@ def _cache(args: argparse.Namespace) -> int:
 
     if args.cache_command == "clear":
         files, n_bytes = clear_cache(everything=args.all)
-        what = "cached files" if args.all else "sampled density fields"
+        what = "cached files" if args.all else "sampled density fields and atlas tiles"
         print(f"deleted {files} {what} ({n_bytes / 1e6:.1f} MB)")
         return 0
     info = cache_info()
@@ -134,6 +136,15 @@ def _cache(args: argparse.Namespace) -> int:
         label = "(top level)" if name == "." else name
         print(f"  {label}: {part['files']} files, {part['bytes'] / 1e6:.1f} MB")
     print(f"total: {info['total_bytes'] / 1e6:.1f} MB")
+    for entry in info["tiles"]:
+        days = entry["days"]
+        span = days[0] if len(days) == 1 else f"{days[0]} .. {days[-1]}"
+        print(
+            f"  atlas tiles of {entry['model']}: {len(days)} days ({span}), "
+            f"{entry['files']} files, {entry['bytes'] / 1e6:.1f} MB"
+        )
+        if 1 < len(days) <= 31:
+            print(f"    days: {', '.join(days)}")
     return 0
 
 
@@ -375,7 +386,7 @@ def build_parser() -> argparse.ArgumentParser:
     refresh.set_defaults(run=_data_refresh)
     cache = sub.add_parser(
         "cache",
-        help="show or clear the user cache (sampled density fields, downloads)",
+        help="show or clear the user cache (density atlas tiles, sampled fields, downloads)",
         description="The cache ($RHOPROP_CACHE, else $XDG_CACHE_HOME/rhoprop or "
         "~/.cache/rhoprop) holds sampled density fields (recomputed when missing) and "
         "downloaded space-weather and JB2008 files. Each folder is kept under "
@@ -384,7 +395,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cache_sub = cache.add_subparsers(dest="cache_command", metavar="ACTION")
     cache_sub.add_parser("info", help="where the cache is and what it holds")
-    clear = cache_sub.add_parser("clear", help="delete the sampled density fields")
+    clear = cache_sub.add_parser(
+        "clear", help="delete the sampled density fields and atlas tiles"
+    )
     clear.add_argument(
         "--all",
         action="store_true",

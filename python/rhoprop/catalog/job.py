@@ -253,7 +253,19 @@ def run_catalog_file(
         + (f" ({no_file} objects without a valid epoch have none)" if no_file else "")
         + f", {summary} and {manifest}"
     )
+    print(atlas_line())
     return [*paths, summary, manifest]
+
+
+def atlas_line() -> str:
+    """The density atlas's peak memory, for the end of a long run."""
+    from ..density import field_memory
+
+    m = field_memory()
+    return (
+        f"density atlas: peak {m.peak / 1e6:.0f} MB of day tiles in memory "
+        f"(budget {m.budget / 1e6:.0f} MB, $RHOPROP_FIELD_MEMORY)"
+    )
 
 
 def run_reentry_file(
@@ -312,4 +324,5 @@ def run_reentry_file(
         f"{len(cat)} objects, {result.members} members each, horizon {horizon_days:g} days: "
         f"{wall:.1f} s; wrote {path} and {manifest}"
     )
+    print(atlas_line())
     return [path, manifest]

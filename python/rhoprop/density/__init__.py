@@ -11,12 +11,17 @@ thermospheric density (kg/m^3) and an atmosphere the Rust core evaluates.
 - :class:`PcaRom`: a PCA reduced-order model as HASDM-ML outputs it.
 - :class:`FromFunction`: any callable (times, lat, lon, alt) -> (mean, std).
 - :class:`DensityField`: a sampled field (what :meth:`SampledModel.field` returns).
+- :class:`Atlas`: how a sampled model reaches the core, as UTC-day tiles under a memory
+  budget (:func:`set_memory_budget`, :func:`field_memory`).
 
 Layout: ``_inputs`` (input checks, altitude band) <- ``field`` (sampling, the field type)
-<- ``model`` (the protocol and the sampling base) <- one module per model.
+<- ``atlas`` (day tiles, their caches) <- ``model`` (the protocol and the sampling base) <-
+one module per model.
 """
 
+from . import atlas
 from ._inputs import altitude_band
+from .atlas import Atlas, FieldMemory, field_memory, set_memory_budget
 from .exponential import Exponential
 from .field import DensityField, FieldResolution
 from .function import FromFunction
@@ -29,6 +34,8 @@ from .pcarom import PcaRom
 from .point_model import ActivitySigma
 
 __all__ = [
+    "Atlas",
+    "FieldMemory",
     "JB2008_SIGMA",
     "JR_SIGMA",
     "ActivitySigma",
@@ -48,4 +55,7 @@ __all__ = [
     "SampledModel",
     "altitude_band",
     "as_atmosphere",
+    "atlas",
+    "field_memory",
+    "set_memory_budget",
 ]

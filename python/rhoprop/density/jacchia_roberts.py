@@ -119,6 +119,8 @@ class JacchiaRoberts(PointModel):
 
     def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
         blocks = np.arange(start - _CADENCE, end + 2 * _CADENCE, _CADENCE).astype("datetime64[ns]")
+        first, last = self._coverage()
+        blocks = np.unique(np.clip(blocks, first, last))  # a window may end at the record's end
         digest = hashlib.sha256(np.ascontiguousarray(self.drivers(blocks)).tobytes())
         return {
             "model": "jacchia-roberts-1971",

@@ -274,6 +274,9 @@ class Msis(SampledModel):
         blocks = np.arange(start - DRIVER_CADENCE, end + 2 * DRIVER_CADENCE, DRIVER_CADENCE).astype(
             "datetime64[ns]"
         )
+        first, last = self.space_weather.span
+        # The driver blocks around the window, within the record (a window may end at it).
+        blocks = np.unique(np.clip(blocks, first, last))
         d = self.space_weather.drivers(blocks)
         digest = hashlib.sha256()
         for a in (d.f107, d.f107a, d.ap):
