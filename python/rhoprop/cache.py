@@ -20,6 +20,7 @@ writers never collide. Misuse never loses a computed value:
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import secrets
 import threading
@@ -195,8 +196,6 @@ def cache_info(override: str | os.PathLike[str] | None = None) -> dict[str, Any]
                 part = parts.setdefault(key, {"files": 0, "bytes": 0})
                 part["files"] += 1
                 part["bytes"] += path.stat().st_size
-    from .density.atlas import tiles_on_disk
-
     return {
         "directory": str(root),
         "max_bytes_per_folder": max_bytes(),
@@ -204,6 +203,34 @@ def cache_info(override: str | os.PathLike[str] | None = None) -> dict[str, Any]
         "total_bytes": sum(p["bytes"] for p in parts.values()),
         "tiles": tiles_on_disk(root / "tiles"),
     }
+
+
+def tiles_on_disk(root: Path) -> list[dict[str, Any]]:
+    """The tiles under ``root`` (a cache's ``tiles`` folder, written by
+    :mod:`rhoprop.density.atlas`) by model: the model's description, its days and their
+    bytes."""
+    out: list[dict[str, Any]] = []
+    if not root.is_dir():
+        return out
+    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+        files = sorted(folder.glob("*.npz"))
+        if not files:
+            continue
+        try:
+            label = json.loads((folder / "model.json").read_text()).get("repr", folder.name)
+        except (OSError, ValueError):
+            label = folder.name
+        days = sorted({f.name[:10] for f in files})
+        out.append(
+            {
+                "folder": folder.name,
+                "model": label,
+                "days": days,
+                "files": len(files),
+                "bytes": sum(f.stat().st_size for f in files),
+            }
+        )
+    return out
 
 
 def clear_cache(

@@ -395,9 +395,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cache_sub = cache.add_subparsers(dest="cache_command", metavar="ACTION")
     cache_sub.add_parser("info", help="where the cache is and what it holds")
-    clear = cache_sub.add_parser(
-        "clear", help="delete the sampled density fields and atlas tiles"
-    )
+    clear = cache_sub.add_parser("clear", help="delete the sampled density fields and atlas tiles")
     clear.add_argument(
         "--all",
         action="store_true",

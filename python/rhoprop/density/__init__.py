@@ -34,15 +34,15 @@ from .pcarom import PcaRom
 from .point_model import ActivitySigma
 
 __all__ = [
-    "Atlas",
-    "FieldMemory",
     "JB2008_SIGMA",
     "JR_SIGMA",
     "ActivitySigma",
+    "Atlas",
     "DensityField",
     "DensityModel",
     "DriverUncertainty",
     "Exponential",
+    "FieldMemory",
     "FieldResolution",
     "FromFunction",
     "Gridded",

@@ -466,30 +466,3 @@ def _matches(saved: dict[str, np.ndarray], key: str, shape: tuple[int, ...]) -> 
         )
     except KeyError:
         return False
-
-
-def tiles_on_disk(root: Path) -> list[dict[str, Any]]:
-    """The tiles under ``root`` (a cache's ``tiles`` folder) by model: the model's
-    description, its days and their bytes."""
-    out: list[dict[str, Any]] = []
-    if not root.is_dir():
-        return out
-    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
-        files = sorted(folder.glob("*.npz"))
-        if not files:
-            continue
-        try:
-            label = json.loads((folder / "model.json").read_text()).get("repr", folder.name)
-        except (OSError, ValueError):
-            label = folder.name
-        days = sorted({f.name[:10] for f in files})
-        out.append(
-            {
-                "folder": folder.name,
-                "model": label,
-                "days": days,
-                "files": len(files),
-                "bytes": sum(f.stat().st_size for f in files),
-            }
-        )
-    return out

@@ -113,7 +113,7 @@ class JacchiaRoberts(PointModel):
         before = epochs - np.where(left, np.timedelta64(1, "us"), np.timedelta64(0, "us"))
         return super()._grid_values(before, left, alt, lat, lon)
 
-    def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
+    def _coverage(self) -> tuple[np.datetime64, np.datetime64]:
         first, last = self.space_weather.span
         return first + _KP_LAG, last  # Kp of t - 3 h
 
