@@ -196,3 +196,28 @@ def test_memory_is_reported_and_bad_budgets_are_refused(monkeypatch):
         rp.density.set_memory_budget(-1)
     with pytest.raises(ValueError, match="too fine"):
         rp.density.Atlas(model, rp.density.FieldResolution(latitude=1e-3))
+
+
+def test_dask_workers_sample_or_read_tiles_and_give_the_same_bits(tmp_path, monkeypatch):
+    # The workers get the atlas as a reference (model and grid); with a cache directory of
+    # their own they sample the tiles themselves, and the results equal the local run's
+    # bit for bit.
+    distributed = pytest.importorskip("distributed")
+    from test_catalog import END, SAMPLE
+
+    model = rp.density.Msis("2.1", resolution=COARSE)
+    cat = rp.catalog.load(SAMPLE)
+    local = rp.catalog.propagate_catalog(cat, model, END, output_step=1800.0, progress=False)
+    monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        remote = rp.catalog.propagate_catalog(
+            cat, model, END, output_step=1800.0, client=client, chunk_size=2, progress=False
+        )
+    np.testing.assert_array_equal(remote.mean, local.mean)
+    np.testing.assert_array_equal(remote.covariance, local.covariance)
+    assert rp.cache.cache_info(tmp_path)["tiles"], "the workers wrote their own tiles"
