@@ -32,7 +32,8 @@ pub enum CoreError {
     /// A density lookup fell outside the sampled field.
     #[error(
         "density field does not cover {axis} = {value} (field covers {min} to {max}) \
-         at t = {t} s from the epoch; sample the field over a wider {axis} range"
+         at t = {t} s from the epoch (a sampled model's atlas starts at the model's lowest \
+         altitude and covers the drivers' span; a user grid covers what it was given)"
     )]
     OutsideField {
         axis: &'static str,
