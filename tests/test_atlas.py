@@ -67,7 +67,7 @@ def test_tiles_follow_the_model_within_the_interpolation_tolerance():
     field = model.atlas.field("2002-09-07T05:00", "2002-09-08T20:00")
     t, lat, lon, alt = points(2000, "2002-09-07T05:00", 39.0, seed=2)
     mean, sigma = field.mean_sigma(ut1_seconds(t), inertial(t, lat, lon, alt))
-    want, want_sigma = exp_function(t, lat, lon, alt)
+    want, _want_sigma = exp_function(t, lat, lon, alt)
     rel = mean / want - 1.0
     assert np.sqrt(np.mean(rel**2)) < 0.01 and np.max(np.abs(rel)) < 0.03
     np.testing.assert_allclose(sigma / mean, 0.1, rtol=1e-9)
@@ -179,7 +179,7 @@ def test_an_atlas_pickles_as_a_reference():
 
 def test_a_time_outside_the_drivers_is_a_clear_error():
     model = rp.density.Msis("2.1", resolution=COARSE)
-    first, last = model.space_weather.span
+    _first, last = model.space_weather.span
     with pytest.raises(rp.OutsideRecordError, match="drivers from"):
         model.atlas.field(last - np.timedelta64(1, "h"), last + np.timedelta64(1, "h"))
     # The last day is cut to the record: a run up to its end works.

@@ -27,8 +27,40 @@ def test_one_tree_under_value_error():
     assert rp.DecayError is errors.DecayError
     assert {"OutsideRecordError", "DecayError"} <= set(rp.__all__)
     assert issubclass(errors.CacheWarning, RuntimeWarning)
-    # The core's classes are the extension's own (raised from Rust).
-    assert rp.DensityFieldError is rp._core.DensityFieldError
+    # The core's classes live in rhoprop.errors (the extension raises them).
+    assert rp.DensityFieldError is errors.DensityFieldError
+    assert issubclass(errors.StepUnderflowError, rp.IntegrationError)
+
+
+def test_core_errors_arrive_typed_with_their_values():
+    # Each core error variant is its own class, its values attributes: no message parsing.
+    from rhoprop import _core
+
+    field, _ = exponential_grid()
+    state = rp.scenarios.paper_state()
+    with pytest.raises(errors.DensityFieldError) as info:
+        rp.propagate(state, rp.Spacecraft(2.2, 0.01), field, 400 * 86400.0)
+    e = info.value
+    assert e.axis.startswith("time") and e.value > e.max and e.time is not None
+    with pytest.raises(errors.NonFiniteError) as info:
+        _core.ExponentialAtmosphere(float("nan"), 0.0, 1.0)
+    assert info.value.name == "rho0" and np.isnan(info.value.value)
+    with pytest.raises(errors.InvalidValueError) as info:
+        _core.ExponentialAtmosphere(1e-12, 0.0, -5.0)
+    assert info.value.value == -5.0 and "> 0" in info.value.reason
+    # A CCSP covariance that is not positive definite carries its time and eigenvalue; in a
+    # catalog, at t = 0 it is the user's initial covariance: an error, not a shortened run.
+    from test_catalog import END, SAMPLE
+
+    with pytest.raises(errors.CovarianceError, match="object 9000") as info:
+        rp.catalog.propagate_catalog(
+            rp.catalog.load(SAMPLE),
+            rp.scenarios.benchmark_exponential(0.2),
+            END,
+            initial_covariance=-np.eye(6),
+            progress=False,
+        )
+    assert info.value.time == 0.0 and info.value.min_eigenvalue < 0
 
 
 @pytest.fixture(scope="module")

@@ -17,6 +17,7 @@ from ._version import __version__
 from .ensemble import EnsembleResult, GaussianMixture, debias_drag_coefficient
 from .ensemble import ensemble as ensemble  # the function; the package stays importable
 from .errors import (
+    CovarianceError,
     DecayError,
     DensityFieldError,
     IntegrationError,
@@ -69,6 +70,7 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "CcspResult",
+    "CovarianceError",
     "DecayError",
     "DensityFieldError",
     "EnsembleResult",

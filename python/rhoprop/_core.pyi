@@ -23,12 +23,9 @@ __all__ = [
     "R_POLE",
     "SECONDS_PER_DAY",
     "WGS84_F",
-    "DensityFieldError",
     "ExponentialAtmosphere",
     "FieldTile",
     "GriddedAtmosphere",
-    "IntegrationError",
-    "RhopropError",
     "ccsp",
     "ccsp_many",
     "geodetic",
@@ -65,15 +62,6 @@ HARD_BODY_SHAPES: tuple[str, ...]
 
 def simd_path() -> str:
     """Instruction set of the batch kernels on this CPU: "avx2+fma" or "portable"."""
-
-class RhopropError(ValueError):
-    """Base of all rhoprop errors (a ValueError)."""
-
-class DensityFieldError(RhopropError):
-    """A density lookup fell outside the sampled field."""
-
-class IntegrationError(RhopropError):
-    """The integrator could not complete (step underflow, too many steps)."""
 
 @final
 class ExponentialAtmosphere:

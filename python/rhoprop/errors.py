@@ -1,13 +1,24 @@
 """The whole exception tree of rhoprop. Every rhoprop error is a :class:`RhopropError`,
-itself a ``ValueError``, so ``except ValueError`` catches bad input; the core's errors
-are raised by the extension as these same classes.
+itself a ``ValueError``, so ``except ValueError`` catches bad input. Each error of the Rust
+core has its own class here, raised by the extension with the values as attributes (so no
+caller ever parses a message).
 
 ::
 
     ValueError
     └── RhopropError
-        ├── DensityFieldError    a lookup outside a sampled density field (core)
+        ├── NonFiniteError       an input is NaN or infinite (core): .name, .value
+        ├── InvalidValueError    an input is out of its range (core): .name, .value, .reason
+        ├── RejectedInputError   an input is wrong as a whole (core): .name, .reason
+        ├── UnknownNameError     not one of the known names (core): .what, .name, .expected
+        ├── ShapeError           an array of the wrong shape (core): .name, .reason
+        ├── DensityFieldError    a lookup outside a density field (core): .axis, .value,
+        │                        .min, .max, .time
+        ├── CovarianceError      a CCSP covariance that is not positive definite (core):
+        │                        .time, .min_eigenvalue
         ├── IntegrationError     the integrator could not complete (core)
+        │   ├── StepUnderflowError   .time, .step
+        │   └── TooManyStepsError    .max_steps, .time
         ├── OutsideRecordError   a lookup outside a data record (space weather, PcaRom)
         ├── DecayError           the object decayed where a result needs it in orbit
         └── ScenarioError        an invalid scenario file
@@ -15,11 +26,92 @@ are raised by the extension as these same classes.
     RuntimeWarning
     ├── CacheWarning             the disk cache could not be used (the result is kept)
     └── PredictedDriversWarning  predicted (not observed) space weather is in use
+
+The core's attributes are None on an instance made by Python code (a message only).
 """
 
 from __future__ import annotations
 
-from ._core import DensityFieldError, IntegrationError, RhopropError
+
+class RhopropError(ValueError):
+    """Base of all rhoprop errors (a ValueError)."""
+
+
+class NonFiniteError(RhopropError):
+    """An input value is NaN or infinite. ``name``: which; ``value``: the value."""
+
+    name: str | None = None
+    value: float | None = None
+
+
+class InvalidValueError(RhopropError):
+    """An input value is outside its valid range. ``name``, ``value`` and ``reason``."""
+
+    name: str | None = None
+    value: float | None = None
+    reason: str | None = None
+
+
+class RejectedInputError(RhopropError):
+    """An input is wrong as a whole (no one value to quote). ``name`` and ``reason``."""
+
+    name: str | None = None
+    reason: str | None = None
+
+
+class UnknownNameError(RhopropError):
+    """A name that is not one of the known choices. ``what`` (the kind of name),
+    ``name`` and ``expected`` (tuple of the known names)."""
+
+    what: str | None = None
+    name: str | None = None
+    expected: tuple[str, ...] | None = None
+
+
+class ShapeError(RhopropError):
+    """An array has the wrong length or shape. ``name`` and ``reason``."""
+
+    name: str | None = None
+    reason: str | None = None
+
+
+class DensityFieldError(RhopropError):
+    """A density lookup fell outside a field: ``axis`` (e.g. "altitude (m)"), ``value``,
+    the covered range ``min``..``max`` (the axis's units) and ``time`` (s from the run's
+    epoch)."""
+
+    axis: str | None = None
+    value: float | None = None
+    min: float | None = None
+    max: float | None = None
+    time: float | None = None
+
+
+class CovarianceError(RhopropError):
+    """A CCSP covariance stopped being positive definite (near decay, or an initial
+    covariance that is not one): ``time`` (s from the run's epoch; 0 for the initial one)
+    and ``min_eigenvalue`` (of the matrix that failed, in its units)."""
+
+    time: float | None = None
+    min_eigenvalue: float | None = None
+
+
+class IntegrationError(RhopropError):
+    """The integrator could not complete (step underflow, too many steps)."""
+
+
+class StepUnderflowError(IntegrationError):
+    """The adaptive step fell below its floor: ``time`` (s) and ``step`` (s)."""
+
+    time: float | None = None
+    step: float | None = None
+
+
+class TooManyStepsError(IntegrationError):
+    """More than ``max_steps`` steps before ``time`` (s)."""
+
+    max_steps: int | None = None
+    time: float | None = None
 
 
 class OutsideRecordError(RhopropError):
@@ -50,11 +142,19 @@ class PredictedDriversWarning(RuntimeWarning):
 
 __all__ = [
     "CacheWarning",
+    "CovarianceError",
     "DecayError",
     "DensityFieldError",
     "IntegrationError",
+    "InvalidValueError",
+    "NonFiniteError",
     "OutsideRecordError",
     "PredictedDriversWarning",
+    "RejectedInputError",
     "RhopropError",
     "ScenarioError",
+    "ShapeError",
+    "StepUnderflowError",
+    "TooManyStepsError",
+    "UnknownNameError",
 ]

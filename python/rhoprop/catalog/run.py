@@ -6,7 +6,6 @@ recorded per object), never swallowed."""
 from __future__ import annotations
 
 import concurrent.futures as cf
-import re
 import threading
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -16,7 +15,7 @@ import numpy as np
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, R_EARTH
 from ..density import DensityModel, SampledModel
-from ..errors import RhopropError
+from ..errors import CovarianceError, RhopropError
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import (
@@ -312,9 +311,11 @@ def _object_error(err: Exception, obj: CatalogObject) -> Exception:
     """``err`` again (same type) with the object named in front, or ``err`` itself when
     its type takes no plain message."""
     try:
-        return type(err)(f"object {obj.norad_id} ({obj.name}, {obj.source}): {err}")
+        named = type(err)(f"object {obj.norad_id} ({obj.name}, {obj.source}): {err}")
     except Exception:  # an exception type with a different constructor
         return err
+    named.__dict__.update(vars(err))  # the core's values (time, axis, ...) stay attributes
+    return named
 
 
 def _run_object(
@@ -541,10 +542,6 @@ def _iso(t: np.datetime64) -> str:
     return str(t.astype("datetime64[ms]")) + "Z"
 
 
-#: The core's message when a CCSP covariance stops being positive definite at an update.
-_LOST_DEFINITENESS = re.compile(r"CCSP covariance at t = ([-+0-9.eE]+) s")
-
-
 def _ccsp_outputs(
     obj: CatalogObject,
     craft: Spacecraft,
@@ -579,11 +576,10 @@ def _ccsp_outputs(
     k, why = len(offsets), ""
     try:
         r = first if first is not None and offsets[k - 1] > 0 else run(k)
-    except RhopropError as err:
-        found = _LOST_DEFINITENESS.search(str(err))
-        if found is None or "positive definite" not in str(err):
-            raise
-        t_bad = float(found.group(1))
+    except CovarianceError as err:
+        if err.time is None or err.time <= 0:
+            raise  # the initial covariance itself: bad input, not a shortened run
+        t_bad = float(err.time)
         k = int(np.count_nonzero(offsets < t_bad))
         why = (
             f"the CCSP covariance lost positive definiteness at "

@@ -109,12 +109,11 @@ pub fn factor(
     let bt = c / l2.sqrt();
     let a = pc * l1 - bt * bt.transpose();
     let a = (a + a.transpose()) * 0.5;
-    let chol = Cholesky::new(a).ok_or_else(|| {
-        CoreError::invalid(
-            format!("CCSP covariance at t = {t} s"),
-            a.symmetric_eigenvalues().min(),
-            "is not positive definite (value: smallest eigenvalue of (lambda1+n) P - B^T B)",
-        )
+    let chol = Cholesky::new(a).ok_or_else(|| CoreError::NotPositiveDefinite {
+        what: "CCSP covariance ((lambda1+n) P - B^T B)",
+        t,
+        min_eigenvalue: a.symmetric_eigenvalues().min(),
+        hint: "",
     })?;
     let mut s = Matrix8::zeros();
     s.fixed_view_mut::<6, 6>(0, 0).copy_from(&chol.l());
@@ -270,12 +269,12 @@ fn run<A: Atmosphere + ?Sized>(
         pc = p1 + c * c.transpose();
         pc = (pc + pc.transpose()) * 0.5;
         if Cholesky::new(pc).is_none() {
-            return Err(CoreError::invalid(
-                format!("CCSP covariance at t = {t1} s"),
-                pc.symmetric_eigenvalues().min(),
-                "is not positive definite (value: smallest eigenvalue); try a larger initial \
-                 covariance or scaling",
-            ));
+            return Err(CoreError::NotPositiveDefinite {
+                what: "CCSP covariance",
+                t: t1,
+                min_eigenvalue: pc.symmetric_eigenvalues().min(),
+                hint: "; try a larger initial covariance or scaling",
+            });
         }
         let mut p = pc;
         if drag_on {

@@ -42,6 +42,17 @@ pub enum CoreError {
         max: f64,
         t: f64,
     },
+    /// A CCSP covariance is not positive definite (near decay, or a bad initial one).
+    #[error(
+        "{what} at t = {t} s is not positive definite (smallest eigenvalue \
+         {min_eigenvalue}){hint}"
+    )]
+    NotPositiveDefinite {
+        what: &'static str,
+        t: f64,
+        min_eigenvalue: f64,
+        hint: &'static str,
+    },
     /// The adaptive integrator could not meet its tolerance.
     #[error("adaptive integrator: step size underflow at t = {t} s (h = {h} s)")]
     StepUnderflow { t: f64, h: f64 },

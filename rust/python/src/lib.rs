@@ -18,16 +18,6 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    m.add("RhopropError", py.get_type::<errors::RhopropError>())?;
-    m.add(
-        "DensityFieldError",
-        py.get_type::<errors::DensityFieldError>(),
-    )?;
-    m.add(
-        "IntegrationError",
-        py.get_type::<errors::IntegrationError>(),
-    )?;
     m.add_class::<density::PyExponential>()?;
     m.add_class::<density::PyGridded>()?;
     m.add_class::<density::PyFieldTile>()?;
