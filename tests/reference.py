@@ -1,5 +1,6 @@
 """Independent reference propagation for tests: scipy's DOP853 on a numpy right-hand side
-written from the equations of DESIGN.md section 3 (no rhoprop code involved)."""
+written from the equations of docs/conventions.md, "Frames and dynamics" (no rhoprop code
+involved)."""
 
 from __future__ import annotations
 

@@ -47,7 +47,8 @@ def test_default_settings_end_within_a_metre(
 def test_rk8_step_accuracy_matches_published_figures(
     reference, paper_state, paper_craft, benchmark_atmosphere
 ):
-    # DESIGN.md section 5: fixed-step RK8 ends 0.06 m off at 180 s and 0.9 m off at 240 s.
+    # docs/conventions.md, "Integrators and defaults": fixed-step RK8 ends 0.06 m off at
+    # 180 s and 0.9 m off at 240 s.
     def final_error(step: float) -> float:
         tr = rp.propagate(
             paper_state, paper_craft, benchmark_atmosphere, DURATION, method="rk8", step=step

@@ -174,7 +174,7 @@ def test_kappa_kinds_are_the_cores():
 def test_constants_are_the_cores():
     from rhoprop import constants
 
-    # DESIGN.md section 3, exactly.
+    # docs/conventions.md, "Frames and dynamics", exactly.
     assert constants.MU == 3.986004418e14 and constants.R_EARTH == 6378137.0
     assert constants.J2 == 1.08262668e-3 and constants.OMEGA_EARTH == 7.292115e-5
     assert constants.WGS84_F == 1 / 298.257223563

@@ -1,5 +1,5 @@
 """The CCSP filter: an unscented transform when density is certain, the equivalent
-piecewise-constant kappa process of DESIGN.md section 6 when it is not."""
+piecewise-constant kappa process of docs/conventions.md, "CCSP filter" when it is not."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Monte Carlo with correlated density: kappa statistics, determinism, exact mean orbit,
-long-time theory (DESIGN.md section 4), initial-covariance propagation vs a linearised
-state-transition matrix, and errors. Tolerances follow from the sample sizes."""
+long-time theory (docs/conventions.md, "The kappa processes"), initial-covariance
+propagation vs a linearised state-transition matrix, and errors. Tolerances follow from the sample sizes."""
 
 from __future__ import annotations
 

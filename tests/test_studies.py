@@ -1,5 +1,5 @@
 """The method comparison study on the analytic atmosphere (fast), against the long-time
-theory of DESIGN.md section 4."""
+theory of docs/conventions.md, "The kappa processes"."""
 
 from __future__ import annotations
 
@@ -38,7 +38,8 @@ def test_ccsp_vs_monte_carlo_on_analytic_models(tmp_path):
     # Debiased, the second model's orbit stays with the reference; with Cd_ref it runs ahead.
     assert abs(c.ccsp_mean[keys[2]]) < 0.1 * abs(c.ccsp_mean[keys[1]])
     assert c.ccsp_mean[keys[1]] > 0
-    # The CCSP spread is ~1.5x the Gauss-Markov 18 min Monte Carlo (DESIGN.md section 6).
+    # The CCSP spread is ~1.5x the Gauss-Markov 18 min Monte Carlo (docs/conventions.md,
+    # "CCSP filter").
     ratio = c.ccsp_std[keys[0]] / c.mc_along[keys[0]].std(ddof=1)
     assert 1.2 < ratio < 1.9, ratio
     # The figure states the long-time ratio: sqrt(2 dt / (2 tau)), tau = 1080 s / ln 2.

@@ -1,5 +1,5 @@
 """Physical constants and defaults, read from the Rust core so that they are typed once
-(DESIGN.md section 3). SI units."""
+(docs/conventions.md, "Frames and dynamics"). SI units."""
 
 from __future__ import annotations
 

@@ -26,7 +26,7 @@ CoreAtmosphere = (_core.ExponentialAtmosphere, _core.GriddedAtmosphere)
 @runtime_checkable
 class DensityModel(Protocol):
     """What the propagators accept as ``model``: a density model with uncertainty
-    (DESIGN.md section 2). Every model of :mod:`rhoprop.density` satisfies it; a user's
+    (docs/density-models.md). Every model of :mod:`rhoprop.density` satisfies it; a user's
     own model usually derives from :class:`SampledModel` or wraps a function in
     :class:`~rhoprop.density.FromFunction`."""
 

@@ -1,5 +1,5 @@
 """The consider-covariance sigma-point (CCSP) filter: orbit covariance with density as a
-consider parameter (paper section 4, as made unambiguous in DESIGN.md section 6)."""
+consider parameter (paper section 4, as made unambiguous in docs/conventions.md, "CCSP filter")."""
 
 from __future__ import annotations
 
@@ -58,7 +58,7 @@ def ccsp(
     kappa held over an update interval. At each update the state covariance gains
     C C^T from the consider points' cross-covariance C, and new sigma points are drawn from
     the factor S = [[Chol(A), B^T], [0, sqrt(l2)]], B = C^T / sqrt(l2),
-    A = l1 P - B^T B (DESIGN.md section 6; the paper prints the off-diagonal block
+    A = l1 P - B^T B (docs/conventions.md, "CCSP filter"; the paper prints the off-diagonal block
     transposed, which mixes units). The result is the linearised covariance of a kappa
     piecewise constant over each interval with correlation 1 / l2 between consecutive
     intervals (``rp.kappa.PiecewiseConstant(update_interval, 1 / l2)``): its long-time

@@ -1,5 +1,5 @@
-"""Processes of the normalised density offset kappa(t) (DESIGN.md section 4): the density
-a member sees is rho = mean + kappa * sigma (additive) or mean * exp(kappa s - s^2/2)
+"""Processes of the normalised density offset kappa(t) (docs/conventions.md, "The kappa
+processes"): the density a member sees is rho = mean + kappa * sigma (additive) or mean * exp(kappa s - s^2/2)
 (lognormal). Each member draws its own kappa path from its own random stream."""
 
 from __future__ import annotations
@@ -25,7 +25,8 @@ class KappaProcess:
 
     def correlation_time(self) -> float:
         """Integral of the autocorrelation, D (s): the long-time along-track variance grows
-        as 3 D T^3 (eps a_D)^2 (DESIGN.md section 4); infinite for :class:`Constant`."""
+        as 3 D T^3 (eps a_D)^2 (docs/conventions.md, "The kappa processes"); infinite for
+        :class:`Constant`."""
         raise TypeError(f"{type(self).__name__} is not a kappa process")  # pragma: no cover
 
     def node_spacing(self) -> float | None:

@@ -40,7 +40,8 @@ COMPONENTS = ("x", "y", "z")
 STATE_LABELS = ("x", "y", "z", "vx", "vy", "vz")
 #: Labels of the ``rtn`` (and ``rtn2``) dimension: radial, along-track, cross-track.
 RTN_LABELS = ("R", "T", "N")
-#: The ``frame`` attribute of single results: rhoprop's inertial frame (DESIGN.md 3).
+#: The ``frame`` attribute of single results: rhoprop's inertial frame (docs/conventions.md,
+#: "Frames and dynamics").
 INERTIAL_FRAME = "EME2000 (J2000/GCRF axes, precession-nutation neglected)"
 #: The ``rtn_frame`` attribute: what the RTN components are taken in.
 RTN_FRAME = "RTN of the mean orbit: R = r/|r|, N = r x v/|r x v|, T = N x R"

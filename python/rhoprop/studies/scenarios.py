@@ -1,4 +1,4 @@
-"""The paper's study as data (Paul, Licata & Mehta; DESIGN.md section 7)."""
+"""The paper's study as data (Paul, Licata & Mehta; docs/paper-study.md)."""
 
 from __future__ import annotations
 

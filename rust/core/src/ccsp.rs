@@ -1,5 +1,5 @@
 //! The consider-covariance sigma-point (CCSP) filter of the paper (section 4), in the
-//! form of DESIGN.md section 6: the augmented state is [r, v, kappa] with kappa the
+//! form of docs/conventions.md, "CCSP filter": the augmented state is [r, v, kappa] with kappa the
 //! normalised density offset (unit variance), which makes the units of the printed
 //! block-Cholesky factor consistent (the paper's B has units of state in the density row;
 //! we use the transposed off-diagonal block).
@@ -86,7 +86,7 @@ pub const DRAG_ALPHA: f64 = 0.01;
 /// A sigma point: [state (6), kappa, c].
 type Point = [f64; 8];
 
-/// The scaled block factor of DESIGN.md section 6 generalised to the two consider
+/// The scaled block factor of docs/conventions.md, "CCSP filter" generalised to the two consider
 /// parameters [kappa, c]:
 /// S = [[Chol(A), B^T], [0, diag(sqrt(l2), alpha sqrt(l2))]] with
 /// B^T = [C / sqrt(l2), alpha sqrt(l2) D] and A = l1 `pc` - C C^T / l2, where
@@ -94,7 +94,7 @@ type Point = [f64; 8];
 /// C C^T), `c` the cross-covariance with kappa and `d` the cross-covariance with c (both
 /// of unit variance), `alpha` the scaling of the c points ([`DRAG_ALPHA`]). Hence
 /// S S^T = [[l1 pc + a^2 l2 D D^T, C, a^2 l2 D], [C^T, l2, 0], [a^2 l2 D^T, 0, a^2 l2]]
-/// (a = alpha): kappa's cross block unscaled as in DESIGN.md (the 1 / l2 forgetting per
+/// (a = alpha): kappa's cross block unscaled as in docs/conventions.md, "CCSP filter" (the 1 / l2 forgetting per
 /// update), c's scaled like its variance (carried in full). With D = 0 the first seven
 /// rows and columns are the p = 1 factor exactly. `t` names the epoch in errors.
 pub fn factor(
@@ -492,7 +492,7 @@ mod tests {
             alpha in 0.01f64..1.0,
         ) {
             // S S^T = [[l1 pc + a^2 l2 D D^T, C, a^2 l2 D], [C^T, l2, 0], [a^2 l2 D^T, 0,
-            // a^2 l2]]: kappa's cross block unscaled (DESIGN.md section 6), c's scaled like
+            // a^2 l2]]: kappa's cross block unscaled (docs/conventions.md, "CCSP filter"), c's scaled like
             // its variance (a = alpha).
             let mut pc = Matrix6::from_diagonal(&Vector6::from_column_slice(&diag));
             let c = Vector6::from_column_slice(&c);
@@ -512,7 +512,7 @@ mod tests {
             prop_assert!(sst[(6, 7)] == 0.0);
             // Lower block-triangular: zeros below the state block.
             prop_assert!(s.fixed_view::<2, 6>(6, 0).abs().max() == 0.0);
-            // With D = 0 the p = 1 factor of DESIGN.md section 6, bit for bit.
+            // With D = 0 the p = 1 factor of docs/conventions.md, "CCSP filter", bit for bit.
             let s0 = factor(&pc, &c, &Vector6::zeros(), l1, l2, alpha, 0.0).unwrap();
             prop_assert!(s0.fixed_view::<7, 7>(0, 0) == s.fixed_view::<7, 7>(0, 0));
             prop_assert!(s0.fixed_view::<6, 1>(0, 7).abs().max() == 0.0);

@@ -1,4 +1,4 @@
-//! Physical constants of the design contract (DESIGN.md section 3). Use exactly these.
+//! Physical constants of the design contract (docs/conventions.md, "Frames and dynamics"). Use exactly these.
 
 /// Earth's gravitational parameter, m^3/s^2.
 pub const MU: f64 = 3.986004418e14;

@@ -25,7 +25,7 @@ pub trait BatchRhs<const W: usize> {
     }
 }
 
-/// How the normalised offset kappa perturbs the density (DESIGN.md section 4).
+/// How the normalised offset kappa perturbs the density (docs/conventions.md, "The kappa processes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Perturbation {
     /// rho = mean + kappa * sigma, clipped at 0 (the paper's form); clips are counted.

@@ -1,4 +1,4 @@
-//! The normalised density offset kappa(t) of each member (DESIGN.md section 4), as node
+//! The normalised density offset kappa(t) of each member (docs/conventions.md, "The kappa processes"), as node
 //! values on a time grid that the integrator steps through exactly.
 
 use crate::error::{positive, CoreError};

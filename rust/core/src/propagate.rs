@@ -193,7 +193,7 @@ mod tests {
         propagate(atm, &problem, times, method, &Progress::default())
     }
 
-    /// The paper's initial state (DESIGN.md section 7).
+    /// The paper's initial state (docs/paper-study.md).
     const PAPER: [f64; 6] = [
         3782900.7032,
         -5441600.6779,

@@ -1,5 +1,9 @@
-//! Fixed-step explicit Runge-Kutta (classic RK4 and the 8th-order DOP853 tableau) and the
-//! one fixed-step loop of the crate: [`drive`] over a [`StepPlan`].
+//! The fixed-step schemes, classic RK4, the 8th-order DOP853 tableau (RK8) and
+//! Adams-Bashforth-Moulton (ABM, started and restarted with RK8 steps), and the one
+//! fixed-step loop of the crate: [`drive`] over a [`StepPlan`], shared by propagate, the
+//! Monte Carlo and the CCSP. The schemes are arms of one `match` in the stepping loop so
+//! that each batch's stage sums stay in registers (same additions, same order on every
+//! SIMD path).
 
 use super::dop853_tableau as tab;
 use super::{check_times, combine, Control, Outcome, StepHooks};
