@@ -1,6 +1,7 @@
 """Monte Carlo with correlated density: kappa statistics, determinism, exact mean orbit,
 long-time theory (docs/conventions.md, "The kappa processes"), initial-covariance
-propagation vs a linearised state-transition matrix, and errors. Tolerances follow from the sample sizes."""
+propagation vs a linearised state-transition matrix, and errors. Tolerances follow from the
+sample sizes."""
 
 from __future__ import annotations
 

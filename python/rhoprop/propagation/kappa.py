@@ -1,6 +1,7 @@
 """Processes of the normalised density offset kappa(t) (docs/conventions.md, "The kappa
-processes"): the density a member sees is rho = mean + kappa * sigma (additive) or mean * exp(kappa s - s^2/2)
-(lognormal). Each member draws its own kappa path from its own random stream."""
+processes"): the density a member sees is rho = mean + kappa * sigma (additive) or
+mean * exp(kappa s - s^2/2) (lognormal). Each member draws its own kappa path from its own
+random stream."""
 
 from __future__ import annotations
 
