@@ -2,7 +2,7 @@
 core). Users call the documented ``rhoprop`` API instead; array arguments are float64."""
 
 from collections.abc import Callable
-from typing import Any, final
+from typing import NamedTuple, TypedDict, final
 
 import numpy as np
 import numpy.typing as npt
@@ -119,6 +119,36 @@ class FieldTile:
     def span(self) -> tuple[float, float]:
         """First and last time node, s."""
 
+class _Propagated(NamedTuple):
+    """What ``propagate`` returns (a plain tuple at runtime, in this order)."""
+
+    times: _F64
+    states: _F64
+    decayed_at: float | None
+    rhs_evaluations: int
+    clipped: int
+
+class _CcspOutput(TypedDict):
+    """What ``ccsp`` returns (and ``ccsp_many`` per object)."""
+
+    decayed_at: float | None
+    times: _F64
+    means: _F64
+    covariances: _F64
+    cross: _F64
+    drag_cross: _F64
+
+class _MonteCarloOutput(TypedDict):
+    """What ``monte_carlo`` returns."""
+
+    positions: _F64
+    velocities: _F64
+    densities: _F64 | None
+    clipped: npt.NDArray[np.uint64]
+    decay_times: _F64
+    step: float
+    drag_factors: _F64
+
 def propagate(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
     epoch: float,
@@ -130,7 +160,7 @@ def propagate(
     rtol: float | None,
     floor_altitude: float,
     zonal_degree: int = 2,
-) -> tuple[_F64, _F64, float | None, int, int]:
+) -> _Propagated:
     """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
 
 def ccsp(
@@ -146,7 +176,7 @@ def ccsp(
     floor_altitude: float,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
-) -> dict[str, Any]:
+) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
     Cd*A/m carried as the second consider parameter."""
@@ -159,7 +189,7 @@ def ccsp_many(
     floor_altitude: float,
     zonal_degree: int = 2,
     progress: Callable[[int], object] | None = None,
-) -> list[dict[str, Any] | Exception]:
+) -> list[_CcspOutput | Exception]:
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
     update_times, step, drag_sigma), in one call: per object the dict of ``ccsp`` or the
     exception its run raised."""
@@ -183,7 +213,7 @@ def monte_carlo(
     progress: Callable[[int], object] | None,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
-) -> dict[str, Any]:
+) -> _MonteCarloOutput:
     """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
     (n,), decay_times (n,), step (s), drag_factors (n,) (factor on Cd*A/m per member,
     log-normal with log-sigma drag_sigma)."""

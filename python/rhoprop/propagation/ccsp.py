@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +27,9 @@ from .propagate import (
 )
 from .results import CcspResult, StateMoments
 from .state import OrbitState, Spacecraft
+
+if TYPE_CHECKING:
+    from .._core import _CcspOutput
 
 #: The paper's near-zero initial covariance: 1 mm and 1 um/s (1 sigma) on each axis.
 DEFAULT_INITIAL_COVARIANCE = np.diag([1e-6, 1e-6, 1e-6, 1e-12, 1e-12, 1e-12])
@@ -121,7 +124,7 @@ def ccsp(
         drag_sigma=drag_sigma,
     )
 
-    def run(atmosphere: Any) -> dict[str, Any]:
+    def run(atmosphere: Any) -> _CcspOutput:
         return _core.ccsp(
             atmosphere,
             args.epoch,
@@ -207,7 +210,7 @@ def _arguments(
     return args, span
 
 
-def _result(state: OrbitState, out: dict[str, Any], drag_sigma: float) -> CcspResult:
+def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResult:
     """The :class:`CcspResult` of the core's output dict."""
     # The binding reports decay as "decayed_at" (None when the filter ran to the end).
     decayed = out.get("decayed_at")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +28,9 @@ from .propagate import (
 )
 from .results import MonteCarloResult, Trajectory, sample_moments, trajectory_from_core
 from .state import OrbitState, Spacecraft
+
+if TYPE_CHECKING:
+    from .._core import _MonteCarloOutput
 
 #: Methods of :func:`monte_carlo` (fixed step: kappa nodes fall on step boundaries).
 METHODS = ("rk8", "rk4", "abm")
@@ -193,7 +196,7 @@ def monte_carlo(
             raise ValueError(f"initial_covariance[{i}][{j}] must be finite, got {cov[i, j]}")
     epoch = ut1_seconds(state.epoch)
 
-    def run(atmosphere: Any) -> tuple[dict[str, Any], Trajectory]:
+    def run(atmosphere: Any) -> tuple[_MonteCarloOutput, Trajectory]:
         bar = ProgressBar(int(n), "Monte Carlo") if progress is True else None
         callback = bar if bar is not None else (progress if callable(progress) else None)
         try:
