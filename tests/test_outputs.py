@@ -15,8 +15,8 @@ from sgp4.api import Satrec
 
 import rhoprop as rp
 from rhoprop import catalog, io
-from rhoprop.catalog.export import MANIFEST, OutputFolder, atomic_path, sanitise
 from rhoprop.cli import main
+from rhoprop.io import MANIFEST, OutputFolder, atomic_path, sanitise
 from rhoprop.studies.scenario_file import ScenarioError, load_scenario
 
 SAMPLE = Path(__file__).parent / "data" / "sample.tle"

@@ -41,8 +41,7 @@ from .spaceweather import SpaceWeather
 from .time import seconds_since_j2000, to_datetime64
 
 if TYPE_CHECKING:
-    from . import catalog, conjunction, plot, studies
-    from .catalog import export as io
+    from . import catalog, conjunction, io, plot, studies
     from .studies import scenarios
 
 #: Heavy or optional parts, imported on first attribute access (PEP 562).
@@ -51,7 +50,7 @@ _LAZY = {
     "conjunction": "rhoprop.conjunction",
     "plot": "rhoprop.plot",
     "studies": "rhoprop.studies",
-    "io": "rhoprop.catalog.export",
+    "io": "rhoprop.io",
     "scenarios": "rhoprop.studies.scenarios",
 }
 

@@ -4,9 +4,9 @@ and ballistic coefficients fitted to them (``fit``), their initial covariance
 or on Dask (``run``), reentry windows (``reentry_windows``) and files out (``export``:
 CCSDS OEM and a Parquet summary)."""
 
+from ..io import summary_table, write_oem, write_summary
 from .covariance import TleAccuracy, tle_accuracy, tle_covariance
 from .elements import SGP4_RHO0, Catalog, CatalogObject, drag_parameter_from_bstar, load
-from .export import summary_table, write_oem, write_summary
 from .fit import FitResult, fit_element_set
 from .reentry_windows import ReentryResult, reentry
 from .run import CatalogResult, common_epochs, propagate_catalog

@@ -11,10 +11,10 @@ from typing import Any
 import numpy as np
 
 from ..density import DensityModel, Exponential, Msis
+from ..io import OutputFolder, command_line, oem_names, sanitise, write_oem, write_summary
 from ..spaceweather import SpaceWeather
 from .covariance import COVARIANCE_NAMES
 from .elements import load
-from .export import OutputFolder, command_line, oem_names, sanitise, write_oem, write_summary
 from .run import STATUSES, propagate_catalog
 
 #: Density models by the names the command line accepts.

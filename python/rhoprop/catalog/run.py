@@ -177,7 +177,7 @@ class CatalogResult:
         valid output in m, what the covariance includes) as a ``pandas.DataFrame``, one
         row per object in input order (needs pandas, e.g. the ``[xarray]`` extra)."""
         pd = optional_import("pandas", "CatalogResult.to_pandas()")
-        from .export import summary_table
+        from ..io import summary_table
 
         frame: pandas.DataFrame = pd.DataFrame(summary_table(self))
         return frame

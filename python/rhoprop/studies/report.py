@@ -11,9 +11,9 @@ from typing import Any
 import numpy as np
 
 from .. import frames
-from ..catalog.export import OutputFolder, command_line
 from ..density import Msis
 from ..ensemble import EnsembleResult
+from ..io import OutputFolder, command_line
 from ..propagation import OrbitState, Spacecraft, propagate
 from ..spaceweather import SpaceWeather
 from . import scenarios

@@ -14,10 +14,10 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from ..catalog.export import OutputFolder, command_line, sanitise, write_oem
 from ..density import DensityModel, Exponential, Msis
 from ..ensemble import ensemble
 from ..errors import ScenarioError
+from ..io import OutputFolder, command_line, sanitise, write_oem
 from ..propagation import OrbitState, Spacecraft, kappa
 from ..spaceweather import SpaceWeather
 from .plots import ensemble_figure

@@ -1,0 +1,27 @@
+"""Files in and out, below the catalog and the studies: CCSDS OEM (``oem``), the Parquet
+summary of a catalog run (``summary``) and the output folder of a run with its manifest
+and atomic writes (``files``). A new output format is a module here. Two formats stay with
+what they describe: CCSDS conjunction data messages in :mod:`rhoprop.conjunction.cdm` (a
+message computes its own Pc, which belongs to the conjunction stage above this one) and
+the xarray datasets in the results'
+``to_xarray`` (:mod:`rhoprop.propagation`, the catalog).
+"""
+
+from .files import MANIFEST, OutputFolder, atomic_path, command_line, sanitise, write_text_atomic
+from .oem import DUPLICATES, duplicate_ids, oem_names, write_oem
+from .summary import summary_table, write_summary
+
+__all__ = [
+    "DUPLICATES",
+    "MANIFEST",
+    "OutputFolder",
+    "atomic_path",
+    "command_line",
+    "duplicate_ids",
+    "oem_names",
+    "sanitise",
+    "summary_table",
+    "write_oem",
+    "write_summary",
+    "write_text_atomic",
+]

@@ -1,0 +1,260 @@
+"""CCSDS OEM files (KVN, version 2.0 per CCSDS 502.0-B-3, with covariance blocks) of
+trajectories, Monte Carlo and CCSP results and catalog runs; file names per object."""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..propagation import CcspResult, MonteCarloResult, Trajectory
+from .files import _iso, atomic_path, sanitise
+
+#: What ``duplicates`` of :func:`write_oem` accepts.
+DUPLICATES = ("error", "suffix")
+
+
+def duplicate_ids(objects: list[Any]) -> list[int]:
+    """NORAD ids that more than one of ``objects`` carries, sorted."""
+    counts = Counter(o.norad_id for o in objects)
+    return sorted(i for i, c in counts.items() if c > 1)
+
+
+def oem_names(objects: list[Any], duplicates: str = "error") -> list[str]:
+    """OEM file names per object: ``<NORAD id>.oem``; a repeated id is an error naming
+    it (``duplicates="error"``) or gets ``_2``, ``_3``, ... in input order
+    (``duplicates="suffix"``)."""
+    if duplicates not in DUPLICATES:
+        raise ValueError(f"duplicates must be 'error' or 'suffix', got {duplicates!r}")
+    twice = duplicate_ids(objects)
+    if twice and duplicates == "error":
+        shown = ", ".join(map(str, twice[:10])) + (", ..." if len(twice) > 10 else "")
+        raise ValueError(
+            f"NORAD ids {shown} occur more than once in the catalog, so their OEM files "
+            "would overwrite each other; remove the repeats or use duplicates='suffix' "
+            "(--duplicates suffix)"
+        )
+    seen: Counter[int] = Counter()
+    names = []
+    for o in objects:
+        seen[o.norad_id] += 1
+        k = seen[o.norad_id]
+        names.append(f"{o.norad_id}.oem" if k == 1 else f"{o.norad_id}_{k}.oem")
+    return names
+
+
+def _oem_text(
+    name: str,
+    object_id: str,
+    ref_frame: str,
+    originator: str,
+    epochs: np.ndarray,
+    mean: np.ndarray,
+    covariance: np.ndarray | None,
+    note: str = "",
+    *,
+    cov_frame: str | None = None,
+) -> str:
+    """One OEM segment: states in km and km/s, covariances in km^2, km^2/s, km^2/s^2;
+    ``note`` (what the covariance includes) becomes COMMENT lines of the covariance
+    section."""
+    created = _dt.datetime.now(_dt.timezone.utc).replace(tzinfo=None).isoformat(timespec="seconds")
+    frame = sanitise(ref_frame)
+    lines = [
+        "CCSDS_OEM_VERS = 2.0",
+        f"CREATION_DATE = {created}",
+        f"ORIGINATOR = {sanitise(originator)}",
+        "",
+        "META_START",
+        f"OBJECT_NAME = {sanitise(name) or 'UNKNOWN'}",
+        f"OBJECT_ID = {sanitise(object_id) or 'UNKNOWN'}",
+        "CENTER_NAME = EARTH",
+        f"REF_FRAME = {frame}",
+        "TIME_SYSTEM = UTC",
+        f"START_TIME = {_iso(epochs[0])}",
+        f"STOP_TIME = {_iso(epochs[-1])}",
+        "META_STOP",
+        "",
+    ]
+    for t, s in zip(epochs, mean / 1e3, strict=True):
+        lines.append(f"{_iso(t)} " + " ".join(f"{v:.9e}" for v in s))
+    if covariance is not None:
+        lines += ["", "COVARIANCE_START"]
+        lines += [f"COMMENT {chunk}" for chunk in _wrap(sanitise(note, 2000))]
+        for t, c in zip(epochs, covariance / 1e6, strict=True):
+            lines += [f"EPOCH = {_iso(t)}", f"COV_REF_FRAME = {cov_frame or frame}"]
+            for row in range(6):
+                lines.append(" ".join(f"{c[row, col]:.9e}" for col in range(row + 1)))
+        lines += ["COVARIANCE_STOP"]
+    lines.append("")
+    return "\n".join(lines)
+
+
+def _wrap(text: str, width: int = 70) -> list[str]:
+    """``text`` in lines of at most about ``width`` characters (none when empty)."""
+    import textwrap
+
+    return textwrap.wrap(text, width) if text else []
+
+
+#: REF_FRAME values write_oem accepts: TEME for SGP4-derived catalog states, and the
+#: inertial frames rhoprop's states are taken in (EME2000/J2000, GCRF, ICRF).
+OEM_FRAMES = ("TEME", "EME2000", "GCRF", "ICRF")
+#: Frames of the covariance blocks: the states' own frame, or each state's RTN.
+COVARIANCE_FRAMES = ("inertial", "rtn")
+
+
+def _rtn_covariances(mean: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """6x6 covariances rotated into the RTN frame of each mean state (R = r/|r|,
+    N = r x v/|r x v|, T = N x R; position and velocity rotated alike, no omega x r term,
+    as CDMs do)."""
+    from ..frames import rtn_basis
+
+    basis = rtn_basis(mean[:, :3], mean[:, 3:])  # (n, 3, 3), rows R, T, N
+    big = np.zeros((len(mean), 6, 6))
+    big[:, :3, :3] = basis
+    big[:, 3:, 3:] = basis
+    return np.asarray(np.einsum("nij,njk,nlk->nil", big, covariance, big))
+
+
+def _save_oem(path: Path, text: str, file_format: str) -> Path:
+    """Validates ``text`` with the ``oem`` library (CCSDS OEM 2.0) and writes it as KVN
+    (the text itself, comments kept) or as XML (the library's writer), atomically."""
+    from oem import OrbitEphemerisMessage
+
+    with atomic_path(path) as tmp:
+        kvn = tmp.with_name(tmp.name + ".kvn")
+        try:
+            kvn.write_text(text)
+            try:
+                message = OrbitEphemerisMessage.open(str(kvn))
+            except Exception as err:  # the library raises plain exceptions on bad files
+                raise ValueError(f"OEM for {path.name} failed validation: {err}") from err
+            if file_format == "kvn":
+                kvn.replace(tmp)
+            else:
+                message.save_as(str(tmp), file_format="xml")
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                kvn.unlink()
+    return path
+
+
+def write_oem(
+    result: Any,
+    directory: str | Path,
+    *,
+    originator: str = "rhoprop",
+    duplicates: str = "error",
+    object_name: str = "OBJECT",
+    object_id: str = "OBJECT",
+    ref_frame: str | None = None,
+    covariance_frame: str = "inertial",
+    file_format: str = "kvn",
+) -> list[Path]:
+    """Writes CCSDS OEM 2.0 files into ``directory``: mean states (km, km/s) and a
+    covariance block at each epoch (km^2, km^2/s, km^2/s^2), time system UTC. Every file
+    is validated by reading it back with the maintained ``oem`` library before it is
+    renamed into place; XML files are written by that library.
+
+    Args:
+        result: a catalog result (:class:`~rhoprop.catalog.CatalogResult`): one file
+            per object, ``<NORAD id>.oem``, at the object's valid epochs (none for an
+            object with no valid epoch); or a single :class:`~rhoprop.CcspResult` /
+            :class:`~rhoprop.MonteCarloResult` (one file, ``<object_id>.oem``, its mean
+            and covariance at every output with statistics) or
+            :class:`~rhoprop.Trajectory` (states only).
+        directory: output folder (created).
+        originator: the ORIGINATOR field.
+        duplicates: catalog only: ``"error"`` (default) refuses NORAD ids that occur more
+            than once; ``"suffix"`` names the repeats ``<id>_2.oem``, ``<id>_3.oem``, ...
+        object_name, object_id: single results: the OBJECT_NAME and OBJECT_ID fields.
+        ref_frame: REF_FRAME, one of :data:`OEM_FRAMES` (default TEME for a catalog,
+            whose states come from SGP4, and EME2000 for a single result, rhoprop's
+            inertial frame). The states are written as computed: this names their frame,
+            it does not convert them.
+        covariance_frame: ``"inertial"`` (the states' frame, default) or ``"rtn"`` (each
+            epoch's covariance rotated into the RTN frame of its mean state;
+            ``COV_REF_FRAME = RTN``).
+        file_format: ``"kvn"`` (default; ``.oem``) or ``"xml"`` (``.xml``; inertial
+            covariances only: the library's XML writer does not keep COV_REF_FRAME).
+
+    Returns:
+        The paths written. Text from the inputs is sanitised (printable ASCII only).
+    """
+    frame = "TEME" if ref_frame is None and not _is_single(result) else ref_frame or "EME2000"
+    if frame not in OEM_FRAMES:
+        raise ValueError(f"ref_frame must be one of {OEM_FRAMES}, got {ref_frame!r}")
+    if covariance_frame not in COVARIANCE_FRAMES:
+        raise ValueError(
+            f"covariance_frame must be one of {COVARIANCE_FRAMES}, got {covariance_frame!r}"
+        )
+    if file_format not in ("kvn", "xml"):
+        raise ValueError(f"file_format must be 'kvn' or 'xml', got {file_format!r}")
+    if file_format == "xml" and covariance_frame == "rtn":
+        raise ValueError(
+            "RTN covariances need file_format='kvn': the oem library's XML writer drops "
+            "COV_REF_FRAME, so the covariances would read back as inertial"
+        )
+    suffix = ".oem" if file_format == "kvn" else ".xml"
+
+    def text(name: str, oid: str, epochs: Any, mean: Any, cov: Any, note: str = "") -> str:
+        if cov is not None and covariance_frame == "rtn":
+            cov = _rtn_covariances(mean, cov)
+        return _oem_text(
+            name,
+            oid,
+            frame,
+            originator,
+            epochs,
+            mean,
+            cov,
+            note,
+            cov_frame="RTN" if covariance_frame == "rtn" else None,
+        )
+
+    out = Path(directory)
+    if _is_single(result):
+        m = result.moments()
+        ok = np.isfinite(m.mean).all(axis=1) & np.isfinite(m.covariance).all(axis=(1, 2))
+        if not ok.any():
+            raise ValueError("the result has no epoch with a finite mean and covariance")
+        cov = None if isinstance(result, Trajectory) else m.covariance[ok]
+        body = text(object_name, object_id, m.epochs[ok], m.mean[ok], cov)
+        name = (sanitise(object_id) or "OBJECT").replace("/", "_").replace(" ", "_")
+        return [_save_oem(out / f"{name}{suffix}", body, file_format)]
+    if not all(hasattr(result, a) for a in ("objects", "valid", "mean", "covariance")):
+        raise TypeError(
+            "write_oem takes a CatalogResult (one file per object) or a single CcspResult, "
+            f"MonteCarloResult or Trajectory (one file), not a {type(result).__name__}"
+        )
+    names = oem_names(result.objects, duplicates)
+    paths = []
+    for k, obj in enumerate(result.objects):
+        idx = np.flatnonzero(result.valid[k])
+        if not len(idx):
+            continue
+        body = text(
+            obj.name,
+            str(obj.norad_id),
+            result.epochs[idx],
+            result.mean[k, idx],
+            result.covariance[k, idx],
+            _note(result, k),
+        )
+        paths.append(_save_oem(out / names[k].replace(".oem", suffix), body, file_format))
+    return paths
+
+
+def _is_single(result: Any) -> bool:
+    return isinstance(result, (CcspResult, MonteCarloResult, Trajectory))
+
+
+def _note(result: Any, k: int) -> str:
+    """What object ``k``'s covariance includes ("" when the result does not say)."""
+    notes = getattr(result, "covariance_note", None)
+    return "" if notes is None else str(notes[k])
