@@ -391,3 +391,22 @@ def test_load_reads_gzip_compressed_catalogs(test_data, tmp_path):
     damaged.write_bytes(src.read_bytes()[:500])
     with pytest.raises(ValueError, match="damaged gzip"):
         rp.catalog.load(damaged)
+
+
+def test_an_initial_covariance_callable_is_called_once_per_object():
+    calls = []
+
+    def per_object(obj):
+        calls.append(obj.norad_id)
+        return np.diag([100.0**2] * 3 + [0.1**2] * 3)
+
+    cat = catalog.load(SAMPLE)
+    catalog.propagate_catalog(
+        cat,
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        initial_covariance=per_object,
+        progress=False,
+    )
+    assert sorted(calls) == sorted(o.norad_id for o in cat)

@@ -131,13 +131,12 @@ def one_by_one(cat, model, end, **kw):
         "update_interval": kw.get("update_interval", 3600.0),
         "floor_altitude": DEFAULT_FLOOR_ALTITUDE,
         "errors": kw.get("errors", "raise"),
-        "initial_covariance": kw.get("initial_covariance"),
         "zonal_degree": 2,
-        "drag_sigmas": tuple(catalog_run._drag_sigma(o, "auto") for o in objs),
     }
+    plans = catalog_run._plans(objs, kw.get("initial_covariance"), "auto")
     step = kw.get("output_step", 3600.0)
     epochs = catalog_run.common_epochs(objs, np.datetime64(end, "ns"), step)
-    return [catalog_run._run_object(o, model, epochs, i, cfg) for i, o in enumerate(objs)]
+    return [catalog_run._run_object(p, model, epochs, cfg) for p in plans]
 
 
 @pytest.mark.parametrize(

@@ -293,6 +293,29 @@ def _initial_covariance(obj: CatalogObject, choice: Any) -> tuple[np.ndarray | N
     return cov, note
 
 
+@dataclass(frozen=True)
+class ObjectPlan:
+    """What one object of a catalog run is run with, decided once before any run: its
+    index in the catalog, the object, its initial covariance (None: the propagators'
+    default) and what that covariance includes, and its Cd*A/m relative sigma. A user's
+    ``initial_covariance`` callable is called here, once per object."""
+
+    index: int
+    obj: CatalogObject
+    initial: np.ndarray | None
+    initial_note: str
+    drag_sigma: float
+
+
+def _plans(objs: list[CatalogObject], initial_covariance: Any, drag_sigma: Any) -> list[ObjectPlan]:
+    """One :class:`ObjectPlan` per object, in catalog order."""
+    plans = []
+    for i, obj in enumerate(objs):
+        initial, note = _initial_covariance(obj, initial_covariance)
+        plans.append(ObjectPlan(i, obj, initial, note, _drag_sigma(obj, drag_sigma)))
+    return plans
+
+
 def _shipped_model(model: Any) -> Any:
     """The atmosphere for all objects, as an object that pickles as a reference to travel
     to Dask workers: a sampled model becomes its :class:`~rhoprop.density.atlas.Atlas`
@@ -319,10 +342,9 @@ def _object_error(err: Exception, obj: CatalogObject) -> Exception:
 
 
 def _run_object(
-    obj: CatalogObject,
+    plan: ObjectPlan,
     model: Any,
     epochs: np.ndarray,
-    index: int,
     cfg: dict[str, Any],
     stop: threading.Event | None = None,
     done: dict[str, Any] | None = None,
@@ -336,10 +358,10 @@ def _run_object(
     if stop is not None and stop.is_set():
         raise KeyboardInterrupt("catalog run interrupted")
     try:
-        return _propagate_object(obj, model, epochs, index, cfg, stop, done or {})
+        return _propagate_object(plan, model, epochs, cfg, stop, done or {})
     except Exception as err:
         if cfg["errors"] == "raise":
-            named = _object_error(err, obj)
+            named = _object_error(err, plan.obj)
             if named is err:
                 raise
             raise named from err
@@ -356,16 +378,15 @@ def _run_object(
 
 
 def _propagate_object(
-    obj: CatalogObject,
+    plan: ObjectPlan,
     model: Any,
     epochs: np.ndarray,
-    index: int,
     cfg: dict[str, Any],
     stop: threading.Event | None,
     done: dict[str, Any],
 ) -> dict[str, Any]:
+    obj, initial = plan.obj, plan.initial
     craft = Spacecraft(1.0, obj.drag_parameter)
-    initial, _note = _initial_covariance(obj, cfg["initial_covariance"])
     offsets = to_seconds(epochs, obj.state.epoch)
     nt = len(epochs)
     out_mean = np.full((nt, 6), np.nan)
@@ -382,7 +403,7 @@ def _propagate_object(
                 offsets[:k],
                 cfg,
                 initial,
-                cfg["drag_sigmas"][index],
+                plan.drag_sigma,
                 done.get("ccsp"),
             )
             reached = len(means)
@@ -402,9 +423,9 @@ def _propagate_object(
             model,
             output_times=offsets,
             n=cfg["n"],
-            drag_sigma=cfg["drag_sigmas"][index],
+            drag_sigma=plan.drag_sigma,
             kappa=cfg["kappa"],
-            seed=cfg["seed"] + index,
+            seed=cfg["seed"] + plan.index,
             output_step=None,
             initial_covariance=initial,
             progress=check,
@@ -462,7 +483,7 @@ def _mean_orbit(
 
 def _ccsp_chunk(
     model: Any,
-    chunk: list[tuple[int, CatalogObject]],
+    chunk: list[ObjectPlan],
     epochs: np.ndarray,
     cfg: dict[str, Any],
     stop: threading.Event | None = None,
@@ -473,17 +494,14 @@ def _ccsp_chunk(
     :func:`_run_object` with those runs reused. An object whose mean orbit or batched
     CCSP raised runs again alone, so statuses, shortened runs, field widening and errors
     are exactly those of the object-by-object run."""
-    done: dict[int, dict[str, Any]] = {i: {} for i, _ in chunk}
+    done: dict[int, dict[str, Any]] = {p.index: {} for p in chunk}
     runs, owners = [], []
-    for i, obj in chunk:
+    for plan in chunk:
         if stop is not None and stop.is_set():
             raise KeyboardInterrupt("catalog run interrupted")
+        i, obj = plan.index, plan.obj
         craft = Spacecraft(1.0, obj.drag_parameter)
         offsets = to_seconds(epochs, obj.state.epoch)
-        try:
-            initial, _note = _initial_covariance(obj, cfg["initial_covariance"])
-        except Exception:
-            continue  # raised again (or recorded) by _run_object
         if offsets[-1] <= 0:
             continue
         # Optimistically over every output: the mean orbit (one lane, for its decay time)
@@ -493,8 +511,8 @@ def _ccsp_chunk(
                 "state": obj.state,
                 "spacecraft": craft,
                 "update_times": _update_times(offsets, cfg["update_interval"]),
-                "initial_covariance": initial,
-                "drag_sigma": cfg["drag_sigmas"][i],
+                "initial_covariance": plan.initial,
+                "drag_sigma": plan.drag_sigma,
             }
         )
         owners.append(i)
@@ -519,7 +537,7 @@ def _ccsp_chunk(
             if not isinstance(out, Exception) and _clear_of_floor(out, cfg):
                 done[i]["ccsp"] = out
                 done[i]["mean"] = None  # the mean orbit cannot have come down
-    return [(i, _run_object(o, model, epochs, i, cfg, stop, done[i])) for i, o in chunk]
+    return [(p.index, _run_object(p, model, epochs, cfg, stop, done[p.index])) for p in chunk]
 
 
 #: How far above the floor (m) a CCSP's mean must stay, at every update, for the mean
@@ -613,13 +631,13 @@ def _update_times(offsets: np.ndarray, interval: float) -> np.ndarray:
 
 
 def _run_chunk(
-    model: Any, chunk: list[tuple[int, CatalogObject]], epochs: np.ndarray, cfg: dict[str, Any]
+    model: Any, chunk: list[ObjectPlan], epochs: np.ndarray, cfg: dict[str, Any]
 ) -> list[tuple[int, dict[str, Any]]]:
     """A Dask task: run the objects of the chunk (the model arrives unpickled once per
     worker); CCSPs in one core call per chunk."""
     if cfg["method"] == "ccsp":
         return _ccsp_chunk(model, chunk, epochs, cfg)
-    return [(i, _run_object(o, model, epochs, i, cfg)) for i, o in chunk]
+    return [(p.index, _run_object(p, model, epochs, cfg)) for p in chunk]
 
 
 def _lost_with_a_worker(err: BaseException) -> bool:
@@ -637,7 +655,7 @@ def _lost_with_a_worker(err: BaseException) -> bool:
 def _run_on_dask(
     client: Any,
     model: Any,
-    chunks: list[list[tuple[int, CatalogObject]]],
+    chunks: list[list[ObjectPlan]],
     epochs: np.ndarray,
     cfg: dict[str, Any],
     bar: ProgressBar | None,
@@ -691,14 +709,14 @@ def common_epochs(objects: list[CatalogObject], end: np.datetime64, step: float)
     return offsets_to_epochs(end, offsets)
 
 
-def by_epoch(objs: list[CatalogObject]) -> list[tuple[int, CatalogObject]]:
-    """(index, object) pairs in epoch order: chunks of objects close in time share their
-    atlas tiles, so the tiles in use at once stay few however the epochs spread."""
-    return sorted(enumerate(objs), key=lambda item: item[1].state.epoch)
+def by_epoch(plans: list[ObjectPlan]) -> list[ObjectPlan]:
+    """The plans in epoch order: chunks of objects close in time share their atlas tiles,
+    so the tiles in use at once stay few however the epochs spread."""
+    return sorted(plans, key=lambda plan: plan.obj.state.epoch)
 
 
 def _run_local(
-    objs: list[CatalogObject],
+    plans: list[ObjectPlan],
     shipped: Any,
     epochs: np.ndarray,
     cfg: dict[str, Any],
@@ -718,8 +736,8 @@ def _run_local(
     if cfg["method"] == "ccsp":
         # Chunks of objects per core call (objects in parallel there), small enough that
         # every worker gets several.
-        size = max(1, min(CCSP_CHUNK, -(-len(objs) // (4 * workers))))
-        indexed = by_epoch(objs)
+        size = max(1, min(CCSP_CHUNK, -(-len(plans) // (4 * workers))))
+        indexed = by_epoch(plans)
         chunks = [indexed[c : c + size] for c in range(0, len(indexed), size)]
 
         def chunk_done(i: int, done: list[tuple[int, dict[str, Any]]]) -> None:
@@ -740,8 +758,8 @@ def _run_local(
             tick(i, result)
 
         map_in_threads(
-            lambda item: _run_object(item[1], shipped, epochs, item[0], cfg, stop),
-            list(enumerate(objs)),
+            lambda plan: _run_object(plan, shipped, epochs, cfg, stop),
+            plans,
             workers,
             stop,
             object_done,
@@ -847,22 +865,18 @@ def propagate_catalog(
         "update_interval": _validate.positive("update_interval", update_interval),
         "floor_altitude": floor,
         "errors": errors,
-        "initial_covariance": initial_covariance,
         "zonal_degree": zonal_degree_argument(zonal_degree),
-        "drag_sigmas": tuple(_drag_sigma(o, drag_sigma) for o in objs),
     }
-    notes = [
-        f"{_initial_covariance(o, initial_covariance)[1]}; {_drag_note(o, sig, drag_sigma)}"
-        for o, sig in zip(objs, cfg["drag_sigmas"], strict=True)
-    ]
+    plans = _plans(objs, initial_covariance, drag_sigma)
+    notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step)
     shipped = _shipped_model(model)
     bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
     try:
         if client is None:
-            results = _run_local(objs, shipped, epochs, cfg, bar)
+            results = _run_local(plans, shipped, epochs, cfg, bar)
         else:
-            indexed = by_epoch(objs)
+            indexed = by_epoch(plans)
             chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
             results = _run_on_dask(client, shipped, chunks, epochs, cfg, bar)
     finally:
@@ -890,5 +904,5 @@ def propagate_catalog(
         status=np.array([r["status"] for r in order], dtype=object),
         reason=np.array([r["reason"] for r in order], dtype=object),
         covariance_note=np.array(notes, dtype=object),
-        drag_sigma=np.array(cfg["drag_sigmas"], dtype=float),
+        drag_sigma=np.array([p.drag_sigma for p in plans], dtype=float),
     )
