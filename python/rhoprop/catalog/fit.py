@@ -102,6 +102,27 @@ def _positions(
     return np.hstack([traj.positions[:k], traj.velocities[:k]])
 
 
+def _sgp4_observations(
+    sat: Any, start: float, end: float, spacing: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Times (s from the epoch), positions (k, 3) m and velocities (k, 3) m/s of the
+    element set by SGP4 every ``spacing`` s over [start, end]; ValueError naming SGP4's
+    error."""
+    from sgp4.api import SGP4_ERRORS
+
+    times = np.arange(start, end + spacing / 2, spacing)
+    err, r, v = sat.sgp4_array(
+        np.full(len(times), sat.jdsatepoch), sat.jdsatepochF + times / 86400.0
+    )
+    if np.any(err):
+        bad = int(np.flatnonzero(err)[0])
+        raise ValueError(
+            f"SGP4 error {int(err[bad])} at {times[bad]:.0f} s from the epoch: "
+            f"{SGP4_ERRORS.get(int(err[bad]), '')}"
+        )
+    return times, np.asarray(r) * 1e3, np.asarray(v) * 1e3
+
+
 def fit_element_set(
     sat: Any,
     model: Any,
@@ -118,8 +139,8 @@ def fit_element_set(
     Args:
         sat: an ``sgp4`` ``Satrec`` (or a :class:`~rhoprop.catalog.CatalogObject`, whose
             ``satrec()`` is used).
-        model: density model or ``DensityField`` covering the span and the orbit's
-            altitudes (a field sampled once for many objects is much faster).
+        model: density model (a sampled one through its atlas's day tiles) or a
+            ``DensityField`` covering the span and the orbit's altitudes.
         drag_parameter: Cd*A/m to start from and the prior's centre, m^2/kg (default
             from B*, or 0.022 when B* <= 0).
         span: (start, end) of the pseudo-observations, s from the epoch; start <= 0 <= end,
@@ -135,8 +156,6 @@ def fit_element_set(
         :class:`FitResult`. Raises ValueError if SGP4 fails over the span or the orbit
         decays within it.
     """
-    from sgp4.api import SGP4_ERRORS
-
     if hasattr(sat, "satrec") and callable(sat.satrec):
         drag_parameter = drag_parameter if drag_parameter is not None else sat.drag_parameter
         sat = sat.satrec()
@@ -148,18 +167,7 @@ def fit_element_set(
     if abs(start / spacing - round(start / spacing)) > 1e-9:
         raise ValueError(f"span start {start} s is not a multiple of spacing {spacing} s")
     epoch = from_jd(sat.jdsatepoch, sat.jdsatepochF, scale="utc")
-    times = np.arange(start, end + spacing / 2, spacing)
-    err, r, v = sat.sgp4_array(
-        np.full(len(times), sat.jdsatepoch), sat.jdsatepochF + times / 86400.0
-    )
-    if np.any(err):
-        bad = int(np.flatnonzero(err)[0])
-        raise ValueError(
-            f"SGP4 error {int(err[bad])} at {times[bad]:.0f} s from the epoch: "
-            f"{SGP4_ERRORS.get(int(err[bad]), '')}"
-        )
-    obs = np.asarray(r) * 1e3
-    obs_v = np.asarray(v) * 1e3
+    times, obs, obs_v = _sgp4_observations(sat, start, end, spacing)
     t0 = add_seconds(epoch, start)
     duration = end - start
     i_epoch = round(-start / spacing)

@@ -7,10 +7,11 @@ between samples (relative speed x half the spacing), so that no approach closer 
 
 from __future__ import annotations
 
+import enum
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -72,6 +73,33 @@ DRAG_TABLE_TOP = 2000e3
 STAGES = ("secondaries", "radial", "propagated", "coarse_grid", "interpolated", "events")
 #: Step of the fixed-step RK8 that takes an object back from a later epoch to ``start``, s.
 BACKWARD_STEP = 30.0
+
+
+class Reached(enum.IntEnum):
+    """How far one secondary got through stages 2-5 of :func:`screen`."""
+
+    #: Not screened: decayed before the window's first grid step, or (``errors="skip"``)
+    #: its propagation raised.
+    SKIPPED = 0
+    #: Propagated; no grid step within reach of the primary.
+    PROPAGATED = 1
+    #: Some grid step passed the coarse-grid bound.
+    COARSE_GRID = 2
+    #: Some interval passed the interpolated bound and was refined.
+    INTERPOLATED = 3
+
+
+@dataclass(frozen=True)
+class _Outcome:
+    """One secondary's stages 2-5: how far it got, why it was skipped or what to note
+    (its decay inside the window), its events within the distance, the exception that
+    skipped it (``errors="skip"``) and the time per stage (s)."""
+
+    reached: Reached
+    reason: str = ""
+    events: tuple[CloseApproach, ...] = ()
+    error: Exception | None = None
+    timings: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -342,9 +370,8 @@ def screen(
        ``distance`` from the primary's range (its propagated radii over the window, padded
        for sampling) is dropped.
     2. **Propagation**: the others are propagated with rhoprop's dynamics through
-       ``model`` (a sampled model is sampled once into a field covering every survivor
-       up to 1,000 km, and once more coarsely for those reaching higher, see
-       :func:`_models_for`)
+       ``model`` (a sampled model through its density atlas: day tiles over every
+       altitude, shared by all objects, see :func:`_models_for`)
        from their epochs to ``start`` (backwards when later) and then over the window
        with outputs every ``grid_step`` s (adaptive DOP853), on threads.
     3. **Coarse grid**: on each grid interval the distance is at least
@@ -386,12 +413,94 @@ def screen(
             before ``end`` (:class:`~rhoprop.errors.DecayError`).
     """
     wall0 = time.perf_counter()
+    prim, objs, itself = _objects(primary, secondaries)
+    check_model(model)
+    w = _window(prim, start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree)
+    if errors not in ("raise", "skip"):
+        raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
+    workers = worker_count(threads)
+    if workers < 1:
+        raise ValueError(f"threads must be >= 1, got {threads!r}")
+    timings = dict.fromkeys(
+        ("primary", "radial", "field", "propagation", "coarse_grid", "interpolated", "refinement"),
+        0.0,
+    )
+    t0 = time.perf_counter()
+    dyn, ptrack, p_range = _primary_track(prim, model, w)
+    timings["primary"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    survivors = _radial_survivors(objs, model, w, p_range)
+    timings["radial"] = time.perf_counter() - t0
+
+    counts = dict.fromkeys(STAGES, 0)
+    counts["secondaries"] = len(objs)
+    counts["radial"] = len(survivors)
+    skipped: list[tuple[str, str]] = [(o.name, "the primary itself") for o in itself]
+    notes: list[tuple[str, str]] = []
+    events: list[CloseApproach] = []
+    if survivors:
+        t0 = time.perf_counter()
+        earliest = min([w.start, *(o.state.epoch for o in survivors)])
+        latest = max([w.end, *(o.state.epoch for o in survivors)])
+        models = _models_for(model, [o.state for o in survivors], earliest, latest, w.floor)
+        for obj, own in zip(survivors, models, strict=True):
+            obj.model = own
+        timings["field"] = time.perf_counter() - t0
+        results = _run_threads(
+            survivors, dyn, ptrack, w.start, w.span, w.step, w.limit, workers, errors, progress
+        )
+        for obj, res in zip(survivors, results, strict=True):
+            for key, seconds in res.timings.items():
+                timings[key] += seconds
+            if res.reached == Reached.SKIPPED:
+                skipped.append((obj.name, res.reason))
+                continue
+            counts["propagated"] += 1
+            if res.reason:
+                notes.append((obj.name, res.reason))
+            counts["coarse_grid"] += res.reached >= Reached.COARSE_GRID
+            counts["interpolated"] += res.reached >= Reached.INTERPOLATED
+            counts["events"] += bool(res.events)
+            events += res.events
+    events.sort(key=lambda e: (e.tca, e.name2))
+    return ScreeningResult(
+        events=events,
+        counts=counts,
+        skipped=skipped,
+        notes=notes,
+        timings=timings,
+        wall=time.perf_counter() - wall0,
+        threads=workers,
+        start=w.start,
+        end=w.end,
+        distance=w.limit,
+        grid_step=w.step,
+    )
+
+
+@dataclass(frozen=True)
+class _Window:
+    """The checked window and settings of a screen: UTC start and end, span (s), distance
+    (m), grid and fine steps (s), floor altitude (m) and zonal degree."""
+
+    start: np.datetime64
+    end: np.datetime64
+    span: float
+    limit: float
+    step: float
+    fine: float
+    floor: float
+    degree: int
+
+
+def _objects(primary: Any, secondaries: Any) -> tuple[_Object, list[_Object], list[_Object]]:
+    """The primary, the secondaries without the primary itself, and those left out as
+    being the primary (same epoch and state)."""
     prim = _as_object(primary, "primary", 0)
     items = _secondaries_list(secondaries)
     if not items:
         raise ValueError("secondaries is empty: nothing to screen the primary against")
     objs = [_as_object(item, f"secondaries[{i}]", i) for i, item in enumerate(items)]
-    # The primary itself among the secondaries (same epoch and state) is left out.
     itself = [
         o
         for o in objs
@@ -400,7 +509,20 @@ def screen(
     objs = [o for o in objs if not any(o is x for x in itself)]
     if not objs:
         raise ValueError("secondaries hold only the primary itself: nothing to screen")
-    check_model(model)
+    return prim, objs, itself
+
+
+def _window(
+    prim: _Object,
+    start: EpochLike,
+    end: EpochLike,
+    distance: float,
+    grid_step: float,
+    fine_step: float,
+    floor_altitude: float,
+    zonal_degree: int,
+) -> _Window:
+    """The screen's window and settings, checked (ValueError naming the argument)."""
     t_start = to_datetime64(start, "start")
     t_end = to_datetime64(end, "end")
     span = seconds_between(t_start, t_end)
@@ -416,111 +538,64 @@ def screen(
             f"{MAX_STEP_FRACTION * period:.0f} s, keeps the cubic Hermite interpolant of the "
             "relative motion meaningful"
         )
-    fine = _validate.positive("fine_step", fine_step)
-    floor = _validate.real("floor_altitude", floor_altitude)
-    degree = zonal_degree_argument(zonal_degree)
-    if errors not in ("raise", "skip"):
-        raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
-    workers = worker_count(threads)
-    if workers < 1:
-        raise ValueError(f"threads must be >= 1, got {threads!r}")
-    timings = dict.fromkeys(
-        (
-            "primary",
-            "radial",
-            "field",
-            "propagation",
-            "coarse_grid",
-            "interpolated",
-            "refinement",
-        ),
-        0.0,
+    return _Window(
+        t_start,
+        t_end,
+        span,
+        limit,
+        step,
+        _validate.positive("fine_step", fine_step),
+        _validate.real("floor_altitude", floor_altitude),
+        zonal_degree_argument(zonal_degree),
     )
 
-    # The primary first: its own radial range over the window, exactly.
-    t0 = time.perf_counter()
-    window = (min(t_start, prim.state.epoch), max(t_end, prim.state.epoch))
-    (prim.model,) = _models_for(model, [prim.state], *window, floor)
-    dyn = _Dynamics(t_start, True, floor, degree, fine)
-    ptrack, pdecay = _coarse_track(prim, dyn, t_start, span, step)
+
+def _primary_track(
+    prim: _Object, model: Any, w: _Window
+) -> tuple[_Dynamics, _Track, tuple[float, float]]:
+    """The dynamics of the screen, the primary's track over the window and its radial
+    range (m, padded for sampling); DecayError if it decays before the end."""
+    (prim.model,) = _models_for(
+        model, [prim.state], min(w.start, prim.state.epoch), max(w.end, prim.state.epoch), w.floor
+    )
+    dyn = _Dynamics(w.start, True, w.floor, w.degree, w.fine)
+    ptrack, pdecay = _coarse_track(prim, dyn, w.start, w.span, w.step)
     if len(ptrack.t) < 2 or pdecay is not None:
-        at = add_seconds(t_start, pdecay) if pdecay is not None else t_start
+        at = add_seconds(w.start, pdecay) if pdecay is not None else w.start
         raise DecayError(
             f"the primary {prim.name} decays at {at} UTC, before the end of the screening "
-            f"window ({t_end}); screen a window that ends before its decay"
+            f"window ({w.end}); screen a window that ends before its decay"
         )
     rp_n = np.linalg.norm(ptrack.pos, axis=1)
     rdot = np.abs(np.einsum("ij,ij->i", ptrack.pos, ptrack.vel)) / rp_n
-    sample_pad = float(rdot.max()) * step / 2 + MAX_ACCELERATION * step**2 / 8
-    p_low, p_high = float(rp_n.min()) - sample_pad, float(rp_n.max()) + sample_pad
-    timings["primary"] = time.perf_counter() - t0
+    pad = float(rdot.max()) * w.step / 2 + MAX_ACCELERATION * w.step**2 / 8
+    return dyn, ptrack, (float(rp_n.min()) - pad, float(rp_n.max()) + pad)
 
-    # Stage 1: radial prefilter.
-    t0 = time.perf_counter()
+
+def _radial_survivors(
+    objs: list[_Object], model: Any, w: _Window, p_range: tuple[float, float]
+) -> list[_Object]:
+    """Stage 1: the secondaries whose padded radial range (with a bound on their drag
+    decay) comes within the distance of the primary's."""
+    p_low, p_high = p_range
     perigee, apogee, a, p = _radial_ranges(objs)
-    pad = ZONAL_PAD[2 if degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
+    pad = ZONAL_PAD[2 if w.degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
     # Each object's span: from the earlier of its epoch and start to the later of it and end.
     epochs = np.array([o.state.epoch for o in objs], dtype="datetime64[ns]")
-    offsets = to_seconds(epochs, t_start)
-    spans = np.maximum(offsets, span) - np.minimum(offsets, 0.0)
+    offsets = to_seconds(epochs, w.start)
+    spans = np.maximum(offsets, w.span) - np.minimum(offsets, 0.0)
     high = apogee + pad
     low_no_drag = perigee - pad
-    above = low_no_drag > p_high + limit
+    above = low_no_drag > p_high + w.limit
     decay = np.zeros(len(objs))
     if above.any():
         idx = np.flatnonzero(above)
-        first = min(t_start, epochs[idx].min())
+        first = min(w.start, epochs[idx].min())
         decay[idx] = _drag_decay(
-            model, [objs[i] for i in idx], perigee[idx], a[idx], spans[idx], first, t_end
+            model, [objs[i] for i in idx], perigee[idx], a[idx], spans[idx], first, w.end
         )
-    keep = ~((low_no_drag - decay > p_high + limit) | (high < p_low - limit))
-    survivors = [o for o, k in zip(objs, keep, strict=True) if k]
-    timings["radial"] = time.perf_counter() - t0
-
-    counts = dict.fromkeys(STAGES, 0)
-    counts["secondaries"] = len(objs)
-    counts["radial"] = len(survivors)
-    skipped: list[tuple[str, str]] = [(o.name, "the primary itself") for o in itself]
-    notes: list[tuple[str, str]] = []
-    events: list[CloseApproach] = []
-    if survivors:
-        t0 = time.perf_counter()
-        earliest = min([t_start, *(o.state.epoch for o in survivors)])
-        latest = max([t_end, *(o.state.epoch for o in survivors)])
-        models = _models_for(model, [o.state for o in survivors], earliest, latest, floor)
-        for obj, own in zip(survivors, models, strict=True):
-            obj.model = own
-        timings["field"] = time.perf_counter() - t0
-        results = _run_threads(
-            survivors, dyn, ptrack, t_start, span, step, limit, workers, errors, progress
-        )
-        for obj, res in zip(survivors, results, strict=True):
-            for key in ("propagation", "coarse_grid", "interpolated", "refinement"):
-                timings[key] += res["timings"].get(key, 0.0)
-            if res["skip"]:
-                skipped.append((obj.name, res["skip"]))
-                continue
-            counts["propagated"] += 1
-            if res["note"]:
-                notes.append((obj.name, res["note"]))
-            counts["coarse_grid"] += res["coarse"]
-            counts["interpolated"] += res["interp"]
-            counts["events"] += bool(res["events"])
-            events += res["events"]
-    events.sort(key=lambda e: (e.tca, e.name2))
-    return ScreeningResult(
-        events=events,
-        counts=counts,
-        skipped=skipped,
-        notes=notes,
-        timings=timings,
-        wall=time.perf_counter() - wall0,
-        threads=workers,
-        start=t_start,
-        end=t_end,
-        distance=limit,
-        grid_step=step,
-    )
+    keep = ~((low_no_drag - decay > p_high + w.limit) | (high < p_low - w.limit))
+    return [o for o, k in zip(objs, keep, strict=True) if k]
 
 
 def _screen_one(
@@ -531,52 +606,40 @@ def _screen_one(
     span: float,
     step: float,
     limit: float,
-) -> dict[str, Any]:
+) -> _Outcome:
     """Stages 2-5 for one secondary."""
-    out: dict[str, Any] = {
-        "skip": "",
-        "note": "",
-        "coarse": False,
-        "interp": False,
-        "events": [],
-        "timings": {},
-    }
-    tm = out["timings"]
+    tm: dict[str, float] = {}
     t0 = time.perf_counter()
     track, decay = _coarse_track(obj, dyn, start, span, step)
     tm["propagation"] = time.perf_counter() - t0
     if len(track.t) < 2:
         when = add_seconds(start, decay) if decay is not None else start
-        out["skip"] = f"decayed at {when} UTC, before the window ends its first grid step"
-        return out
+        why = f"decayed at {when} UTC, before the window ends its first grid step"
+        return _Outcome(Reached.SKIPPED, why, timings=tm)
+    note = ""
     if decay is not None:
-        out["note"] = f"decayed at {add_seconds(start, decay)} UTC: screened up to then"
-    n = len(track.t)
+        note = f"decayed at {add_seconds(start, decay)} UTC: screened up to then"
     t0 = time.perf_counter()
-    _d, lower = _lower_bounds(prim, track, n)
+    _d, lower = _lower_bounds(prim, track, len(track.t))
     k = np.flatnonzero(lower <= limit)
     tm["coarse_grid"] = time.perf_counter() - t0
     if not len(k):
-        return out
-    out["coarse"] = True
+        return _Outcome(Reached.PROPAGATED, note, timings=tm)
     t0 = time.perf_counter()
     margin = _interpolation_margin(prim, track, step)
     k = k[_hermite_bounds(prim, track, k) <= limit + margin]
     tm["interpolated"] = time.perf_counter() - t0
     if not len(k):
-        return out
-    out["interp"] = True
+        return _Outcome(Reached.COARSE_GRID, note, timings=tm)
     t0 = time.perf_counter()
     last = float(track.t[-1])
     found: list[tuple[float, np.ndarray, np.ndarray]] = []
     for lo, hi in _merge((float(track.t[j]), float(track.t[j + 1])) for j in k):
         found += _refine(dyn, prim, track, lo, hi, 0.0, last)
-    for item in _dedupe(found):
-        ev = _event(dyn, prim, track, *item)
-        if ev.miss_distance <= limit:
-            out["events"].append(ev)
+    events = [_event(dyn, prim, track, *item) for item in _dedupe(found)]
     tm["refinement"] = time.perf_counter() - t0
-    return out
+    near = tuple(ev for ev in events if ev.miss_distance <= limit)
+    return _Outcome(Reached.INTERPOLATED, note, near, timings=tm)
 
 
 def _object_error(err: Exception, obj: _Object) -> Exception:
@@ -597,26 +660,19 @@ def _run_threads(
     workers: int,
     errors: str,
     progress: bool | Callable[[int], None],
-) -> list[dict[str, Any]]:
+) -> list[_Outcome]:
     """Stages 2-5 for every object on ``workers`` threads, results in order. Ctrl-C (or
     an error) cancels the objects not started; the running ones end within ~1 ms."""
     stop = threading.Event()
 
-    def one(obj: _Object) -> dict[str, Any]:
+    def one(obj: _Object) -> _Outcome:
         if stop.is_set():
             raise KeyboardInterrupt("screening interrupted")
         try:
             return _screen_one(obj, dyn, prim, start, span, step, limit)
         except Exception as err:
             if errors == "skip":
-                return {
-                    "skip": f"{type(err).__name__}: {err}",
-                    "note": "",
-                    "coarse": False,
-                    "interp": False,
-                    "events": [],
-                    "timings": {},
-                }
+                return _Outcome(Reached.SKIPPED, f"{type(err).__name__}: {err}", error=err)
             named = _object_error(err, obj)
             if named is err:
                 raise
