@@ -123,16 +123,16 @@ def test_ccsp_many_returns_each_objects_error_and_decay():
 def one_by_one(cat, model, end, **kw):
     """The catalog run object by object, as before the batched core call."""
     objs = list(cat)
-    cfg = {
-        "method": "ccsp",
-        "n": 100,
-        "kappa": rp.kappa.GaussMarkov(),
-        "seed": 0,
-        "update_interval": kw.get("update_interval", 3600.0),
-        "floor_altitude": DEFAULT_FLOOR_ALTITUDE,
-        "errors": kw.get("errors", "raise"),
-        "zonal_degree": 2,
-    }
+    cfg = catalog_run.RunSettings(
+        method="ccsp",
+        n=100,
+        kappa=rp.kappa.GaussMarkov(),
+        seed=0,
+        update_interval=kw.get("update_interval", 3600.0),
+        floor_altitude=DEFAULT_FLOOR_ALTITUDE,
+        errors=kw.get("errors", "raise"),
+        zonal_degree=2,
+    )
     plans = catalog_run._plans(objs, kw.get("initial_covariance"), "auto")
     step = kw.get("output_step", 3600.0)
     epochs = catalog_run.common_epochs(objs, np.datetime64(end, "ns"), step)
@@ -155,11 +155,11 @@ def test_catalog_equals_object_by_object(density, end):
     )
     alone = one_by_one(cat, model, end, initial_covariance="object")
     for k, ref in enumerate(alone):
-        assert batched.status[k] == ref["status"] and batched.reason[k] == ref["reason"]
-        np.testing.assert_array_equal(batched.valid[k], ref["valid"])
-        v = ref["valid"]
-        assert_close(batched.mean[k][v], ref["mean"][v])
-        assert_close(batched.covariance[k][v], ref["cov"][v])
+        assert batched.status[k] == ref.status.value and batched.reason[k] == ref.reason
+        np.testing.assert_array_equal(batched.valid[k], ref.valid)
+        v = ref.valid
+        assert_close(batched.mean[k][v], ref.mean[v])
+        assert_close(batched.covariance[k][v], ref.cov[v])
     if density == 1e-8:
         assert "shortened" in set(batched.status)
     if density == 3e-9:

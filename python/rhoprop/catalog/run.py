@@ -6,6 +6,7 @@ recorded per object), never swallowed."""
 from __future__ import annotations
 
 import concurrent.futures as cf
+import enum
 import threading
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -59,6 +60,7 @@ CCSP_CHUNK = 16
 CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
 
 #: Status of an object in a :class:`CatalogResult`.
+#: The statuses an object can end with (:class:`Status` values).
 STATUSES = ("propagated", "decayed", "shortened", "failed")
 #: What ``errors`` of :func:`propagate_catalog` accepts.
 ERRORS = ("raise", "record")
@@ -293,6 +295,49 @@ def _initial_covariance(obj: CatalogObject, choice: Any) -> tuple[np.ndarray | N
     return cov, note
 
 
+class Status(enum.Enum):
+    """How one object's run ended (the strings of :data:`STATUSES` in results)."""
+
+    PROPAGATED = "propagated"
+    DECAYED = "decayed"
+    SHORTENED = "shortened"
+    FAILED = "failed"
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """The settings every object of a catalog run shares (checked by
+    :func:`propagate_catalog`): ``method`` ("ccsp" or "monte_carlo"), members ``n`` and
+    ``kappa`` and base ``seed`` of a Monte Carlo, the CCSP's ``update_interval`` (s), the
+    ``floor_altitude`` (m), ``errors`` ("raise" or "record") and the ``zonal_degree``."""
+
+    method: str
+    n: int
+    kappa: KappaProcess
+    seed: int
+    update_interval: float
+    floor_altitude: float
+    errors: str
+    zonal_degree: int
+
+
+@dataclass(frozen=True)
+class ObjectOutcome:
+    """One object's run: means (nt, 6) and covariances (nt, 6, 6) on the common epochs
+    (NaN where invalid), which are ``valid``, the mean orbit's decay (s from the object's
+    epoch, or None), the fraction of members decayed, the :class:`Status` and its reason,
+    and the exception of a failed object (``errors="record"``)."""
+
+    mean: np.ndarray
+    cov: np.ndarray
+    valid: np.ndarray
+    decay: float | None
+    fraction: float
+    status: Status
+    reason: str
+    error: Exception | None = None
+
+
 @dataclass(frozen=True)
 class ObjectPlan:
     """What one object of a catalog run is run with, decided once before any run: its
@@ -345,12 +390,12 @@ def _run_object(
     plan: ObjectPlan,
     model: Any,
     epochs: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     stop: threading.Event | None = None,
     done: dict[str, Any] | None = None,
-) -> dict[str, Any]:
+) -> ObjectOutcome:
     """Propagates one object to the common epochs; returns arrays for the result. With
-    ``cfg["errors"] == "record"`` an error becomes status "failed"; else it is raised
+    ``cfg.errors == "record"`` an error becomes status "failed"; else it is raised
     with the object named and chained to the cause. ``stop`` (local runs) ends the
     object's Monte Carlo early after Ctrl-C in the caller. ``done`` holds runs already
     made for this object by :func:`_ccsp_chunk` (its mean orbit, its CCSP), used instead
@@ -360,31 +405,32 @@ def _run_object(
     try:
         return _propagate_object(plan, model, epochs, cfg, stop, done or {})
     except Exception as err:
-        if cfg["errors"] == "raise":
+        if cfg.errors == "raise":
             named = _object_error(err, plan.obj)
             if named is err:
                 raise
             raise named from err
         nt = len(epochs)
-        return {
-            "mean": np.full((nt, 6), np.nan),
-            "cov": np.full((nt, 6, 6), np.nan),
-            "valid": np.zeros(nt, dtype=bool),
-            "decay": None,
-            "fraction": 0.0,
-            "status": "failed",
-            "reason": f"{type(err).__name__}: {err}",
-        }
+        return ObjectOutcome(
+            mean=np.full((nt, 6), np.nan),
+            cov=np.full((nt, 6, 6), np.nan),
+            valid=np.zeros(nt, dtype=bool),
+            decay=None,
+            fraction=0.0,
+            status=Status.FAILED,
+            reason=f"{type(err).__name__}: {err}",
+            error=err,
+        )
 
 
 def _propagate_object(
     plan: ObjectPlan,
     model: Any,
     epochs: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     stop: threading.Event | None,
     done: dict[str, Any],
-) -> dict[str, Any]:
+) -> ObjectOutcome:
     obj, initial = plan.obj, plan.initial
     craft = Spacecraft(1.0, obj.drag_parameter)
     offsets = to_seconds(epochs, obj.state.epoch)
@@ -392,8 +438,8 @@ def _propagate_object(
     out_mean = np.full((nt, 6), np.nan)
     out_cov = np.full((nt, 6, 6), np.nan)
     fraction = 0.0
-    status, reason = "propagated", ""
-    if cfg["method"] == "ccsp":
+    status, reason = Status.PROPAGATED, ""
+    if cfg.method == "ccsp":
         decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done)
         if k:
             means, covs, stopped = _ccsp_outputs(
@@ -409,7 +455,7 @@ def _propagate_object(
             reached = len(means)
             out_mean[:reached], out_cov[:reached] = means, covs
             if stopped:
-                status, reason = "shortened", stopped
+                status, reason = Status.SHORTENED, stopped
     else:
 
         def check(_done: int) -> None:
@@ -422,15 +468,15 @@ def _propagate_object(
             craft,
             model,
             output_times=offsets,
-            n=cfg["n"],
+            n=cfg.n,
             drag_sigma=plan.drag_sigma,
-            kappa=cfg["kappa"],
-            seed=cfg["seed"] + plan.index,
+            kappa=cfg.kappa,
+            seed=cfg.seed + plan.index,
             output_step=None,
             initial_covariance=initial,
             progress=check,
-            floor_altitude=cfg["floor_altitude"],
-            zonal_degree=cfg["zonal_degree"],
+            floor_altitude=cfg.floor_altitude,
+            zonal_degree=cfg.zonal_degree,
         )
         decay = mc.mean_orbit.decayed_at
         m = mc.moments()
@@ -442,16 +488,16 @@ def _propagate_object(
         at = add_seconds(obj.state.epoch, decay)
         # Decay is the headline; an earlier stop of the CCSP stays in the reason.
         reason = f"the mean orbit decays at {_iso(at)}" + (f"; {reason}" if reason else "")
-        status = "decayed"
-    return {
-        "mean": out_mean,
-        "cov": out_cov,
-        "valid": valid,
-        "decay": decay,
-        "fraction": fraction,
-        "status": status,
-        "reason": reason,
-    }
+        status = Status.DECAYED
+    return ObjectOutcome(
+        mean=out_mean,
+        cov=out_cov,
+        valid=valid,
+        decay=decay,
+        fraction=fraction,
+        status=status,
+        reason=reason,
+    )
 
 
 def _mean_orbit(
@@ -459,7 +505,7 @@ def _mean_orbit(
     craft: Spacecraft,
     model: Any,
     offsets: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     done: dict[str, Any],
 ) -> tuple[float | None, int]:
     """The decay time of the mean orbit (s from the object's epoch, or None) and how many
@@ -474,8 +520,8 @@ def _mean_orbit(
             model,
             float(offsets[-1]),
             method="rk8",
-            floor_altitude=cfg["floor_altitude"],
-            zonal_degree=cfg["zonal_degree"],
+            floor_altitude=cfg.floor_altitude,
+            zonal_degree=cfg.zonal_degree,
         )
     decay = done["mean"].decayed_at
     return decay, int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
@@ -485,9 +531,9 @@ def _ccsp_chunk(
     model: Any,
     chunk: list[ObjectPlan],
     epochs: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     stop: threading.Event | None = None,
-) -> list[tuple[int, dict[str, Any]]]:
+) -> list[tuple[int, ObjectOutcome]]:
     """The CCSP objects of a chunk: each object's mean orbit first, then the CCSPs of all
     of them in one core call (objects in parallel, each object's sigma points in one
     batch; bit-identical to running each alone), then each object as
@@ -510,7 +556,7 @@ def _ccsp_chunk(
             {
                 "state": obj.state,
                 "spacecraft": craft,
-                "update_times": _update_times(offsets, cfg["update_interval"]),
+                "update_times": _update_times(offsets, cfg.update_interval),
                 "initial_covariance": plan.initial,
                 "drag_sigma": plan.drag_sigma,
             }
@@ -527,8 +573,8 @@ def _ccsp_chunk(
             outs = ccsp_many(
                 runs,
                 model,
-                floor_altitude=cfg["floor_altitude"],
-                zonal_degree=cfg["zonal_degree"],
+                floor_altitude=cfg.floor_altitude,
+                zonal_degree=cfg.zonal_degree,
                 progress=check,
             )
         except Exception:
@@ -546,14 +592,14 @@ def _ccsp_chunk(
 MEAN_ORBIT_MARGIN = 50e3
 
 
-def _clear_of_floor(result: CcspResult, cfg: dict[str, Any]) -> bool:
+def _clear_of_floor(result: CcspResult, cfg: RunSettings) -> bool:
     """Whether a CCSP ran to its end with its mean at least :data:`MEAN_ORBIT_MARGIN`
     above the floor throughout (|r| - equatorial radius, a lower bound of the geodetic
     altitude)."""
     if result.decayed_at is not None:
         return False
     low = float(np.min(np.linalg.norm(result.mean[:, :3], axis=1))) - R_EARTH
-    return bool(low > float(cfg["floor_altitude"]) + MEAN_ORBIT_MARGIN)
+    return bool(low > float(cfg.floor_altitude) + MEAN_ORBIT_MARGIN)
 
 
 def _iso(t: np.datetime64) -> str:
@@ -565,7 +611,7 @@ def _ccsp_outputs(
     craft: Spacecraft,
     model: Any,
     offsets: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     initial: np.ndarray | None,
     drag_sigma: float = 0.0,
     first: CcspResult | None = None,
@@ -584,10 +630,10 @@ def _ccsp_outputs(
             state,
             craft,
             model,
-            update_times=_update_times(offsets[:k], cfg["update_interval"]),
+            update_times=_update_times(offsets[:k], cfg.update_interval),
             initial_covariance=initial,
-            floor_altitude=cfg["floor_altitude"],
-            zonal_degree=cfg["zonal_degree"],
+            floor_altitude=cfg.floor_altitude,
+            zonal_degree=cfg.zonal_degree,
             drag_sigma=drag_sigma,
         )
 
@@ -631,11 +677,11 @@ def _update_times(offsets: np.ndarray, interval: float) -> np.ndarray:
 
 
 def _run_chunk(
-    model: Any, chunk: list[ObjectPlan], epochs: np.ndarray, cfg: dict[str, Any]
-) -> list[tuple[int, dict[str, Any]]]:
+    model: Any, chunk: list[ObjectPlan], epochs: np.ndarray, cfg: RunSettings
+) -> list[tuple[int, ObjectOutcome]]:
     """A Dask task: run the objects of the chunk (the model arrives unpickled once per
     worker); CCSPs in one core call per chunk."""
-    if cfg["method"] == "ccsp":
+    if cfg.method == "ccsp":
         return _ccsp_chunk(model, chunk, epochs, cfg)
     return [(p.index, _run_object(p, model, epochs, cfg)) for p in chunk]
 
@@ -657,15 +703,15 @@ def _run_on_dask(
     model: Any,
     chunks: list[list[ObjectPlan]],
     epochs: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     bar: ProgressBar | None,
-) -> dict[int, dict[str, Any]]:
+) -> dict[int, ObjectOutcome]:
     """Runs the chunks on a Dask cluster. The atmosphere is scattered to every worker once
     (broadcast); tasks retry twice; a chunk whose task is lost with a dying worker (or
     whose scattered atmosphere went with it) is submitted again, up to three rounds, so no
     object is lost and none is counted twice (results are keyed by object index). An
     exception the task itself raised is raised here at once, with its own type."""
-    results: dict[int, dict[str, Any]] = {}
+    results: dict[int, ObjectOutcome] = {}
     pending = list(range(len(chunks)))
     last: BaseException | None = None
     for _ in range(3):
@@ -719,28 +765,28 @@ def _run_local(
     plans: list[ObjectPlan],
     shipped: Any,
     epochs: np.ndarray,
-    cfg: dict[str, Any],
+    cfg: RunSettings,
     bar: ProgressBar | None,
-) -> dict[int, dict[str, Any]]:
+) -> dict[int, ObjectOutcome]:
     """Objects on threads (the core releases the GIL), each also parallel over its own
     sigma points or members. Ctrl-C (or an error) cancels the objects not started and
     stops running Monte Carlos at once; a running CCSP finishes its object first."""
     stop = threading.Event()
     workers = worker_count()
-    results: dict[int, dict[str, Any]] = {}
+    results: dict[int, ObjectOutcome] = {}
 
     def tick(_i: int, _result: object) -> None:
         if bar is not None:
             bar(len(results))
 
-    if cfg["method"] == "ccsp":
+    if cfg.method == "ccsp":
         # Chunks of objects per core call (objects in parallel there), small enough that
         # every worker gets several.
         size = max(1, min(CCSP_CHUNK, -(-len(plans) // (4 * workers))))
         indexed = by_epoch(plans)
         chunks = [indexed[c : c + size] for c in range(0, len(indexed), size)]
 
-        def chunk_done(i: int, done: list[tuple[int, dict[str, Any]]]) -> None:
+        def chunk_done(i: int, done: list[tuple[int, ObjectOutcome]]) -> None:
             results.update(done)
             tick(i, done)
 
@@ -753,7 +799,7 @@ def _run_local(
         )
     else:
 
-        def object_done(i: int, result: dict[str, Any]) -> None:
+        def object_done(i: int, result: ObjectOutcome) -> None:
             results[i] = result
             tick(i, result)
 
@@ -857,16 +903,16 @@ def propagate_catalog(
         )
     step = _validate.positive("output_step", output_step)
     floor = _validate.real("floor_altitude", floor_altitude)
-    cfg = {
-        "method": method,
-        "n": int(n),
-        "kappa": process,
-        "seed": int(seed),
-        "update_interval": _validate.positive("update_interval", update_interval),
-        "floor_altitude": floor,
-        "errors": errors,
-        "zonal_degree": zonal_degree_argument(zonal_degree),
-    }
+    cfg = RunSettings(
+        method=method,
+        n=int(n),
+        kappa=process,
+        seed=int(seed),
+        update_interval=_validate.positive("update_interval", update_interval),
+        floor_altitude=floor,
+        errors=errors,
+        zonal_degree=zonal_degree_argument(zonal_degree),
+    )
     plans = _plans(objs, initial_covariance, drag_sigma)
     notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step)
@@ -885,9 +931,7 @@ def propagate_catalog(
     order = [results[i] for i in range(len(objs))]
     decay = np.array(
         [
-            np.datetime64("NaT", "ns")
-            if r["decay"] is None
-            else add_seconds(o.state.epoch, r["decay"])
+            np.datetime64("NaT", "ns") if r.decay is None else add_seconds(o.state.epoch, r.decay)
             for r, o in zip(order, objs, strict=True)
         ],
         dtype="datetime64[ns]",
@@ -895,14 +939,14 @@ def propagate_catalog(
     return CatalogResult(
         objects=objs,
         epochs=epochs,
-        mean=np.stack([r["mean"] for r in order]),
-        covariance=np.stack([r["cov"] for r in order]),
-        valid=np.stack([r["valid"] for r in order]),
+        mean=np.stack([r.mean for r in order]),
+        covariance=np.stack([r.cov for r in order]),
+        valid=np.stack([r.valid for r in order]),
         decay_epoch=decay,
-        decay_fraction=np.array([r["fraction"] for r in order]),
+        decay_fraction=np.array([r.fraction for r in order]),
         method=method,
-        status=np.array([r["status"] for r in order], dtype=object),
-        reason=np.array([r["reason"] for r in order], dtype=object),
+        status=np.array([r.status.value for r in order], dtype=object),
+        reason=np.array([r.reason for r in order], dtype=object),
         covariance_note=np.array(notes, dtype=object),
         drag_sigma=np.array([p.drag_sigma for p in plans], dtype=float),
     )
