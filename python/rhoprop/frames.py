@@ -6,9 +6,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _core
-from .time import to_datetime64_array, ut1_seconds
+from .time import EpochsLike, to_datetime64_array, ut1_seconds
 
 
 def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
@@ -25,7 +26,7 @@ def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
     return np.ascontiguousarray(a2), single
 
 
-def _ut1(epochs: Any, n: int) -> np.ndarray:
+def _ut1(epochs: EpochsLike, n: int) -> np.ndarray:
     """The core's Earth-rotation time (UT1 = UTC seconds since 2000-01-01T12:00, see
     :func:`rhoprop.time.ut1_seconds`) of one epoch (repeated n times) or of n epochs."""
     values = to_datetime64_array(epochs, "epochs")
@@ -37,7 +38,7 @@ def _ut1(epochs: Any, n: int) -> np.ndarray:
     return out
 
 
-def gmst(epochs: Any) -> np.ndarray | float:
+def gmst(epochs: EpochsLike) -> np.ndarray | float:
     """Greenwich mean sidereal time (IAU-82), rad in [0, 2 pi), at UTC epochs (UT1 = UTC):
     one epoch gives a float, several an array."""
     values = to_datetime64_array(epochs, "epochs")
@@ -46,7 +47,7 @@ def gmst(epochs: Any) -> np.ndarray | float:
     return _core.gmst(_ut1(values.ravel(), values.size)).reshape(values.shape)
 
 
-def inertial_to_fixed(epochs: Any, positions: Any) -> np.ndarray:
+def inertial_to_fixed(epochs: EpochsLike, positions: npt.ArrayLike) -> np.ndarray:
     """Inertial positions (3,) or (n, 3), m -> Earth-fixed, rotated about z by GMST at
     ``epochs`` (one epoch or n)."""
     p, single = _rows("positions", positions)
@@ -54,7 +55,7 @@ def inertial_to_fixed(epochs: Any, positions: Any) -> np.ndarray:
     return out[0] if single else out
 
 
-def fixed_to_inertial(epochs: Any, positions_fixed: Any) -> np.ndarray:
+def fixed_to_inertial(epochs: EpochsLike, positions_fixed: npt.ArrayLike) -> np.ndarray:
     """Earth-fixed positions (3,) or (n, 3), m -> inertial, rotated about z by -GMST at
     ``epochs`` (one epoch or n); the inverse of :func:`inertial_to_fixed`."""
     p, single = _rows("positions_fixed", positions_fixed)
@@ -71,7 +72,7 @@ def fixed_to_inertial(epochs: Any, positions_fixed: Any) -> np.ndarray:
 GEODETIC_RADII = (50e3, 1e15)
 
 
-def geodetic(positions_fixed: Any) -> np.ndarray:
+def geodetic(positions_fixed: npt.ArrayLike) -> np.ndarray:
     """Earth-fixed positions (3,) or (n, 3), m -> geodetic WGS-84 [lat deg, lon deg,
     alt m], closed form (Heikkinen), sub-millimetre. Positions within 50 km of the centre
     or beyond 1e15 m are a ValueError (no closed-form answer there)."""
@@ -100,7 +101,7 @@ def _finite(what: str, out: np.ndarray) -> np.ndarray:
     return out
 
 
-def geodetic_to_fixed(lat: Any, lon: Any, alt: Any) -> np.ndarray:
+def geodetic_to_fixed(lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike) -> np.ndarray:
     """Geodetic WGS-84 latitude, longitude (deg) and altitude (m) -> Earth-fixed (…, 3), m."""
     la, lo, al = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (lat, lon, alt)))
     lla = np.stack([la.ravel(), lo.ravel(), al.ravel()], axis=1)
@@ -112,7 +113,7 @@ def geodetic_to_fixed(lat: Any, lon: Any, alt: Any) -> np.ndarray:
     return out.reshape((*la.shape, 3))
 
 
-def rtn_basis(position: Any, velocity: Any) -> np.ndarray:
+def rtn_basis(position: npt.ArrayLike, velocity: npt.ArrayLike) -> np.ndarray:
     """RTN basis (3, 3) or (n, 3, 3) of the orbit through ``position`` (m) and
     ``velocity`` (m/s): rows R = r/|r|, T = N x R, N = (r x v)/|r x v|."""
     p, single = _rows("position", position)
@@ -123,7 +124,9 @@ def rtn_basis(position: Any, velocity: Any) -> np.ndarray:
     return out[0] if single else out
 
 
-def to_rtn(positions: Any, ref_positions: Any, ref_velocities: Any) -> np.ndarray:
+def to_rtn(
+    positions: npt.ArrayLike, ref_positions: npt.ArrayLike, ref_velocities: npt.ArrayLike
+) -> np.ndarray:
     """Position differences ``positions - ref_positions`` (…, 3), m, expressed in the RTN
     frame of the reference orbit (radial, along-track, cross-track). ``positions`` may
     carry leading member axes: shape (..., n, 3) against references (n, 3)."""

@@ -34,6 +34,7 @@ import datetime as _dt
 import math
 import re
 import sys
+from collections.abc import Sequence
 from typing import Any, Protocol, overload
 
 import erfa  # type: ignore[import-untyped]
@@ -52,6 +53,9 @@ class TimeLike(Protocol):
 
 
 EpochLike = str | _dt.datetime | _dt.date | np.datetime64 | TimeLike
+#: One epoch or many: an :data:`EpochLike`, a sequence of them or an array (datetime64,
+#: strings, an astropy ``Time`` array).
+EpochsLike = EpochLike | Sequence[EpochLike] | NDArray[Any]
 
 _NS_PER_S = 1_000_000_000
 _NS_PER_DAY = 86_400 * _NS_PER_S
@@ -150,7 +154,7 @@ def _utc_from_tai_ns(tai_ns: NDArray[np.int64]) -> NDArray[np.int64]:
     return u
 
 
-def tai_minus_utc(epochs: Any) -> NDArray[np.float64] | float:
+def tai_minus_utc(epochs: EpochsLike) -> NDArray[np.float64] | float:
     """TAI - UTC, s, at UTC ``epochs`` (leap seconds from ERFA's table; 37 s since
     2017-01-01). Scalar in, float out."""
     ns = _ns(to_datetime64_array(epochs, "epochs"))
@@ -334,7 +338,7 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
 
 
-def to_datetime64_array(epochs: Any, name: str = "epochs") -> NDArray[np.datetime64]:
+def to_datetime64_array(epochs: EpochsLike, name: str = "epochs") -> NDArray[np.datetime64]:
     """UTC epochs as a ``datetime64[ns]`` array of the input's shape: a datetime64 array,
     a sequence or array of anything :func:`to_datetime64` accepts, or an astropy ``Time``
     (any scale and shape). A scalar gives a 0-d array.
@@ -472,7 +476,7 @@ def seconds_between(start: EpochLike, end: EpochLike) -> float:
     return float(_seconds(tai[1], tai[0]))
 
 
-def to_seconds(epochs: Any, origin: EpochLike) -> NDArray[np.float64]:
+def to_seconds(epochs: EpochsLike, origin: EpochLike) -> NDArray[np.float64]:
     """Elapsed SI seconds (float array of the input's shape) from ``origin`` to each of
     ``epochs`` (UTC; anything :func:`to_datetime64_array` accepts), leap seconds
     included."""
@@ -495,10 +499,10 @@ def ut1_seconds(epochs: EpochLike, name: str = ...) -> float: ...
 
 
 @overload
-def ut1_seconds(epochs: Any, name: str = ...) -> Any: ...
+def ut1_seconds(epochs: EpochsLike, name: str = ...) -> Any: ...
 
 
-def ut1_seconds(epochs: Any, name: str = "epoch") -> Any:
+def ut1_seconds(epochs: EpochsLike, name: str = "epoch") -> Any:
     """The core's Earth-rotation time: UT1 seconds since 2000-01-01T12:00 UT1 with
     UT1 = UTC (86400 s per day, leap seconds not counted), as ``rhoprop._core`` takes for
     its ``epoch`` and ``ut1`` arguments (GMST, IAU-82). A float for one epoch, else a
@@ -508,7 +512,7 @@ def ut1_seconds(epochs: Any, name: str = "epoch") -> Any:
     return float(seconds) if values.ndim == 0 else np.asarray(seconds, dtype=np.float64)
 
 
-def core_times(epochs: Any, origin: EpochLike) -> NDArray[np.float64]:
+def core_times(epochs: EpochsLike, origin: EpochLike) -> NDArray[np.float64]:
     """The core's time argument at ``epochs`` for a run that starts at ``origin``:
     ``ut1_seconds(origin)`` plus the elapsed SI seconds from ``origin`` (what the core
     itself computes as ``epoch + t``). Equals :func:`ut1_seconds` unless a leap second

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..constants import MU
 from ..ensemble import EnsembleResult
@@ -316,7 +317,7 @@ def density_pc(
     lead_time: float | None = None,
     drag_parameters: tuple[float | None, float | None] = (None, None),
     method: str = "ccsp",
-    weights: Any = None,
+    weights: npt.ArrayLike | None = None,
     shape: str = "circle",
     **method_options: Any,
 ) -> DensityPc:

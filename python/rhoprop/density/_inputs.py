@@ -3,16 +3,15 @@ reach: a leaf module that the model protocol and the sampled field both use."""
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
+import numpy.typing as npt
 
 from ..constants import MU, R_EARTH, R_POLE
-from ..time import to_datetime64_array
+from ..time import EpochsLike, to_datetime64_array
 
 
 def broadcast_inputs(
-    times: Any, lat: Any, lon: Any, alt: Any
+    times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Broadcasts and checks ``mean_std`` inputs: UTC times (datetime64, ISO strings,
     datetimes or an astropy Time; see :func:`rhoprop.time.to_datetime64_array`) as
@@ -34,7 +33,7 @@ def broadcast_inputs(
 
 
 def altitude_band(
-    position: Any, velocity: Any, below: float = 50e3, above: float = 25e3
+    position: npt.ArrayLike, velocity: npt.ArrayLike, below: float = 50e3, above: float = 25e3
 ) -> tuple[float, float]:
     """Geodetic altitude range (m) an orbit can reach: perigee radius minus the equatorial
     radius, apogee radius minus the polar radius, widened by ``below``/``above`` m for

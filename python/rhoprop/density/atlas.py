@@ -48,11 +48,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core
 from ..cache import cache_dir, entry_lock, load_entry, store_entry
 from ..errors import OutsideRecordError
-from ..time import EpochLike, add_seconds, to_datetime64, ut1_seconds
+from ..time import EpochLike, EpochsLike, add_seconds, to_datetime64, ut1_seconds
 from .field import FieldResolution, time_nodes
 
 #: Top of every atlas grid, m (above it: the exponential extrapolation of the module doc).
@@ -256,7 +257,9 @@ class Atlas:
 
     # -- the protocol of a density model ---------------------------------------------------
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The model's own mean and standard deviation, kg/m^3 (not the tiles')."""
         result: tuple[np.ndarray, np.ndarray] = self.model.mean_std(times, lat, lon, alt)
         return result

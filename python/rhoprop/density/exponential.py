@@ -5,9 +5,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core, _validate
 from ..constants import R_EARTH
+from ..time import EpochsLike
 from ._inputs import broadcast_inputs
 
 
@@ -51,7 +53,9 @@ class Exponential:
             f"scale_height={self.scale_height!r}, rel_sigma={self.rel_sigma!r})"
         )
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of density (kg/m^3) at UTC ``times`` and geodetic
         ``lat``/``lon`` (deg) and ``alt`` (m, WGS-84), broadcast together. The model uses
         the spherical altitude |r| - Re of that point."""

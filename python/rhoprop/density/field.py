@@ -22,11 +22,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core, _validate
 from ..cache import cache_dir, entry_lock, load_entry, store_entry
 from ..time import (
     EpochLike,
+    EpochsLike,
     add_seconds,
     core_times,
     offsets_to_epochs,
@@ -107,12 +109,12 @@ class DensityField:
     def from_arrays(
         cls,
         epoch: EpochLike,
-        times: Any,
-        altitudes: Any,
-        latitudes: Any,
-        longitudes: Any,
-        ln_mean: Any,
-        rel_sigma: Any,
+        times: EpochsLike,
+        altitudes: npt.ArrayLike,
+        latitudes: npt.ArrayLike,
+        longitudes: npt.ArrayLike,
+        ln_mean: npt.ArrayLike,
+        rel_sigma: npt.ArrayLike,
     ) -> DensityField:
         """Builds a field from uniform altitude/latitude/longitude axes (m, deg, deg;
         longitude spanning the globe: nodes lon0 + k 360/n) and time nodes (s from
@@ -170,7 +172,9 @@ class DensityField:
         """Last epoch covered."""
         return add_seconds(self.epoch, float(self.times[-1]))
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Interpolated mean and standard deviation (kg/m^3) at UTC ``times``, geodetic
         ``lat``/``lon`` (deg) and ``alt`` (m); raises ``DensityFieldError`` outside."""
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)

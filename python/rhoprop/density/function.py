@@ -7,7 +7,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
+from ..time import EpochsLike
 from ._inputs import broadcast_inputs
 from .field import FieldResolution, resolution_arg
 from .model import SampledModel
@@ -67,7 +69,9 @@ class FromFunction(SampledModel):
     def __repr__(self) -> str:
         return f"FromFunction(name={self.name!r})"
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of density, kg/m^3, from ``fn`` at UTC ``times``,
         geodetic ``lat``/``lon`` (deg) and ``alt`` (m), broadcast together.
 

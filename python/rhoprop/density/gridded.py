@@ -5,9 +5,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import DensityFieldError
-from ..time import to_datetime64, to_datetime64_array, to_seconds
+from ..time import EpochsLike, to_datetime64, to_datetime64_array, to_seconds
 from .field import DensityField, FieldResolution, sample_field
 from .model import SampledModel
 
@@ -26,7 +27,15 @@ class Gridded(SampledModel):
         std: standard deviation, same shape, kg/m^3, >= 0.
     """
 
-    def __init__(self, times: Any, alt: Any, lat: Any, lon: Any, mean: Any, std: Any) -> None:
+    def __init__(
+        self,
+        times: EpochsLike,
+        alt: npt.ArrayLike,
+        lat: npt.ArrayLike,
+        lon: npt.ArrayLike,
+        mean: npt.ArrayLike,
+        std: npt.ArrayLike,
+    ) -> None:
         epochs = to_datetime64_array(times, "times")
         if epochs.ndim != 1 or len(epochs) < 2:
             raise ValueError("times must be a 1-D array of at least 2 valid UTC epochs")
@@ -65,7 +74,9 @@ class Gridded(SampledModel):
         """The field as given."""
         return self._field
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Interpolated mean and standard deviation, kg/m^3 (see the class doc)."""
         return self._field.mean_std(times, lat, lon, alt)
 

@@ -36,6 +36,7 @@ import numpy as np
 from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
+from ..time import EpochsLike
 from .field import FieldResolution, resolution_arg
 from .point_model import ActivitySigma, PointModel
 
@@ -249,7 +250,7 @@ class Jb2008Indices:
         )
         return max(first_sol, first_dtc), min(last_sol, last_dtc)
 
-    def at(self, times: Any) -> np.ndarray:
+    def at(self, times: EpochsLike) -> np.ndarray:
         """The nine JB2008 inputs (n, 9) at UTC ``times`` (n,) datetime64: F10, F10B, S10,
         S10B, M10, M10B, Y10, Y10B (sfu, lagged) and dTc (K, interpolated and rounded)."""
         t = np.asarray(times, dtype="datetime64[ns]").ravel()

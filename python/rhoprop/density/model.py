@@ -13,9 +13,10 @@ import abc
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core
-from ..time import EpochLike
+from ..time import EpochLike, EpochsLike
 from .atlas import Atlas
 from .field import DensityField, FieldResolution, sample_field
 
@@ -30,7 +31,9 @@ class DensityModel(Protocol):
     own model usually derives from :class:`SampledModel` or wraps a function in
     :class:`~rhoprop.density.FromFunction`."""
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of density, kg/m^3, broadcast over the inputs."""
         ...
 
@@ -66,7 +69,9 @@ class SampledModel(abc.ABC):
     resolution: FieldResolution | None = None
 
     @abc.abstractmethod
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of density, kg/m^3, at UTC ``times``, geodetic
         ``lat``/``lon`` (deg) and ``alt`` (m), broadcast together."""
 

@@ -13,9 +13,11 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _validate
 from ..spaceweather import Drivers, SpaceWeather
+from ..time import EpochsLike
 from ._inputs import broadcast_inputs
 from .field import FieldResolution, resolution_arg
 from .model import SampledModel
@@ -239,7 +241,9 @@ class Msis(SampledModel):
         u = self.uncertainty
         return u.fraction if isinstance(u, RelativeSigma) else u.model_floor
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
         geodetic ``lat``/``lon`` (deg) and ``alt`` (m), broadcast together."""
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)

@@ -21,9 +21,10 @@ import itertools
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import OutsideRecordError
-from ..time import to_datetime64_array
+from ..time import EpochsLike, to_datetime64_array
 from ._inputs import broadcast_inputs
 from .field import FieldResolution, resolution_arg
 from .model import SampledModel
@@ -99,11 +100,11 @@ class PcaRom(SampledModel):
     def __init__(
         self,
         lst: Any,
-        lat: Any,
-        alt: Any,
+        lat: npt.ArrayLike,
+        alt: npt.ArrayLike,
         mean_log10: Any,
         modes: Any,
-        epochs: Any,
+        epochs: EpochsLike,
         coeff_mean: Any,
         coeff_std: Any,
         *,
@@ -181,7 +182,7 @@ class PcaRom(SampledModel):
         )
 
     def log10_moments(
-        self, times: Any, lat: Any, lon: Any, alt: Any
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
     ) -> tuple[np.ndarray, np.ndarray]:
         """Mean m and variance s2 of the Gaussian log10(density / (kg/m^3)) at the points
         (step 3 of the class doc); arguments as :meth:`mean_std`."""
@@ -189,7 +190,7 @@ class PcaRom(SampledModel):
         return m, s2
 
     def _log10_moments(
-        self, times: Any, lat: Any, lon: Any, alt: Any
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(m, s2, U_j sigma_j with shape (..., r)) at the points."""
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
@@ -206,7 +207,9 @@ class PcaRom(SampledModel):
             m[b], s2[b], scaled[b] = self._moments(t_ns[b], la[b], lo[b], al[b])
         return m.reshape(shape), s2.reshape(shape), scaled.reshape((*shape, self.rank))
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of density, kg/m^3, at UTC ``times`` (datetime64 or
         ISO strings), geodetic ``lat``/``lon`` (deg) and ``alt`` (m, WGS-84), broadcast
         together (see the class doc for the formulas)."""

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _validate
+from ..time import EpochsLike
 from ._inputs import broadcast_inputs
 from .model import SampledModel
 
@@ -85,7 +87,9 @@ class PointModel(SampledModel):
     def _activity(self, drivers: np.ndarray) -> np.ndarray:
         """The geomagnetic activity of each row of ``drivers``."""
 
-    def mean_std(self, times: Any, lat: Any, lon: Any, alt: Any) -> tuple[np.ndarray, np.ndarray]:
+    def mean_std(
+        self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
         geodetic ``lat``/``lon`` (deg) and ``alt`` (m, >= 90 km), broadcast together."""
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..density import DensityModel
 from ..propagation import (
@@ -219,7 +220,7 @@ def ensemble(
     reference: str,
     *,
     method: str = "monte_carlo",
-    weights: Any = None,
+    weights: npt.ArrayLike | None = None,
     debias_window: float = 8 * 3600.0,
     duration: float = 259200.0,
     cds: dict[str, float] | None = None,

@@ -202,7 +202,9 @@ def write_oem(
         )
     suffix = ".oem" if file_format == "kvn" else ".xml"
 
-    def text(name: str, oid: str, epochs: Any, mean: Any, cov: Any, note: str = "") -> str:
+    def text(
+        name: str, oid: str, epochs: np.ndarray, mean: np.ndarray, cov: Any, note: str = ""
+    ) -> str:
         if cov is not None and covariance_frame == "rtn":
             cov = _rtn_covariances(mean, cov)
         return _oem_text(

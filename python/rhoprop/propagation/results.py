@@ -19,6 +19,7 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 from numpy.typing import NDArray
 
 from .. import frames
@@ -210,7 +211,9 @@ class StateMoments:
         """Square root of the along-track variance (nt,), m."""
         return np.asarray(np.sqrt(self.rtn_covariance[:, 1, 1]))
 
-    def position_in_frame(self, ref_positions: Any, ref_velocities: Any) -> tuple[Array, Array]:
+    def position_in_frame(
+        self, ref_positions: npt.ArrayLike, ref_velocities: npt.ArrayLike
+    ) -> tuple[Array, Array]:
         """Mean position offset from a reference orbit (nt, 3) and the position covariance
         (nt, 3, 3), both in the reference orbit's RTN frame, m and m^2."""
         ref_p = np.asarray(ref_positions, dtype=float)
@@ -220,7 +223,7 @@ class StateMoments:
         return means, covs
 
 
-def rtn_basis(positions: Any, velocities: Any) -> Array:
+def rtn_basis(positions: npt.ArrayLike, velocities: Any) -> Array:
     """RTN bases (nt, 3, 3) of reference states (nt, 3) that may hold NaN rows (a decayed
     reference): those rows give a NaN basis instead of an error."""
     p = np.asarray(positions, dtype=float).reshape(-1, 3)

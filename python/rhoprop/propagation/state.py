@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _validate
 from ..constants import MU, R_EARTH, R_POLE
@@ -46,7 +46,7 @@ class OrbitState:
     position: np.ndarray
     velocity: np.ndarray
 
-    def __init__(self, epoch: EpochLike, position: Any, velocity: Any) -> None:
+    def __init__(self, epoch: EpochLike, position: npt.ArrayLike, velocity: npt.ArrayLike) -> None:
         object.__setattr__(self, "epoch", to_datetime64(epoch))
         r = _validate.vector3("position", position)
         v = _validate.vector3("velocity", velocity)

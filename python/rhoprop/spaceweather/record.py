@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import OutsideRecordError, PredictedDriversWarning
-from ..time import to_datetime64, to_datetime64_array
+from ..time import EpochsLike, to_datetime64, to_datetime64_array
 from .celestrak import GEOMAGNETIC, MONTHLY_PREDICTED, SCALARS, SECTIONS, check_record, read
 from .files import DEFAULT_URL, bundled_path, cached_path, download
 
@@ -44,7 +44,7 @@ _DAY = np.timedelta64(1, "D")
 # -- epochs ------------------------------------------------------------------------------
 
 
-def _as_epochs(epochs: Any) -> np.ndarray:
+def _as_epochs(epochs: EpochsLike) -> np.ndarray:
     """1-D datetime64[ns] array from a datetime64 scalar or array, an ISO string, a
     ``datetime``, an astropy ``Time`` or a sequence of those (UTC). NaT raises ValueError
     naming its index."""
@@ -339,7 +339,7 @@ class SpaceWeather:
         values.update({name: float(getattr(self, name)[row]) for name in SCALARS})
         return values
 
-    def drivers(self, epochs: Any) -> Drivers:
+    def drivers(self, epochs: EpochsLike) -> Drivers:
         """NRLMSIS drivers (see :class:`Drivers`) at UTC ``epochs``: a ``datetime64``
         scalar or array, an ISO string, a ``datetime`` or a sequence of these (flattened to
         1-D). Only observed and daily predicted rows are used (monthly predicted rows carry
