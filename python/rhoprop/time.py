@@ -56,6 +56,8 @@ EpochLike = str | _dt.datetime | _dt.date | np.datetime64 | TimeLike
 #: One epoch or many: an :data:`EpochLike`, a sequence of them or an array (datetime64,
 #: strings, an astropy ``Time`` array).
 EpochsLike = EpochLike | Sequence[EpochLike] | NDArray[Any]
+#: A span: seconds (int or float), a ``datetime.timedelta`` or a ``numpy.timedelta64``.
+DurationLike = float | _dt.timedelta | np.timedelta64
 
 _NS_PER_S = 1_000_000_000
 _NS_PER_DAY = 86_400 * _NS_PER_S

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..density.model import ModelLike
 from ..parallel import worker_count
 from ..propagation import OrbitState
 from ..time import from_jd
@@ -234,7 +235,7 @@ def load(
     errors: str = "raise",
     drag_parameters: dict[int, float] | None = None,
     fit: bool = False,
-    model: Any = None,
+    model: ModelLike | None = None,
     span: tuple[float, float] | None = None,
     threads: int | None = None,
     zonal_degree: int = 2,

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ..density.model import ModelLike
 from ..frames import rtn_basis
 from ..propagation import OrbitState, Spacecraft, propagate
 from ..time import add_seconds, from_jd
@@ -125,7 +126,7 @@ def _sgp4_observations(
 
 def fit_element_set(
     sat: Any,
-    model: Any,
+    model: ModelLike,
     *,
     drag_parameter: float | None = None,
     span: tuple[float, float] = DEFAULT_SPAN,

@@ -25,10 +25,11 @@ from typing import Any
 import numpy as np
 
 from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..density.model import ModelLike
 from ..parallel import worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.kappa import GaussMarkov, KappaProcess
-from ..time import add_seconds
+from ..time import DurationLike, add_seconds
 from .elements import CatalogObject
 
 #: Default relative 1-sigma of Cd*A/m when the object carries no fit (assumed: the
@@ -114,10 +115,10 @@ def _relative_sigma(obj: CatalogObject, drag_sigma: float | None) -> float:
 
 def reentry(
     objects: Any,
-    model: Any,
+    model: ModelLike,
     *,
     n: int = 100,
-    horizon: Any = 30 * 86400.0,
+    horizon: DurationLike = 30 * 86400.0,
     groups: int = 10,
     drag_sigma: float | None = None,
     kappa: KappaProcess | None = None,

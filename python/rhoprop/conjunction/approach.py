@@ -29,6 +29,7 @@ import numpy as np
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import SampledModel
+from ..density.model import ModelLike
 from ..propagation import OrbitState, Spacecraft, Trajectory, propagate
 from ..propagation.propagate import check_model, zonal_degree_argument
 from ..time import add_seconds, to_seconds
@@ -162,7 +163,12 @@ class _Dynamics:
         return t0 + tr.times, tr.positions, tr.velocities
 
     def forward(
-        self, state: OrbitState, craft: Spacecraft, model: Any, span: float, step: float | None
+        self,
+        state: OrbitState,
+        craft: Spacecraft,
+        model: ModelLike,
+        span: float,
+        step: float | None,
     ) -> Trajectory:
         """``propagate`` of ``state`` over ``span`` s with this screening's floor and zonal
         degree (outputs every ``step`` s, or the end only)."""
@@ -328,7 +334,7 @@ def closest_approach(
     traj1: Trajectory,
     traj2: Trajectory,
     *,
-    model: Any = None,
+    model: ModelLike | None = None,
     spacecraft: Spacecraft | tuple[Spacecraft, Spacecraft] | None = None,
     names: tuple[str, str] = ("object 1", "object 2"),
     ids: tuple[int | None, int | None] = (None, None),

@@ -19,7 +19,7 @@ import numpy as np
 from .. import _core, _validate
 from ..catalog.elements import CatalogObject
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, MU, R_EARTH, R_POLE
-from ..density.model import as_atmosphere
+from ..density.model import ModelLike, as_atmosphere
 from ..errors import DecayError
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
@@ -340,7 +340,7 @@ def _secondaries_list(secondaries: Any) -> list[Any]:
 def screen(
     primary: Any,
     secondaries: Any,
-    model: Any,
+    model: ModelLike,
     *,
     start: EpochLike,
     end: EpochLike,

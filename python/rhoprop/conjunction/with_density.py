@@ -26,6 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..constants import MU
+from ..density.model import ModelLike
 from ..ensemble import EnsembleResult
 from ..ensemble import ensemble as run_ensemble
 from ..frames import rtn_basis
@@ -154,7 +155,7 @@ def _wrap(angle: float) -> float:
 def state_before(
     target: OrbitState,
     spacecraft: Spacecraft,
-    model: Any,
+    model: ModelLike,
     lead: float,
     *,
     tol: float = 0.5,

@@ -3,11 +3,25 @@ reach: a leaf module that the model protocol and the sampled field both use."""
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 import numpy.typing as npt
 
 from ..constants import MU, R_EARTH, R_POLE
 from ..time import EpochsLike, to_datetime64_array
+
+
+class StateLike(Protocol):
+    """What a density model needs of an orbit state (:class:`~rhoprop.OrbitState`): its
+    UTC epoch and inertial position (m) and velocity (m/s)."""
+
+    @property
+    def epoch(self) -> np.datetime64: ...
+    @property
+    def position(self) -> np.ndarray: ...
+    @property
+    def velocity(self) -> np.ndarray: ...
 
 
 def broadcast_inputs(

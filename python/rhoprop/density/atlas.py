@@ -54,6 +54,7 @@ from .. import _core
 from ..cache import cache_dir, entry_lock, load_entry, store_entry
 from ..errors import OutsideRecordError
 from ..time import EpochLike, EpochsLike, add_seconds, to_datetime64, ut1_seconds
+from ._inputs import StateLike
 from .field import FieldResolution, time_nodes
 
 #: Top of every atlas grid, m (above it: the exponential extrapolation of the module doc).
@@ -264,7 +265,7 @@ class Atlas:
         result: tuple[np.ndarray, np.ndarray] = self.model.mean_std(times, lat, lon, alt)
         return result
 
-    def atmosphere(self, state: Any, duration: float) -> Any:
+    def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The core field for ``duration`` s from ``state`` (negative: backwards)."""
         edge = add_seconds(state.epoch, duration, round_up=duration > 0)
         return self.field(min(state.epoch, edge), max(state.epoch, edge))

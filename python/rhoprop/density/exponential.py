@@ -10,7 +10,7 @@ import numpy.typing as npt
 from .. import _core, _validate
 from ..constants import R_EARTH
 from ..time import EpochsLike
-from ._inputs import broadcast_inputs
+from ._inputs import StateLike, broadcast_inputs
 
 
 class Exponential:
@@ -74,6 +74,6 @@ class Exponential:
             )
         return mean, std
 
-    def atmosphere(self, state: Any, duration: float) -> Any:
+    def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The analytic core atmosphere (valid at every time and place)."""
         return self._core

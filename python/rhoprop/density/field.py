@@ -19,7 +19,7 @@ import itertools
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -37,7 +37,10 @@ from ..time import (
     to_seconds,
     ut1_seconds,
 )
-from ._inputs import broadcast_inputs
+from ._inputs import StateLike, broadcast_inputs
+
+if TYPE_CHECKING:
+    from .model import SampledModel
 
 
 @dataclass(frozen=True)
@@ -193,7 +196,7 @@ class DensityField:
         mean, sigma = self.core.mean_sigma(ut1, inertial)
         return mean.reshape(shape), sigma.reshape(shape)
 
-    def atmosphere(self, state: Any, duration: float) -> Any:
+    def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The core atmosphere (the field itself); it must cover the propagation."""
         return self.core
 
@@ -249,7 +252,7 @@ def grid_axes(
 
 
 def sample_field(
-    model: Any,
+    model: SampledModel,
     start: EpochLike,
     end: EpochLike,
     *,

@@ -8,7 +8,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import DensityFieldError
-from ..time import EpochsLike, to_datetime64, to_datetime64_array, to_seconds
+from ..time import EpochLike, EpochsLike, to_datetime64, to_datetime64_array, to_seconds
+from ._inputs import StateLike
 from .field import DensityField, FieldResolution, sample_field
 from .model import SampledModel
 
@@ -82,8 +83,8 @@ class Gridded(SampledModel):
 
     def field(
         self,
-        start: Any,
-        end: Any,
+        start: EpochLike,
+        end: EpochLike,
         *,
         altitude_range: tuple[float, float] | None = None,
         resolution: FieldResolution | None = None,
@@ -104,6 +105,6 @@ class Gridded(SampledModel):
             self, start, end, altitude_range=altitude_range, resolution=resolution, cache=cache
         )
 
-    def atmosphere(self, state: Any, duration: float) -> Any:
+    def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The native field."""
         return self._field.core

@@ -17,6 +17,7 @@ import numpy.typing as npt
 
 from .. import _core
 from ..time import EpochLike, EpochsLike
+from ._inputs import StateLike
 from .atlas import Atlas
 from .field import DensityField, FieldResolution, sample_field
 
@@ -37,12 +38,16 @@ class DensityModel(Protocol):
         """Mean and standard deviation of density, kg/m^3, broadcast over the inputs."""
         ...
 
-    def atmosphere(self, state: Any, duration: float) -> Any:
+    def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The core atmosphere covering ``duration`` s of the orbit from ``state``."""
         ...
 
 
-def as_atmosphere(model: Any, state: Any, duration: float) -> Any:
+#: What the propagators accept as ``model``: a density model or a core atmosphere.
+ModelLike = DensityModel | _core.ExponentialAtmosphere | _core.GriddedAtmosphere
+
+
+def as_atmosphere(model: ModelLike, state: StateLike, duration: float) -> Any:
     """The core atmosphere of ``model`` for ``duration`` s of the orbit from ``state``."""
     if isinstance(model, CoreAtmosphere):
         return model
@@ -118,7 +123,7 @@ class SampledModel(abc.ABC):
         state.pop("_atlas", None)
         return state
 
-    def atmosphere(self, state: Any, duration: float) -> Any:
+    def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The core field of the atlas's day tiles covering ``duration`` s from ``state``
         (negative: backwards), every altitude included."""
         return self.atlas.atmosphere(state, duration)

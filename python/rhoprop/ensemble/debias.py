@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core, _validate, frames
-from ..density import DensityModel, as_atmosphere
+from ..density.model import DensityModel, ModelLike, as_atmosphere
 from ..propagation import OrbitState, Spacecraft
 from ..time import offsets_to_epochs, ut1_seconds
 
@@ -16,7 +16,7 @@ DEBIAS_CADENCE = 60.0
 def backward_orbit(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: DensityModel,
+    model: ModelLike,
     window: float,
     cadence: float = DEBIAS_CADENCE,
 ) -> tuple[np.ndarray, np.ndarray]:

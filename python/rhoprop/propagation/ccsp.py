@@ -11,8 +11,8 @@ import numpy as np
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import DensityModel, as_atmosphere
-from ..time import ut1_seconds
+from ..density.model import ModelLike, as_atmosphere
+from ..time import DurationLike, ut1_seconds
 from .montecarlo import drag_sigma_argument
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -41,8 +41,8 @@ OUTPUT_BYTES = 8 * (6 + 36 + 6 + 9 + 1)
 def ccsp(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: DensityModel,
-    duration: Any = None,
+    model: ModelLike,
+    duration: DurationLike | None = None,
     *,
     update_interval: float = 3600.0,
     initial_covariance: Any = None,
@@ -162,7 +162,7 @@ def _arguments(
     state: Any,
     spacecraft: Any,
     model: Any,
-    duration: Any,
+    duration: DurationLike | None,
     *,
     update_interval: float,
     initial_covariance: Any,
@@ -232,7 +232,7 @@ def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResul
 
 def ccsp_many(
     runs: list[dict[str, Any]],
-    model: Any,
+    model: ModelLike,
     *,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = 2,

@@ -10,9 +10,9 @@ import numpy as np
 
 from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import DensityModel
+from ..density.model import ModelLike
 from ..progress import ProgressBar
-from ..time import ut1_seconds
+from ..time import DurationLike, ut1_seconds
 from .kappa import GaussMarkov, KappaProcess
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -64,8 +64,8 @@ def result_bytes(n: int, nt: int, record_density: bool) -> int:
 def monte_carlo(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: DensityModel,
-    duration: Any = None,
+    model: ModelLike,
+    duration: DurationLike | None = None,
     *,
     n: int = 1000,
     kappa: KappaProcess | None = None,

@@ -14,8 +14,8 @@ import numpy as np
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
-from ..density.model import CoreAtmosphere, DensityModel, as_atmosphere
-from ..time import ut1_seconds
+from ..density.model import CoreAtmosphere, DensityModel, ModelLike, as_atmosphere
+from ..time import DurationLike, ut1_seconds
 from .results import Trajectory, trajectory_from_core
 from .state import OrbitState, Spacecraft
 
@@ -119,7 +119,7 @@ def zonal_degree_argument(value: Any) -> int:
     return int(value)
 
 
-def check_model(model: Any) -> None:
+def check_model(model: ModelLike) -> None:
     """TypeError unless ``model`` is a density model (or a core atmosphere)."""
     if isinstance(model, CoreAtmosphere) or callable(getattr(model, "atmosphere", None)):
         return
@@ -177,7 +177,7 @@ def check_memory(estimate: float, limit: float, what: str) -> None:
 
 
 def run_in_field(
-    model: Any, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
+    model: ModelLike, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
 ) -> T:
     """``run(atmosphere)`` with the core atmosphere of ``model`` for ``span`` s from
     ``state`` (negative: backwards). A sampled model's atmosphere is the field of its
@@ -188,7 +188,7 @@ def run_in_field(
     return run(as_atmosphere(model, state, span))
 
 
-def model_argument(model: Any, density: Any, function: str) -> Any:
+def model_argument(model: ModelLike | None, density: ModelLike | None, function: str) -> ModelLike:
     """The model of a call that may still use the deprecated keyword ``density``."""
     if density is None:
         if model is None:
@@ -207,8 +207,8 @@ def model_argument(model: Any, density: Any, function: str) -> Any:
 def propagate(
     state: OrbitState,
     spacecraft: Spacecraft,
-    model: DensityModel | None = None,
-    duration: Any = None,
+    model: ModelLike | None = None,
+    duration: DurationLike | None = None,
     *,
     output_step: float | None = None,
     method: str = "dop853",

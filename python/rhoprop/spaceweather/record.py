@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import OutsideRecordError, PredictedDriversWarning
-from ..time import EpochsLike, to_datetime64, to_datetime64_array
+from ..time import EpochLike, EpochsLike, to_datetime64, to_datetime64_array
 from .celestrak import GEOMAGNETIC, MONTHLY_PREDICTED, SCALARS, SECTIONS, check_record, read
 from .files import DEFAULT_URL, bundled_path, cached_path, download
 
@@ -479,7 +479,9 @@ class SpaceWeather:
 
     # -- variants --------------------------------------------------------------------------
 
-    def mean_geomagnetic(self, start: Any = "2000-01-01", end: Any = "2019-12-31") -> SpaceWeather:
+    def mean_geomagnetic(
+        self, start: EpochLike = "2000-01-01", end: EpochLike = "2019-12-31"
+    ) -> SpaceWeather:
         """A new record with every geomagnetic index (3-hourly ap and Kp, daily Ap, Cp, C9)
         replaced in every row by its mean over the days ``start`` to ``end`` (inclusive;
         3-hourly indices by the mean of all their 3-hourly values, NaN ignored). Solar

@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import frames
 from ..density import Msis
+from ..density.model import ModelLike
 from ..ensemble import debias_drag_coefficient, ensemble
 from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
 from ..spaceweather import SpaceWeather
@@ -89,7 +90,7 @@ class MethodComparison:
 def method_comparison(
     state: OrbitState | None = None,
     spacecraft: Spacecraft | None = None,
-    model: Any = None,
+    model: ModelLike | None = None,
     duration: float = scenarios.PAPER_DURATION,
     *,
     n: int = 1000,
@@ -164,7 +165,7 @@ def _mean_density(model: Any, result: MonteCarloResult) -> np.ndarray:
     return np.asarray(mean)
 
 
-def model_label(model: Any) -> str:
+def model_label(model: ModelLike) -> str:
     """A short human label for a density model."""
     version = getattr(model, "version", None)
     if version is not None:
