@@ -26,6 +26,8 @@ from .constants import MU, R_EARTH
 from .frames import rtn_basis
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
     from .catalog import CatalogResult
     from .ensemble import EnsembleResult
     from .propagation import CcspResult, MonteCarloResult
@@ -51,7 +53,7 @@ def along_track(
     result: MonteCarloResult | CcspResult,
     *,
     time_index: int = -1,
-    ax: Any = None,
+    ax: Axes | None = None,
     bins: int = 40,
     label: str | None = None,
     color: str = "C0",
@@ -85,7 +87,7 @@ def along_track(
     return ax
 
 
-def ensemble_pdf(ens: EnsembleResult, *, time_index: int = -1, ax: Any = None) -> Any:
+def ensemble_pdf(ens: EnsembleResult, *, time_index: int = -1, ax: Axes | None = None) -> Any:
     """Along-track PDF of an ensemble at output ``time_index``: each Monte Carlo model's
     members as a histogram under its normal (dashed), the mixture (bold) and its modes
     (triangles), km from the reference model's mean orbit. Returns the axes."""
@@ -137,7 +139,9 @@ def ensemble_pdf(ens: EnsembleResult, *, time_index: int = -1, ax: Any = None) -
     return ax
 
 
-def rtn_spread(result: Any, *, ax: Any = None, label: str = "") -> Any:
+def rtn_spread(
+    result: MonteCarloResult | CcspResult, *, ax: Axes | None = None, label: str = ""
+) -> Any:
     """Radial, along-track and cross-track 1-sigma over time (log scale), km, of any
     result with ``moments()``. Returns the axes."""
     ax = _axes(ax)
@@ -157,7 +161,7 @@ def rtn_spread(result: Any, *, ax: Any = None, label: str = "") -> Any:
     return ax
 
 
-def density_traces(result: MonteCarloResult, *, members: int = 5, ax: Any = None) -> Any:
+def density_traces(result: MonteCarloResult, *, members: int = 5, ax: Axes | None = None) -> Any:
     """The density the first ``members`` members saw at the outputs, 1e-12 kg/m^3, and
     their mean; needs ``monte_carlo(..., record_density=True)``. Returns the axes."""
     if result.densities is None:
@@ -174,7 +178,7 @@ def density_traces(result: MonteCarloResult, *, members: int = 5, ax: Any = None
     return ax
 
 
-def catalog_summary(result: CatalogResult, *, ax: Any = None) -> Any:
+def catalog_summary(result: CatalogResult, *, ax: Axes | None = None) -> Any:
     """Along-track 1-sigma at each object's last valid output against its initial
     perigee altitude (log scale), one point per object coloured by status. Returns the
     axes."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -180,9 +180,10 @@ def run_catalog_file(
     line is converted), see :func:`~rhoprop.catalog.propagate_catalog`.
     Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
-    if isinstance(drag_sigma, str) and drag_sigma != "auto":
+    sigma: float | Literal["auto"] = "auto"
+    if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
         try:
-            drag_sigma = float(drag_sigma)
+            sigma = float(drag_sigma)
         except ValueError:
             raise ValueError(
                 f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
@@ -226,7 +227,7 @@ def run_catalog_file(
         zonal_degree=zonal_degree,
         seed=seed,
         update_interval=update_interval,
-        drag_sigma=drag_sigma,
+        drag_sigma=sigma,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import datetime as _dt
+from collections.abc import Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Any
@@ -114,7 +115,7 @@ def _relative_sigma(obj: CatalogObject, drag_sigma: float | None) -> float:
 
 
 def reentry(
-    objects: Any,
+    objects: Iterable[CatalogObject],
     model: ModelLike,
     *,
     n: int = 100,

@@ -8,10 +8,12 @@ from __future__ import annotations
 import concurrent.futures as cf
 import enum
 import threading
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, R_EARTH
@@ -60,6 +62,16 @@ CCSP_CHUNK = 16
 CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
 
 #: Status of an object in a :class:`CatalogResult`.
+#: ``initial_covariance`` of a catalog run: "object", "tle", "paper", one (6, 6) matrix
+#: for all, a callable giving each object's, or None (the paper's).
+InitialCovariance = (
+    Literal["object", "tle", "paper"]
+    | npt.ArrayLike
+    | Callable[[CatalogObject], npt.ArrayLike]
+    | None
+)
+#: ``drag_sigma`` of a catalog run: "auto", one relative sigma, or a callable per object.
+DragSigma = Literal["auto"] | float | Callable[[CatalogObject], float]
 #: The statuses an object can end with (:class:`Status` values).
 STATUSES = ("propagated", "decayed", "shortened", "failed")
 #: What ``errors`` of :func:`propagate_catalog` accepts.
@@ -814,7 +826,7 @@ def _run_local(
 
 
 def propagate_catalog(
-    objects: Any,
+    objects: Iterable[CatalogObject],
     model: DensityModel,
     end: EpochLike,
     *,
@@ -825,13 +837,13 @@ def propagate_catalog(
     output_step: float = 3600.0,
     update_interval: float = 3600.0,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    client: Any = None,
+    client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     chunk_size: int = 50,
     progress: bool = True,
     errors: str = "raise",
-    initial_covariance: Any = None,
+    initial_covariance: InitialCovariance = None,
     zonal_degree: int = 2,
-    drag_sigma: Any = "auto",
+    drag_sigma: DragSigma = "auto",
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 

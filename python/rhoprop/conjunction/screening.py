@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -73,6 +73,10 @@ DRAG_TABLE_TOP = 2000e3
 STAGES = ("secondaries", "radial", "propagated", "coarse_grid", "interpolated", "events")
 #: Step of the fixed-step RK8 that takes an object back from a later epoch to ``start``, s.
 BACKWARD_STEP = 30.0
+
+
+#: An object :func:`screen` takes: a catalog object, or (state, spacecraft[, name]).
+ScreenObject = CatalogObject | tuple[OrbitState, Spacecraft] | tuple[OrbitState, Spacecraft, str]
 
 
 class Reached(enum.IntEnum):
@@ -338,8 +342,8 @@ def _secondaries_list(secondaries: Any) -> list[Any]:
 
 
 def screen(
-    primary: Any,
-    secondaries: Any,
+    primary: ScreenObject,
+    secondaries: Iterable[ScreenObject],
     model: ModelLike,
     *,
     start: EpochLike,

@@ -74,7 +74,7 @@ class FieldResolution:
                 raise ValueError(f"resolution.{name} = {step} deg must divide {span:g} deg")
 
 
-def resolution_arg(value: Any, name: str = "resolution") -> FieldResolution | None:
+def resolution_arg(value: object, name: str = "resolution") -> FieldResolution | None:
     """``value`` checked as a model's ``resolution`` keyword: a :class:`FieldResolution`
     or None (the default resolution)."""
     if value is not None and not isinstance(value, FieldResolution):

@@ -7,12 +7,21 @@ import contextlib
 import datetime as _dt
 from collections import Counter
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..propagation import CcspResult, MonteCarloResult, Trajectory
 from .files import _iso, atomic_path, sanitise
+
+if TYPE_CHECKING:
+    from typing import TypeAlias
+
+    from ..catalog import CatalogResult
+
+    #: What :func:`write_oem` writes: one trajectory, a Monte Carlo or CCSP result, a
+    #: catalog run.
+    ResultLike: TypeAlias = Trajectory | MonteCarloResult | CcspResult | CatalogResult
 
 #: What ``duplicates`` of :func:`write_oem` accepts.
 DUPLICATES = ("error", "suffix")
@@ -145,7 +154,7 @@ def _save_oem(path: Path, text: str, file_format: str) -> Path:
 
 
 def write_oem(
-    result: Any,
+    result: ResultLike,
     directory: str | Path,
     *,
     originator: str = "rhoprop",
@@ -220,7 +229,7 @@ def write_oem(
         )
 
     out = Path(directory)
-    if _is_single(result):
+    if isinstance(result, (CcspResult, MonteCarloResult, Trajectory)):
         m = result.moments()
         ok = np.isfinite(m.mean).all(axis=1) & np.isfinite(m.covariance).all(axis=(1, 2))
         if not ok.any():

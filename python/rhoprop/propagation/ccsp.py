@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
@@ -45,12 +46,12 @@ def ccsp(
     duration: DurationLike | None = None,
     *,
     update_interval: float = 3600.0,
-    initial_covariance: Any = None,
+    initial_covariance: npt.ArrayLike | None = None,
     scaling: tuple[float, float] = (3.0, 3.0),
     perturbation: str = "additive",
     step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    update_times: Any = None,
+    update_times: npt.ArrayLike | None = None,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
 ) -> CcspResult:

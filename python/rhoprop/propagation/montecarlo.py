@@ -7,6 +7,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
@@ -71,8 +72,8 @@ def monte_carlo(
     kappa: KappaProcess | None = None,
     seed: int = 0,
     output_step: float | None = 3600.0,
-    output_times: Any = None,
-    initial_covariance: Any = None,
+    output_times: npt.ArrayLike | None = None,
+    initial_covariance: npt.ArrayLike | None = None,
     perturbation: str = "additive",
     record_density: bool = False,
     progress: bool | Callable[[int], object] = True,

@@ -106,7 +106,7 @@ def span_of(duration: Any, times: np.ndarray | None, name: str) -> float:
     return end
 
 
-def zonal_degree_argument(value: Any) -> int:
+def zonal_degree_argument(value: object) -> int:
     """``value`` as the zonal degree of a run: an integer from 2 (J2 only) to
     :data:`MAX_ZONAL_DEGREE` (J2..J6); anything else is a TypeError or ValueError."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
