@@ -39,6 +39,7 @@ from typing import Any, Protocol, overload
 
 import erfa  # type: ignore[import-untyped]
 import numpy as np
+import numpy.typing as npt
 from numpy.typing import NDArray
 
 
@@ -164,7 +165,7 @@ def tai_minus_utc(epochs: EpochsLike) -> NDArray[np.float64] | float:
     return float(out) if out.ndim == 0 else out
 
 
-def is_leap_second_day(day: Any) -> bool:
+def is_leap_second_day(day: EpochLike) -> bool:
     """Whether the UTC day ``day`` ends with a positive leap second (23:59:60)."""
     midnight = to_datetime64(day, "day").astype("datetime64[D]") + np.timedelta64(1, "D")
     m = int(midnight.astype("datetime64[ns]").astype(np.int64))
@@ -384,10 +385,10 @@ def from_jd(jd: float, jd2: float = 0.0, *, scale: str = "utc") -> np.datetime64
 
 
 @overload
-def from_jd(jd: Any, jd2: Any = 0.0, *, scale: str = "utc") -> Any: ...
+def from_jd(jd: npt.ArrayLike, jd2: npt.ArrayLike = 0.0, *, scale: str = "utc") -> Any: ...
 
 
-def from_jd(jd: Any, jd2: Any = 0.0, *, scale: str = "utc") -> Any:
+def from_jd(jd: npt.ArrayLike, jd2: npt.ArrayLike = 0.0, *, scale: str = "utc") -> Any:
     """A Julian date ``jd + jd2`` (days; the two-part form keeps full precision) on the
     time scale ``scale`` as UTC ``datetime64[ns]``: a scalar for scalars, else an array.
 
@@ -537,7 +538,7 @@ def add_seconds(epoch: EpochLike, seconds: float, *, round_up: bool = False) -> 
     return np.datetime64(_shift(to_datetime64(epoch), np.array([ns]))[0], "ns")
 
 
-def offsets_to_epochs(epoch: EpochLike, seconds: Any) -> NDArray[np.datetime64]:
+def offsets_to_epochs(epoch: EpochLike, seconds: npt.ArrayLike) -> NDArray[np.datetime64]:
     """``datetime64[ns]`` array of ``epoch`` plus each of ``seconds`` (float array of
     elapsed SI seconds, leap seconds counted; an offset that ends inside a leap second
     gives the next 00:00:00 UTC)."""

@@ -125,7 +125,7 @@ def _sgp4_observations(
 
 
 def fit_element_set(
-    sat: Any,
+    sat: Any,  # an sgp4 Satrec or a CatalogObject (sgp4 ships no type information)
     model: ModelLike,
     *,
     drag_parameter: float | None = None,

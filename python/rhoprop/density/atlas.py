@@ -138,7 +138,7 @@ class _TileMemory:
                 self._keep(key, tile)
             return tile
 
-    def put(self, key: str, tile: Any) -> None:
+    def put(self, key: str, tile: _core.FieldTile) -> None:
         with self.lock:
             self.alive[key] = tile
             self._keep(key, tile)
@@ -413,7 +413,9 @@ class Atlas:
         return ln_mean, rel_sigma
 
 
-def model_folder(description: Any, resolution: FieldResolution, altitude: Any) -> str:
+def model_folder(
+    description: object, resolution: FieldResolution, altitude: tuple[float, float, int]
+) -> str:
     """Folder name of a model's tiles: its description without the per-window digests of
     its drivers, with the resolution and altitude grid."""
     stable = _stable(description)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -12,6 +12,9 @@ from ..time import EpochLike, EpochsLike, to_datetime64, to_datetime64_array, to
 from ._inputs import StateLike
 from .field import DensityField, FieldResolution, sample_field
 from .model import SampledModel
+
+if TYPE_CHECKING:
+    import xarray
 
 
 class Gridded(SampledModel):
@@ -56,7 +59,7 @@ class Gridded(SampledModel):
         self._field = DensityField.from_arrays(epochs[0], offsets, alt, lat, lon, np.log(m), s / m)
 
     @classmethod
-    def from_dataset(cls, dataset: Any, mean: str = "mean", std: str = "std") -> Gridded:
+    def from_dataset(cls, dataset: xarray.Dataset, mean: str = "mean", std: str = "std") -> Gridded:
         """From an xarray Dataset with variables ``mean`` and ``std`` (kg/m^3) on the
         dimensions ``time``, ``alt`` (m), ``lat``, ``lon`` (deg), in any order."""
         order = ("time", "alt", "lat", "lon")

@@ -279,13 +279,13 @@ class Jb2008Indices:
         out[:, 8] = np.floor(value + 0.5)
         return out
 
-    def mean_dtc(self, first: Any, last: Any) -> float:
+    def mean_dtc(self, first: np.datetime64 | str, last: np.datetime64 | str) -> float:
         """Mean hourly dTc (K) over the days ``first`` to ``last`` (inclusive, UTC dates),
         clipped to the file's span."""
-        a = int(np.datetime64(first, "h").astype(np.int64)) - int(self._dtc_first.astype(np.int64))
-        b = int((np.datetime64(last, "D") + _DAY).astype("datetime64[h]").astype(np.int64)) - int(
-            self._dtc_first.astype(np.int64)
-        )
+        start = int(self._dtc_first.astype(np.int64))
+        a = int(np.asarray(first, dtype="datetime64[h]").astype(np.int64)) - start
+        after = np.asarray(last, dtype="datetime64[D]") + _DAY
+        b = int(after.astype("datetime64[h]").astype(np.int64)) - start
         a, b = max(a, 0), min(b, len(self._dtc))
         if b <= a:
             raise OutsideRecordError(

@@ -43,6 +43,8 @@ class DensityModel(Protocol):
         ...
 
 
+#: The core's atmospheres (what a model's ``atmosphere`` gives the propagators).
+AtmosphereLike = _core.ExponentialAtmosphere | _core.GriddedAtmosphere
 #: What the propagators accept as ``model``: a density model or a core atmosphere.
 ModelLike = DensityModel | _core.ExponentialAtmosphere | _core.GriddedAtmosphere
 

@@ -66,7 +66,7 @@ DRIVER_CADENCE = np.timedelta64(3, "h")
 _DriverCall = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def ap_sigma(ap: Any) -> np.ndarray:
+def ap_sigma(ap: npt.ArrayLike) -> np.ndarray:
     """1-sigma uncertainty of an ap value from the resolution of the index: ap is read from
     Kp, which is given in thirds of a unit, so a value is uncertain by about one Kp third,
     i.e. half the distance between the neighbouring ap levels (averaged over both sides;

@@ -96,7 +96,7 @@ class EnsembleResult:
         """The 1-D along-track mixture, m."""
         return self.mixture(time_index).marginal(axes=[1])
 
-    def along_track_pdf(self, x: Any, time_index: int = -1) -> np.ndarray:
+    def along_track_pdf(self, x: npt.ArrayLike, time_index: int = -1) -> np.ndarray:
         """Along-track PDF of the mixture at ``x`` (m), 1/m."""
         return self.along_track_mixture(time_index).pdf(np.asarray(x, dtype=float))
 

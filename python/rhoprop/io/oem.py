@@ -212,7 +212,12 @@ def write_oem(
     suffix = ".oem" if file_format == "kvn" else ".xml"
 
     def text(
-        name: str, oid: str, epochs: np.ndarray, mean: np.ndarray, cov: Any, note: str = ""
+        name: str,
+        oid: str,
+        epochs: np.ndarray,
+        mean: np.ndarray,
+        cov: np.ndarray | None,
+        note: str = "",
     ) -> str:
         if cov is not None and covariance_frame == "rtn":
             cov = _rtn_covariances(mean, cov)

@@ -12,7 +12,7 @@ import numpy.typing as npt
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import ModelLike, as_atmosphere
+from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..time import DurationLike, ut1_seconds
 from .montecarlo import drag_sigma_argument
 from .propagate import (
@@ -125,7 +125,7 @@ def ccsp(
         drag_sigma=drag_sigma,
     )
 
-    def run(atmosphere: Any) -> _CcspOutput:
+    def run(atmosphere: AtmosphereLike) -> _CcspOutput:
         return _core.ccsp(
             atmosphere,
             args.epoch,

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
-from ..density.model import ModelLike
+from ..density.model import AtmosphereLike, ModelLike
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
 from .kappa import GaussMarkov, KappaProcess
@@ -197,7 +197,7 @@ def monte_carlo(
             raise ValueError(f"initial_covariance[{i}][{j}] must be finite, got {cov[i, j]}")
     epoch = ut1_seconds(state.epoch)
 
-    def run(atmosphere: Any) -> tuple[_MonteCarloOutput, Trajectory]:
+    def run(atmosphere: AtmosphereLike) -> tuple[_MonteCarloOutput, Trajectory]:
         bar = ProgressBar(int(n), "Monte Carlo") if progress is True else None
         callback = bar if bar is not None else (progress if callable(progress) else None)
         try:

@@ -11,10 +11,11 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
-from ..density.model import CoreAtmosphere, DensityModel, ModelLike, as_atmosphere
+from ..density.model import AtmosphereLike, CoreAtmosphere, DensityModel, ModelLike, as_atmosphere
 from ..time import DurationLike, ut1_seconds
 from .results import Trajectory, trajectory_from_core
 from .state import OrbitState, Spacecraft
@@ -66,7 +67,7 @@ def output_grid(duration: float, output_step: float | None) -> np.ndarray:
     return grid
 
 
-def explicit_times(name: str, values: Any, *, allow_zero: bool) -> np.ndarray:
+def explicit_times(name: str, values: npt.ArrayLike, *, allow_zero: bool) -> np.ndarray:
     """``values`` as a 1-D float array of finite, strictly increasing times, s (>= 0 when
     ``allow_zero``, else > 0), at most :data:`MAX_STEPS` of them."""
     try:
@@ -88,7 +89,7 @@ def explicit_times(name: str, values: Any, *, allow_zero: bool) -> np.ndarray:
     return times
 
 
-def span_of(duration: Any, times: np.ndarray | None, name: str) -> float:
+def span_of(duration: DurationLike | None, times: np.ndarray | None, name: str) -> float:
     """The run's span, s: ``duration``, or the last of explicit ``times`` (``name``);
     both given must agree (to 1 ns)."""
     if times is None:
@@ -279,7 +280,7 @@ def propagate(
     epoch = ut1_seconds(state.epoch)
     tol = DEFAULT_RTOL if rtol is None and method == "dop853" else rtol
 
-    def run(atmosphere: Any) -> tuple[Any, ...]:
+    def run(atmosphere: AtmosphereLike) -> tuple[Any, ...]:
         return _core.propagate(
             atmosphere,
             epoch,

@@ -223,7 +223,7 @@ class StateMoments:
         return means, covs
 
 
-def rtn_basis(positions: npt.ArrayLike, velocities: Any) -> Array:
+def rtn_basis(positions: npt.ArrayLike, velocities: npt.ArrayLike) -> Array:
     """RTN bases (nt, 3, 3) of reference states (nt, 3) that may hold NaN rows (a decayed
     reference): those rows give a NaN basis instead of an error."""
     p = np.asarray(positions, dtype=float).reshape(-1, 3)
@@ -235,7 +235,7 @@ def rtn_basis(positions: npt.ArrayLike, velocities: Any) -> Array:
     return out
 
 
-def sample_moments(states: Any, alive: Any = None) -> tuple[Array, Array]:
+def sample_moments(states: np.ndarray, alive: np.ndarray | None = None) -> tuple[Array, Array]:
     """Sample mean (nt, k) and covariance (nt, k, k), ddof = 1, of member values
     (n, nt, k) (states: k = 6), over the members ``alive`` (n, nt) at each time (default:
     those with finite values, so decayed members, NaN after their decay, are left out).

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import OutsideRecordError, PredictedDriversWarning
 from ..time import EpochLike, EpochsLike, to_datetime64, to_datetime64_array
@@ -61,7 +62,7 @@ F107_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.05), (3.0, 0.08), (27.0, 0.15), (365.
 AP_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.5), (3.0, 1.0))
 
 
-def forecast_sigma(lead_days: Any) -> tuple[np.ndarray, np.ndarray]:
+def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Relative 1-sigma of predicted F10.7 and of predicted ap at ``lead_days`` (days past
     the last observed day; <= 0: observed, sigma 0), interpolated in
     :data:`F107_FORECAST_SIGMA` and :data:`AP_FORECAST_SIGMA`.
@@ -312,7 +313,7 @@ class SpaceWeather:
         end = (self.date[self._n_daily - 1] + _DAY).astype("datetime64[ns]")
         return first, end - np.timedelta64(1, "ns")
 
-    def daily(self, date: Any) -> dict[str, Any]:
+    def daily(self, date: EpochLike) -> dict[str, Any]:
         """The row of a UTC day (ISO string, ``date`` or ``datetime64``) as a dict, for
         inspection; a day covered only by a monthly predicted row gives that month's row.
         Units as in the class docstring. Raises :class:`~rhoprop.OutsideRecordError` (a

@@ -246,7 +246,7 @@ def most_disputed(ensembles: dict[str, EnsembleResult]) -> str:
     """The case whose models disagree most: largest spread of the component along-track
     means over the mean component sigma at the last output."""
 
-    def score(ens: Any) -> float:
+    def score(ens: EnsembleResult) -> float:
         m = ens.component_means[-1, :, 1]
         s = np.sqrt(ens.component_covariances[-1, :, 1, 1])
         return float(np.ptp(m) / np.mean(s))

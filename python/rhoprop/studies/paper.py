@@ -4,6 +4,7 @@ processes; ``case_ensembles`` Fig. 5; ``ccsp_vs_monte_carlo`` Fig. 6."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -12,7 +13,7 @@ import numpy as np
 
 from .. import frames
 from ..density import Msis
-from ..density.model import ModelLike
+from ..density.model import DensityModel, ModelLike
 from ..ensemble import debias_drag_coefficient, ensemble
 from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
 from ..spaceweather import SpaceWeather
@@ -227,8 +228,8 @@ class CcspComparison:
 def ccsp_vs_monte_carlo(
     state: OrbitState | None = None,
     spacecraft: Spacecraft | None = None,
-    reference: Any = None,
-    second: Any = None,
+    reference: DensityModel | None = None,
+    second: DensityModel | None = None,
     duration: float = scenarios.PAPER_DURATION,
     *,
     second_cd: float | None = None,
@@ -292,14 +293,14 @@ def ccsp_vs_monte_carlo(
 
 
 def case_ensembles(
-    cases: Any = None,
+    cases: Sequence[str] | None = None,
     *,
     n: int = 1000,
     duration: float = scenarios.PAPER_DURATION,
     method: str = "monte_carlo",
     seed: int = 0,
     progress: bool = True,
-    record: Any = None,
+    record: SpaceWeather | None = None,
 ) -> dict[str, Any]:
     """The paper's Fig. 5: the three-model ensemble for each space-weather case (default
     all four), Monte Carlo GaussMarkov(18 min) per model, Cd debiased over 8 h against
