@@ -29,7 +29,7 @@ def test_single_interval_is_the_unscented_transform(setup):
     ends = []
     for p in points:
         tr = rp.propagate(
-            rp.OrbitState(state.epoch, p[:3], p[3:]), craft, model, 21600.0, method="rk8"
+            rp.OrbitState(state.epoch, p[:3], p[3:]), craft, model, 21600.0, integrator="rk8"
         )
         ends.append(tr.states[-1])
     ends = np.array(ends)

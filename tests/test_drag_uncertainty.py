@@ -64,7 +64,7 @@ def _sensitivity(state, craft, model, days: int, eps: float = 1e-3) -> np.ndarra
 
     def run(f: float):
         c = rp.Spacecraft(craft.cd * f, craft.area_to_mass)
-        return rp.propagate(state, c, model, days * DAY, output_step=DAY, method="rk8")
+        return rp.propagate(state, c, model, days * DAY, output_step=DAY, integrator="rk8")
 
     nominal, plus, minus = run(1.0), run(np.exp(eps)), run(np.exp(-eps))
     diff = (plus.positions[1:] - minus.positions[1:]) / (2 * eps)
@@ -184,7 +184,7 @@ def test_member_equals_a_deterministic_run_with_its_drag(setup):
     mc = rp.monte_carlo(state, craft, model, DAY, n=4, seed=2, drag_sigma=0.3, progress=False)
     for i in (0, 3):
         c = rp.Spacecraft(craft.cd * mc.drag_factors[i], craft.area_to_mass)
-        det = rp.propagate(state, c, model, DAY, output_step=3600.0, method="rk8")
+        det = rp.propagate(state, c, model, DAY, output_step=3600.0, integrator="rk8")
         np.testing.assert_allclose(mc.positions[i], det.positions, rtol=0, atol=1e-6)
 
 

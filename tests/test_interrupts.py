@@ -41,7 +41,7 @@ RUNS = {
         "rp.propagate(state, craft, field, 1.1e8, rtol=1e-12)"
     ),
     # ~8 s: 10^7 RK8 steps of 10 s.
-    "propagate_rk8": "rp.propagate(state, craft, model, 9.99e7, method='rk8', step=10.0)",
+    "propagate_rk8": "rp.propagate(state, craft, model, 9.99e7, integrator='rk8', step=10.0)",
     # ~80 s: 200,000 members x 3 days.
     "monte_carlo": (
         "rp.monte_carlo(state, craft, model, 3 * 86400.0, n=200_000, output_step=None, "

@@ -151,7 +151,7 @@ def test_initial_covariance_matches_linearised_propagation(setup):
 
     def end(y):
         s = rp.OrbitState(state.epoch, y[:3], y[3:])
-        tr = rp.propagate(s, craft, model, 3600.0, method="rk8")
+        tr = rp.propagate(s, craft, model, 3600.0, integrator="rk8")
         return tr.states[-1]
 
     y0 = state.state
@@ -220,7 +220,7 @@ def test_step_default_per_method(setup, method, step):
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.0)
     r = rp.monte_carlo(
-        state, craft, model, DAY3, n=2, output_step=None, method=method, progress=False
+        state, craft, model, DAY3, n=2, output_step=None, integrator=method, progress=False
     )
     assert r.step == step
     reference = rp.propagate(state, craft, model, DAY3, rtol=1e-12).positions[-1]
@@ -257,7 +257,7 @@ def test_output_times_equal_the_output_grid(setup):
         ({"initial_covariance": np.eye(6) + np.triu(np.ones((6, 6)), 1)}, "symmetric"),
         ({"perturbation": "multiplicative"}, "unknown perturbation"),
         ({"seed": -1}, "seed must be a non-negative integer"),
-        ({"method": "dop853"}, "a Monte Carlo uses 'rk8', 'rk4' or 'abm'"),
+        ({"integrator": "dop853"}, "a Monte Carlo uses 'rk8', 'rk4' or 'abm'"),
         ({"initial_covariance": np.diag([1.0, np.nan, 1, 1, 1, 1])}, r"\[1\]\[1\] must be finite"),
         ({"threads": 10**6}, "threads = 1000000 is more than"),
         ({"step": 86400.0}, r"step = 86400 s is too large for this orbit: its period is 5\d\d\d s"),
@@ -306,11 +306,11 @@ def test_multistep_members_equal_the_deterministic_multistep_orbit(paper_state, 
         kappa=rp.kappa.Constant(),
         output_step=None,
         progress=False,
-        method="abm",
+        integrator="abm",
     )
-    det = rp.propagate(paper_state, paper_craft, atmosphere, 3 * 86400.0, method="abm")
+    det = rp.propagate(paper_state, paper_craft, atmosphere, 3 * 86400.0, integrator="abm")
     np.testing.assert_array_equal(mc.positions[:, -1], np.broadcast_to(det.positions[-1], (5, 3)))
-    rk8 = rp.propagate(paper_state, paper_craft, atmosphere, 3 * 86400.0, method="rk8")
+    rk8 = rp.propagate(paper_state, paper_craft, atmosphere, 3 * 86400.0, integrator="rk8")
     assert np.linalg.norm(det.positions[-1] - rk8.positions[-1]) < 1.0
     # Two evaluations a step (80 s) after the RK8 start: about half RK8's (180 s) count.
     assert det.evaluations < 0.6 * rk8.evaluations

@@ -394,7 +394,7 @@ def test_propagate_exponential(rv, duration, method, step, output_step, rel_sigm
     model = rp.density.Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=rel_sigma)
     tr = contract(
         lambda: rp.propagate(
-            state, craft, model, duration, output_step=output_step, method=method, step=step
+            state, craft, model, duration, output_step=output_step, integrator=method, step=step
         )
     )
     if tr is not None:
@@ -419,7 +419,7 @@ def test_propagate_odd_arguments(duration, method, step, output_step, rtol, floo
             model,
             duration,
             output_step=output_step,
-            method=method,
+            integrator=method,
             step=step,
             rtol=rtol,
             floor_altitude=floor,
@@ -470,7 +470,7 @@ def test_monte_carlo_exponential(rv, duration, n, kappa, step, output_step, pert
             step=step,
             output_step=output_step,
             perturbation=perturbation,
-            method=method,
+            integrator=method,
             progress=False,
             threads=2,
         )

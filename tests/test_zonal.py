@@ -86,7 +86,7 @@ def rhoprop_end(degree: int, state: rp.OrbitState, span: float) -> np.ndarray:
         rp.scenarios.paper_spacecraft(),
         no_drag(),
         span,
-        method="dop853",
+        integrator="dop853",
         rtol=1e-12,
         zonal_degree=degree,
     )
@@ -125,7 +125,7 @@ def test_monte_carlo_and_ccsp_honour_the_degree():
     model = rp.scenarios.benchmark_exponential(0.1)
     span = 6 * 3600.0
     prop = {
-        n: rp.propagate(state, craft, model, span, method="rk8", zonal_degree=n).positions[-1]
+        n: rp.propagate(state, craft, model, span, integrator="rk8", zonal_degree=n).positions[-1]
         for n in (2, 6)
     }
     assert np.linalg.norm(prop[6] - prop[2]) > 100.0

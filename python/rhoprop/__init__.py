@@ -27,6 +27,7 @@ from .errors import (
 )
 from .propagation import (
     CcspResult,
+    Dynamics,
     MonteCarloResult,
     OrbitState,
     Spacecraft,
@@ -72,6 +73,7 @@ __all__ = [
     "CovarianceError",
     "DecayError",
     "DensityFieldError",
+    "Dynamics",
     "EnsembleResult",
     "GaussianMixture",
     "IntegrationError",

@@ -277,7 +277,7 @@ def load(
         raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
     if fit and model is None:
         raise ValueError("fit=True needs a density model: load(path, fit=True, model=...)")
-    from ..propagation.propagate import zonal_degree_argument
+    from ..propagation.dynamics import zonal_degree_argument
 
     zonal_degree = zonal_degree_argument(zonal_degree)
     p = Path(path)

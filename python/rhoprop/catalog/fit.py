@@ -94,7 +94,7 @@ def _positions(
         model,
         duration,
         output_step=spacing,
-        method="rk8",
+        integrator="rk8",
         zonal_degree=zonal_degree,
     )
     k = round(duration / spacing) + 1

@@ -29,6 +29,7 @@ from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import ModelLike
 from ..parallel import worker_count
 from ..propagation import Spacecraft, monte_carlo
+from ..propagation.dynamics import Dynamics, resolve
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..time import DurationLike, add_seconds
 from .elements import CatalogObject
@@ -126,6 +127,7 @@ def reentry(
     seed: int = 0,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     threads: int | None = None,
+    dynamics: Dynamics | None = None,
 ) -> ReentryResult:
     """Reentry windows of ``objects`` within ``horizon`` of their epochs.
 
@@ -145,6 +147,8 @@ def reentry(
         seed: object i group g uses seed ``seed + 1000 * i + g``.
         floor_altitude: the decay altitude, m (default 120 km).
         threads: objects run at once (default: CPU count).
+        dynamics: a :class:`~rhoprop.Dynamics` for every member's run (then leave
+            ``floor_altitude`` at its default).
 
     Returns:
         :class:`ReentryResult`.
@@ -152,6 +156,7 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
+    dyn = resolve("reentry", dynamics, Dynamics(), floor_altitude=floor_altitude)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(groups, bool) or not isinstance(groups, (int, np.integer)) or groups < 1:
@@ -178,7 +183,7 @@ def reentry(
                 seed=seed + 1000 * i + g,
                 output_step=None,
                 progress=False,
-                floor_altitude=floor_altitude,
+                dynamics=dyn,
                 threads=1,
             )
             times.append(np.asarray(mc.decay_times, dtype=float))

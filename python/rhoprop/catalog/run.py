@@ -28,9 +28,9 @@ from ..propagation import (
     propagate,
 )
 from ..propagation.ccsp import ccsp_many
+from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
-from ..propagation.propagate import zonal_degree_argument
 from ..propagation.results import (
     CcspResult,
     dataset_attrs,
@@ -531,7 +531,7 @@ def _mean_orbit(
             craft,
             model,
             float(offsets[-1]),
-            method="rk8",
+            integrator="rk8",
             floor_altitude=cfg.floor_altitude,
             zonal_degree=cfg.zonal_degree,
         )
@@ -844,6 +844,7 @@ def propagate_catalog(
     initial_covariance: InitialCovariance = None,
     zonal_degree: int = 2,
     drag_sigma: DragSigma = "auto",
+    dynamics: Dynamics | None = None,
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -884,6 +885,10 @@ def propagate_catalog(
             a number for every object (0: none,
             the behaviour before issue 16); or a callable object -> number. Recorded in
             ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md).
+        dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
+            ``zonal_degree`` at once (then leave those keywords at their defaults; its
+            integrator and step are not used: the CCSP integrates with RK8 at its default
+            step, the Monte Carlo with its defaults).
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -914,7 +919,14 @@ def propagate_catalog(
             f"({late[0].state.epoch})"
         )
     step = _validate.positive("output_step", output_step)
-    floor = _validate.real("floor_altitude", floor_altitude)
+    dyn = resolve(
+        "propagate_catalog",
+        dynamics,
+        Dynamics(),
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+    )
+    floor, zonal_degree = dyn.floor_altitude, dyn.zonal_degree
     cfg = RunSettings(
         method=method,
         n=int(n),

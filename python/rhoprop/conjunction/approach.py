@@ -31,7 +31,8 @@ from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import SampledModel
 from ..density.model import ModelLike
 from ..propagation import OrbitState, Spacecraft, Trajectory, propagate
-from ..propagation.propagate import check_model, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve
+from ..propagation.propagate import check_model
 from ..time import add_seconds, to_seconds
 
 __all__ = [
@@ -342,6 +343,7 @@ def closest_approach(
     fine_step: float = DEFAULT_FINE_STEP,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
 ) -> list[CloseApproach]:
     """Close approaches of two trajectories: every local minimum of their distance over
     the absolute times both cover, with the time of closest approach refined to well under
@@ -368,6 +370,8 @@ def closest_approach(
         max_distance: keep only approaches at most this far, m (None: all minima).
         fine_step: output step of the re-propagation, s (default 1 s).
         floor_altitude, zonal_degree: as the trajectories were propagated with.
+        dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
+            ``zonal_degree`` at once (then leave those keywords at their defaults).
 
     Returns:
         The :class:`CloseApproach` events sorted by TCA (object 1 = ``traj1``), states at
@@ -394,8 +398,14 @@ def closest_approach(
             )
     step = _validate.positive("fine_step", fine_step)
     limit = None if max_distance is None else _validate.positive("max_distance", max_distance)
-    floor = _validate.real("floor_altitude", floor_altitude)
-    degree = zonal_degree_argument(zonal_degree)
+    settings = resolve(
+        "closest_approach",
+        dynamics,
+        Dynamics(),
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+    )
+    floor, degree = settings.floor_altitude, settings.zonal_degree
     ref = traj1.epoch
     t1 = to_seconds(traj1.epochs, ref)
     t2 = to_seconds(traj2.epochs, ref)

@@ -24,11 +24,11 @@ from ..errors import DecayError
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft
+from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import (
     MAX_STEP_FRACTION,
     check_model,
     orbital_period,
-    zonal_degree_argument,
 )
 from ..time import EpochLike, add_seconds, seconds_between, to_datetime64, to_seconds, ut1_seconds
 from .approach import (
@@ -356,6 +356,7 @@ def screen(
     threads: int | None = None,
     errors: str = "raise",
     progress: bool | Callable[[int], None] = True,
+    dynamics: Dynamics | None = None,
 ) -> ScreeningResult:
     """Screens one primary against many secondaries for close approaches within
     ``distance`` over [start, end] (UTC).
@@ -399,6 +400,8 @@ def screen(
             period, else ValueError).
         fine_step: output step of the refinement, s.
         floor_altitude, zonal_degree: as for ``rp.propagate``.
+        dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
+            ``zonal_degree`` at once (then leave those keywords at their defaults).
         threads: worker threads (default: CPU count); the core releases the GIL.
         errors: ``"raise"`` (default): a secondary that fails raises its error with the
             object named; ``"skip"``: it is listed in ``skipped`` and the screen goes on.
@@ -419,7 +422,19 @@ def screen(
     wall0 = time.perf_counter()
     prim, objs, itself = _objects(primary, secondaries)
     check_model(model)
-    w = _window(prim, start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree)
+    settings = resolve(
+        "screen", dynamics, Dynamics(), floor_altitude=floor_altitude, zonal_degree=zonal_degree
+    )
+    w = _window(
+        prim,
+        start,
+        end,
+        distance,
+        grid_step,
+        fine_step,
+        settings.floor_altitude,
+        settings.zonal_degree,
+    )
     if errors not in ("raise", "skip"):
         raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
     workers = worker_count(threads)

@@ -213,7 +213,7 @@ def _shoot(
     goal = target.state
 
     def run(epoch: np.datetime64, x: np.ndarray, craft: Spacecraft = spacecraft) -> np.ndarray:
-        out = propagate(OrbitState(epoch, x[:3], x[3:]), craft, model, lead, method="rk8")
+        out = propagate(OrbitState(epoch, x[:3], x[3:]), craft, model, lead, integrator="rk8")
         if out.decayed_at is not None:
             raise ValueError(
                 f"the object decays within {lead:g} s before TCA under the reference model"

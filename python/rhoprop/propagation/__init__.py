@@ -5,6 +5,7 @@
 
 from . import kappa
 from .ccsp import DEFAULT_INITIAL_COVARIANCE, ccsp
+from .dynamics import Dynamics
 from .montecarlo import monte_carlo
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -31,6 +32,7 @@ __all__ = [
     "DEFAULT_STEP",
     "METHODS",
     "CcspResult",
+    "Dynamics",
     "MonteCarloResult",
     "OrbitState",
     "RtnStats",

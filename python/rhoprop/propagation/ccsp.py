@@ -14,6 +14,7 @@ from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..time import DurationLike, ut1_seconds
+from .dynamics import Dynamics, resolve, zonal_degree_argument
 from .montecarlo import drag_sigma_argument
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -24,7 +25,6 @@ from .propagate import (
     fixed_step,
     run_in_field,
     span_of,
-    zonal_degree_argument,
 )
 from .results import CcspResult, StateMoments
 from .state import OrbitState, Spacecraft
@@ -54,6 +54,7 @@ def ccsp(
     update_times: npt.ArrayLike | None = None,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
+    dynamics: Dynamics | None = None,
 ) -> CcspResult:
     """Propagates mean and covariance with the CCSP filter.
 
@@ -106,10 +107,24 @@ def ccsp(
         drag_sigma: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
             0.1 = 10 %; at most 3). Default 0: density uncertainty only, the paper's filter
             (results unchanged). Costs two more sigma points per update.
+        dynamics: a :class:`~rhoprop.Dynamics` holding ``step``, ``floor_altitude`` and
+            ``zonal_degree`` at once (its integrator must be None or "rk8": the filter
+            integrates its sigma points with RK8).
 
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
     """
+    dyn = resolve(
+        "ccsp",
+        dynamics,
+        Dynamics(),
+        step=step,
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+    )
+    if dyn.integrator not in (None, "rk8"):
+        raise ValueError(f"the CCSP integrates with RK8; dynamics.integrator = {dyn.integrator!r}")
+    step, floor_altitude, zonal_degree = dyn.step, dyn.floor_altitude, dyn.zonal_degree
     args, span = _arguments(
         state,
         spacecraft,

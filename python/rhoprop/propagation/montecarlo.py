@@ -14,6 +14,7 @@ from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
+from .dynamics import Dynamics, Integrator, integrator_argument, resolve, zonal_degree_argument
 from .kappa import GaussMarkov, KappaProcess
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -25,7 +26,6 @@ from .propagate import (
     output_grid,
     run_in_field,
     span_of,
-    zonal_degree_argument,
 )
 from .results import MonteCarloResult, Trajectory, sample_moments, trajectory_from_core
 from .state import OrbitState, Spacecraft
@@ -77,13 +77,15 @@ def monte_carlo(
     perturbation: str = "additive",
     record_density: bool = False,
     progress: bool | Callable[[int], object] = True,
-    method: str = "rk8",
+    integrator: Integrator | None = None,
     step: float | None = None,
     threads: int | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     max_memory: float = DEFAULT_MAX_MEMORY,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
+    dynamics: Dynamics | None = None,
+    method: str | None = None,
 ) -> MonteCarloResult:
     """Propagates ``n`` members, each with its own density perturbation kappa(t).
 
@@ -111,7 +113,7 @@ def monte_carlo(
         progress: True shows a progress bar on a terminal for runs longer than a second;
             or a callable, called with the number of members done about every 50 ms (an
             exception it raises stops the run and is raised).
-        method: ``"rk8"`` (default), ``"rk4"`` or ``"abm"`` fixed step. ``"abm"`` (2
+        integrator: ``"rk8"`` (default), ``"rk4"`` or ``"abm"`` fixed step. ``"abm"`` (2
             evaluations a step, restarted with RK8 at every kappa node) pays for held kappa
             processes (``Constant``, long ``PiecewiseConstant``): about half RK8's cost
             at its 80-s default; with a node every step (``GaussMarkov``) it is slower.
@@ -134,6 +136,10 @@ def monte_carlo(
             c_i comes from a stream of its own per member, so it depends only on ``seed``
             and i (not on the thread count) and leaves the member's kappa draws as they
             are without it. The factors are ``result.drag_factors``. At most 3.
+        dynamics: a :class:`~rhoprop.Dynamics` holding ``integrator``, ``step``,
+            ``floor_altitude`` and ``zonal_degree`` at once (then leave those keywords at
+            their defaults).
+        method: deprecated name of ``integrator``.
 
     Returns:
         :class:`MonteCarloResult`. Decayed members are NaN from their decay time on and
@@ -163,8 +169,19 @@ def monte_carlo(
                 f"({MAX_THREADS_PER_CPU} per CPU core of this machine)"
             )
         threads = int(threads)
+    dyn = resolve(
+        "monte_carlo",
+        dynamics,
+        Dynamics(),
+        integrator=integrator_argument("monte_carlo", method, integrator),
+        step=step,
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+    )
+    method = dyn.integrator or "rk8"
+    step, floor_altitude, zonal_degree = dyn.step, dyn.floor_altitude, dyn.zonal_degree
     if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; a Monte Carlo uses 'rk8', 'rk4' or 'abm'")
+        raise ValueError(f"unknown integrator {method!r}; a Monte Carlo uses 'rk8', 'rk4' or 'abm'")
     h = fixed_step(method, step, state)
     if output_times is None:
         span = span_of(duration, None, "output_times")

@@ -17,6 +17,13 @@ from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
 from ..density.model import AtmosphereLike, CoreAtmosphere, DensityModel, ModelLike, as_atmosphere
 from ..time import DurationLike, ut1_seconds
+from .dynamics import (
+    Dynamics,
+    Integrator,
+    integrator_argument,
+    resolve,
+    zonal_degree_argument,
+)
 from .results import Trajectory, trajectory_from_core
 from .state import OrbitState, Spacecraft
 
@@ -39,9 +46,6 @@ MAX_STEP_FRACTION = 1.0 / 20.0
 #: Most integration steps (or output/update times) one run may take: the core's own limit,
 #: checked here before anything is allocated.
 MAX_STEPS = _core.MAX_STEPS
-#: Highest zonal degree the dynamics include (J2..J6); 2, the default, is J2 only (the
-#: paper's model).
-MAX_ZONAL_DEGREE = 6
 #: Default limit on the memory of a run's results, bytes (8 GiB).
 DEFAULT_MAX_MEMORY = 8 * 2**30
 
@@ -105,19 +109,6 @@ def span_of(duration: DurationLike | None, times: np.ndarray | None, name: str) 
                 f"give one of them (duration may be left out when {name} is given)"
             )
     return end
-
-
-def zonal_degree_argument(value: object) -> int:
-    """``value`` as the zonal degree of a run: an integer from 2 (J2 only) to
-    :data:`MAX_ZONAL_DEGREE` (J2..J6); anything else is a TypeError or ValueError."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"zonal_degree must be an integer, got {value!r}")
-    if not 2 <= value <= MAX_ZONAL_DEGREE:
-        raise ValueError(
-            f"zonal_degree = {value} is invalid: it must be 2 (J2 only, the paper's model) "
-            f"to {MAX_ZONAL_DEGREE} (J2..J{MAX_ZONAL_DEGREE})"
-        )
-    return int(value)
 
 
 def check_model(model: ModelLike) -> None:
@@ -212,12 +203,14 @@ def propagate(
     duration: DurationLike | None = None,
     *,
     output_step: float | None = None,
-    method: str = "dop853",
+    integrator: Integrator | None = None,
     rtol: float | None = None,
     step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     density: DensityModel | None = None,
     zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
+    method: str | None = None,
 ) -> Trajectory:
     """Propagates one orbit with two-body + J2 (optionally up to J6) + drag at the mean
     density.
@@ -230,7 +223,7 @@ def propagate(
         duration: propagation span, s (> 0), or a ``timedelta``.
         output_step: spacing of the outputs, s; None gives the start and end only. The end
             is always an output.
-        method: ``"dop853"`` (adaptive, dense output; default), ``"rk8"`` (fixed-step
+        integrator: ``"dop853"`` (adaptive, dense output; default), ``"rk8"`` (fixed-step
             8th-order Dormand-Prince), ``"rk4"`` (fixed-step classic RK4) or ``"abm"``
             (fixed-step Adams-Bashforth-Moulton, 10 back values, started with RK8).
         rtol: relative tolerance of ``"dop853"`` (default 1e-10).
@@ -242,6 +235,10 @@ def propagate(
         zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
             only, the paper's model; 3 to 6 add J3..J6 (EGM2008), which move the paper's orbit
             by 1.6 km in a day.
+        dynamics: a :class:`~rhoprop.Dynamics` holding ``integrator``, ``step``,
+            ``rtol``, ``floor_altitude`` and ``zonal_degree`` at once (then leave those
+            keywords at their defaults).
+        method: deprecated name of ``integrator``.
 
     Returns:
         :class:`Trajectory` at the output times (shorter if the object decayed; its
@@ -262,13 +259,28 @@ def propagate(
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a Spacecraft, got {type(spacecraft).__name__}")
     check_model(model)
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    dyn = resolve(
+        "propagate",
+        dynamics,
+        Dynamics(),
+        integrator=integrator_argument("propagate", method, integrator),
+        step=step,
+        rtol=rtol,
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+    )
+    method = dyn.integrator or "dop853"
+    step, rtol, floor_altitude, zonal_degree = (
+        dyn.step,
+        dyn.rtol,
+        dyn.floor_altitude,
+        dyn.zonal_degree,
+    )
     span = span_of(duration, None, "")
     if rtol is not None:
         rtol = _validate.positive("rtol", rtol)
         if method != "dop853":
-            raise ValueError(f"rtol applies to method 'dop853' only, not {method!r}")
+            raise ValueError(f"rtol applies to integrator 'dop853' only, not {method!r}")
     if method in DEFAULT_STEP:
         step = fixed_step(method, step, state)
         check_steps(span, step, "step")

@@ -16,6 +16,7 @@ from ..density import Msis
 from ..density.model import DensityModel, ModelLike
 from ..ensemble import debias_drag_coefficient, ensemble
 from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
+from ..propagation.dynamics import Integrator
 from ..spaceweather import SpaceWeather
 from . import scenarios
 from .scenarios import LABELS
@@ -121,7 +122,7 @@ def method_comparison(
         # far inside the ~100 m spread, and the mean orbit uses the same integrator.
         # RK4 at the White step itself (10 s), not its 5-s default: 3 m is enough here.
         step = process.step if isinstance(process, kappa.White) and process.step <= 30 else None
-        integrator = "rk8" if step is None else "rk4"
+        integrator: Integrator = "rk8" if step is None else "rk4"
         results[key] = monte_carlo(
             state,
             spacecraft,
@@ -132,7 +133,7 @@ def method_comparison(
             seed=seed,
             output_step=None,
             progress=progress,
-            method=integrator,
+            integrator=integrator,
             step=step,
         )
         # Over the members still flying at the end (decayed ones are NaN).
@@ -149,7 +150,7 @@ def method_comparison(
             output_step=h,
             record_density=True,
             progress=False,
-            method=integrator,
+            integrator=integrator,
             step=step,
         )
         assert trace.densities is not None  # record_density=True

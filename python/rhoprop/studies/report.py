@@ -267,7 +267,7 @@ def _paper_orbits(
     reference = None
     for method in ("dop853", "rk8", "rk4"):
         t0 = time.perf_counter()
-        tr = propagate(state, craft, model, duration, method=method)
+        tr = propagate(state, craft, model, duration, integrator=method)
         wall = time.perf_counter() - t0
         reference = tr.positions[-1] if reference is None else reference
         diff = float(np.linalg.norm(tr.positions[-1] - reference))
