@@ -101,7 +101,7 @@ def fit_all(snapshot: Path) -> None:
     """Fits every element set of a whole snapshot through NRLMSIS 2.1's atlas."""
     model = rp.density.Msis("2.1")
     t0 = time.perf_counter()
-    cat = catalog.load(snapshot, errors="skip", fit=True, model=model)
+    cat = catalog.load(snapshot, errors="record", fit=True, model=model)
     wall = time.perf_counter() - t0
     fitted = sum(o.fit is not None for o in cat)
     notes = collections.Counter(
@@ -159,7 +159,7 @@ def main() -> None:
                 path.write_text(leo_subset(text, args.objects))
         else:
             path.write_text(synthetic_tle(args.objects))
-        cat = catalog.load(path, errors="skip")
+        cat = catalog.load(path, errors="record")
     print(f"{len(cat)} objects ({'real snapshot' if args.real else 'synthetic'})")
     epochs = np.array([o.state.epoch for o in cat])
     print(f"epochs from {epochs.min()} to {epochs.max()}")

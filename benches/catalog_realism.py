@@ -154,7 +154,7 @@ def run_config(
             path,
             fit=True,
             model=field,
-            errors="skip",
+            errors="record",
             span=fit_span,
             zonal_degree=zonal_degree,
         )

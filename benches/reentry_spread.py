@@ -65,7 +65,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "low.tle"
         path.write_text("\n".join(lines) + "\n")
-        cat = rp.catalog.load(path, errors="skip")
+        cat = rp.catalog.load(path, errors="record")
     epochs = np.array([o.state.epoch for o in cat])
     print(
         f"{len(cat)} element sets with perigee < {args.perigee_km:g} km, "
@@ -74,7 +74,7 @@ def main() -> None:
     model = rp.density.Msis("2.1")
     t0 = time.perf_counter()
     res = rp.catalog.reentry(
-        cat, model, n=args.members, horizon=args.horizon_days * 86400.0, groups=4
+        cat, model, n=args.members, duration=args.horizon_days * 86400.0, groups=4
     )
     wall = time.perf_counter() - t0
     predicted = int(np.count_nonzero(~np.isnat(res.epoch_median)))

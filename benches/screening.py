@@ -57,7 +57,7 @@ def main() -> None:
         path = Path(tmp) / "active.tle"
         path.write_text(gzip.open(snapshot, "rt").read())
         t0 = time.perf_counter()
-        cat = catalog.load(path, errors="skip")
+        cat = catalog.load(path, errors="record")
         load = time.perf_counter() - t0
     print(f"{len(cat)} objects loaded in {load:.2f} s ({len(cat.skipped)} skipped: B* <= 0)")
     start = max(o.state.epoch for o in cat)

@@ -104,7 +104,7 @@ def test_malformed_input_is_named_or_skipped(tmp_path):
     path.write_text("\n".join(bad))
     with pytest.raises(ValueError, match="line 5 fails its checksum"):
         catalog.load(path)
-    cat = catalog.load(path, errors="skip")
+    cat = catalog.load(path, errors="record")
     assert len(cat) == 5 and len(cat.skipped) == 1 and "lines 5-6" in cat.skipped[0][0]
     records = omm_records()
     del records[2]["MEAN_MOTION"]
@@ -383,8 +383,8 @@ def test_load_reads_gzip_compressed_catalogs(test_data, tmp_path):
     src = test_data / "catalogs" / "celestrak_active_20231113.txt.gz"
     plain = tmp_path / "active.txt"
     plain.write_bytes(gzip.decompress(src.read_bytes()))
-    a = rp.catalog.load(src, errors="skip")
-    b = rp.catalog.load(plain, errors="skip")
+    a = rp.catalog.load(src, errors="record")
+    b = rp.catalog.load(plain, errors="record")
     assert len(a) == len(b) > 1000 and len(a.skipped) == len(b.skipped)
     assert [o.norad_id for o in a] == [o.norad_id for o in b]
     damaged = tmp_path / "damaged.txt.gz"

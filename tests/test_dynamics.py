@@ -74,3 +74,19 @@ def test_method_of_propagate_is_deprecated_for_integrator(setup):
         pytest.raises(TypeError, match=r"both method= and integrator="),
     ):
         rp.propagate(state, craft, model, 3600.0, method="rk8", integrator="rk4")
+
+
+def test_errors_has_one_spelling(tmp_path):
+    # "record" everywhere (the run goes on and records each failure); load's and screen's
+    # old "skip" still works with a warning.
+    from test_catalog import SAMPLE
+
+    bad = tmp_path / "bad.tle"
+    bad.write_text(SAMPLE.read_text() + "1 garbage\n2 garbage\n")
+    cat = rp.catalog.load(bad, errors="record")
+    assert cat.skipped and len(cat) == len(rp.catalog.load(SAMPLE))
+    with pytest.warns(DeprecationWarning, match=r'errors="record"'):
+        old = rp.catalog.load(bad, errors="skip")
+    assert len(old) == len(cat)
+    with pytest.raises(ValueError, match="errors must be 'raise' or 'record'"):
+        rp.catalog.load(bad, errors="ignore")

@@ -49,7 +49,7 @@ def tle_file(tmp_path_factory):
 
 
 def test_fit_converges_and_reports_residuals(tle_file, atmosphere):
-    obj = catalog.load(tle_file, errors="skip")[0]
+    obj = catalog.load(tle_file, errors="record")[0]
     f = fit_element_set(obj, atmosphere)
     assert f.converged and f.iterations <= 8
     assert f.state.epoch == obj.state.epoch
@@ -65,7 +65,7 @@ def test_fit_converges_and_reports_residuals(tle_file, atmosphere):
 
 
 def test_fit_is_independent_of_the_starting_drag(tle_file, atmosphere):
-    obj = catalog.load(tle_file, errors="skip")[0]
+    obj = catalog.load(tle_file, errors="record")[0]
     a = fit_element_set(obj, atmosphere)
     b = fit_element_set(obj, atmosphere, drag_parameter=3 * obj.drag_parameter)
     assert abs(a.drag_parameter - b.drag_parameter) < 0.1 * a.drag_parameter
@@ -87,7 +87,7 @@ def test_nonpositive_bstar_loads_only_with_fit(tle_file, atmosphere):
 
 
 def test_tle_covariance_has_the_regime_rms_in_rtn(tle_file):
-    obj = catalog.load(tle_file, errors="skip")[0]
+    obj = catalog.load(tle_file, errors="record")[0]
     acc = tle_accuracy(obj.state)
     assert acc.regime == "LEO below 800 km"
     cov = tle_covariance(obj.state)

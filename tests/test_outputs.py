@@ -94,7 +94,7 @@ def test_non_utf8_bytes_are_skipped_or_named(tmp_path):
     path.write_bytes(SAMPLE.read_bytes().replace(b"SYNTH-2", b"SYNTH-\xe9"))
     with pytest.raises(ValueError, match=r"latin1.tle line 4: byte 0xe9 is not UTF-8"):
         catalog.load(path)
-    cat = catalog.load(path, errors="skip")
+    cat = catalog.load(path, errors="record")
     assert len(cat) == 6 and cat[1].name == "SYNTH-\ufffd"
 
 

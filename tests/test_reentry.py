@@ -32,7 +32,7 @@ def atmosphere():
 
 def test_windows_are_ordered_and_count_every_member(atmosphere):
     objs = [_low(1, 200e3), _low(2, 220e3)]
-    r = catalog.reentry(objs, atmosphere, n=20, horizon=dt.timedelta(days=10), groups=4)
+    r = catalog.reentry(objs, atmosphere, n=20, duration=dt.timedelta(days=10), groups=4)
     assert r.members == 20 and r.groups == 4
     assert (r.decayed_fraction == 1).all()
     assert (r.epoch_q025 <= r.epoch_median).all() and (r.epoch_median <= r.epoch_q975).all()
@@ -44,20 +44,20 @@ def test_windows_are_ordered_and_count_every_member(atmosphere):
 
 def test_drag_uncertainty_widens_the_window(atmosphere):
     obj = [_low(1, 200e3)]
-    narrow = catalog.reentry(obj, atmosphere, n=20, horizon=10 * 86400.0, groups=1)
-    wide = catalog.reentry(obj, atmosphere, n=20, horizon=10 * 86400.0, drag_sigma=0.4)
+    narrow = catalog.reentry(obj, atmosphere, n=20, duration=10 * 86400.0, groups=1)
+    wide = catalog.reentry(obj, atmosphere, n=20, duration=10 * 86400.0, drag_sigma=0.4)
     span = lambda r: r.epoch_q975[0] - r.epoch_q025[0]  # noqa: E731
     assert span(wide) > span(narrow)
 
 
 def test_nat_beyond_the_horizon(atmosphere):
-    r = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, horizon=3600.0, groups=2)
+    r = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, duration=3600.0, groups=2)
     assert r.decayed_fraction[0] == 0
     assert np.isnat(r.epoch_median[0]) and np.isnat(r.epoch_q025[0]) and np.isnat(r.epoch_q975[0])
-    with pytest.raises(ValueError, match="horizon"):
-        catalog.reentry([_low(1, 200e3)], atmosphere, horizon=-1.0)
-    with pytest.raises(TypeError, match="horizon"):
-        catalog.reentry([_low(1, 200e3)], atmosphere, horizon="soon")
+    with pytest.raises(ValueError, match="duration"):
+        catalog.reentry([_low(1, 200e3)], atmosphere, duration=-1.0)
+    with pytest.raises(TypeError, match="duration"):
+        catalog.reentry([_low(1, 200e3)], atmosphere, duration="soon")
 
 
 def test_cli_reentry_prints_and_writes(tmp_path, capsys):
@@ -72,3 +72,10 @@ def test_cli_reentry_prints_and_writes(tmp_path, capsys):
     assert len(text) == 1 + len(catalog.load(SAMPLE))
     assert "members each" in capsys.readouterr().out
     assert (out / "manifest.json").is_file()
+
+
+def test_horizon_is_the_deprecated_name_of_duration(atmosphere):
+    with pytest.warns(DeprecationWarning, match="duration="):
+        old = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, horizon=3600.0, groups=2)
+    new = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, duration=3600.0, groups=2)
+    assert old.horizon == new.horizon == 3600.0

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import warnings
 from numbers import Real
+from typing import Literal
 
 import numpy as np
 
@@ -58,3 +60,26 @@ def vector3(name: str, value: object) -> np.ndarray:
         raise ValueError(f"{name}[{bad[0]}] must be finite, got {arr[bad[0]]}")
     arr.flags.writeable = False
     return arr
+
+
+#: ``errors=`` of every function that can go on past a failure: "raise" (the first
+#: failure raises) or "record" (each failure is recorded, with its reason, and the rest
+#: goes on).
+Errors = Literal["raise", "record"]
+
+
+def errors_argument(function: str, value: object) -> Errors:
+    """``errors=`` of ``function`` checked: "raise" or "record"; the old spelling "skip"
+    (of ``catalog.load`` and ``conjunction.screen``) is "record" with a
+    DeprecationWarning."""
+    if value == "skip":
+        warnings.warn(
+            f'{function}(errors="skip") is deprecated; errors="record" goes on and records '
+            "each failure",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        return "record"
+    if value == "raise" or value == "record":
+        return value
+    raise ValueError(f"errors must be 'raise' or 'record', got {value!r}")

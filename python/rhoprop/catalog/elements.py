@@ -15,10 +15,11 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
+from .. import _validate
 from ..density.model import ModelLike
 from ..parallel import worker_count
 from ..propagation import OrbitState
@@ -79,7 +80,7 @@ class CatalogObject:
 
 @dataclass
 class Catalog:
-    """Objects read from a file, and the entries skipped (with ``errors="skip"``) as
+    """Objects read from a file, and the entries skipped (with ``errors="record"``) as
     (where, message) pairs."""
 
     objects: list[CatalogObject]
@@ -232,7 +233,7 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
 def load(
     path: str | Path,
     *,
-    errors: str = "raise",
+    errors: _validate.Errors | Literal["skip"] = "raise",
     drag_parameters: dict[int, float] | None = None,
     fit: bool = False,
     model: ModelLike | None = None,
@@ -273,8 +274,7 @@ def load(
     """
     from .fit import DEFAULT_SPAN
 
-    if errors not in ("raise", "skip"):
-        raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
+    errors = _validate.errors_argument("load", errors)
     if fit and model is None:
         raise ValueError("fit=True needs a density model: load(path, fit=True, model=...)")
     from ..propagation.dynamics import zonal_degree_argument

@@ -196,7 +196,7 @@ def run_catalog_file(
     atmosphere = model_by_name(model)
     cat = load(
         file,
-        errors="skip" if skip_bad else "raise",
+        errors="record" if skip_bad else "raise",
         fit=fit,
         model=atmosphere if fit else None,
         drag_parameters=drag,
@@ -294,7 +294,7 @@ def run_reentry_file(
 
     atmosphere = model_by_name(model)
     cat = load(
-        file, errors="skip" if skip_bad else "raise", fit=fit, model=atmosphere if fit else None
+        file, errors="record" if skip_bad else "raise", fit=fit, model=atmosphere if fit else None
     )
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
@@ -303,7 +303,7 @@ def run_reentry_file(
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     t0 = time.perf_counter()
     result = reentry(
-        cat, atmosphere, n=members, horizon=horizon_days * 86400.0, drag_sigma=drag_sigma
+        cat, atmosphere, n=members, duration=horizon_days * 86400.0, drag_sigma=drag_sigma
     )
     wall = time.perf_counter() - t0
     rows = result.rows()

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import datetime as _dt
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
@@ -90,7 +91,7 @@ class ReentryResult:
         ]
 
 
-def _seconds(horizon: Any) -> float:
+def _seconds(horizon: object) -> float:
     if isinstance(horizon, _dt.timedelta):
         value = horizon.total_seconds()
     elif isinstance(horizon, np.timedelta64):
@@ -100,9 +101,9 @@ def _seconds(horizon: Any) -> float:
     ):
         value = float(horizon)
     else:
-        raise TypeError(f"horizon must be seconds or a timedelta, got {type(horizon).__name__}")
+        raise TypeError(f"duration must be seconds or a timedelta, got {type(horizon).__name__}")
     if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"horizon must be positive, got {horizon!r}")
+        raise ValueError(f"duration must be positive, got {horizon!r}")
     return value
 
 
@@ -120,7 +121,7 @@ def reentry(
     model: ModelLike,
     *,
     n: int = 100,
-    horizon: DurationLike = 30 * 86400.0,
+    duration: DurationLike = 30 * 86400.0,
     groups: int = 10,
     drag_sigma: float | None = None,
     kappa: KappaProcess | None = None,
@@ -128,8 +129,9 @@ def reentry(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     threads: int | None = None,
     dynamics: Dynamics | None = None,
+    horizon: DurationLike | None = None,
 ) -> ReentryResult:
-    """Reentry windows of ``objects`` within ``horizon`` of their epochs.
+    """Reentry windows of ``objects`` within ``duration`` of their epochs.
 
     Args:
         objects: a :class:`~rhoprop.catalog.Catalog` or list of
@@ -138,7 +140,7 @@ def reentry(
         model: density model (a sampled one serves each object the day tiles of its own
             span from its atlas, :mod:`rhoprop.density.atlas`) or a field/atmosphere.
         n: members per object (a multiple of ``groups`` is used: rounded up).
-        horizon: how far to look, s after each object's epoch, or a ``timedelta``
+        duration: how far to look, s after each object's epoch, or a ``timedelta``
             (default 30 days).
         groups: Cd*A/m values per object (stratified; 1 turns Cd*A/m uncertainty off).
         drag_sigma: relative (log) 1-sigma of Cd*A/m for every object; default: the
@@ -149,6 +151,8 @@ def reentry(
         threads: objects run at once (default: CPU count).
         dynamics: a :class:`~rhoprop.Dynamics` for every member's run (then leave
             ``floor_altitude`` at its default).
+        horizon: deprecated name of ``duration`` (a span after each object's own epoch is
+            ``duration`` everywhere; an absolute end shared by all objects is ``end``).
 
     Returns:
         :class:`ReentryResult`.
@@ -163,7 +167,14 @@ def reentry(
         raise ValueError(f"groups must be a positive integer, got {groups!r}")
     per_group = max(int(np.ceil(n / groups)), 2)
     total = per_group * int(groups)
-    span = _seconds(horizon)
+    if horizon is not None:
+        warnings.warn(
+            "reentry(horizon=...) is deprecated; the span after each epoch is duration=",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        duration = horizon
+    span = _seconds(duration)
     process = kappa or GaussMarkov()
     probabilities = (np.arange(groups) + 0.5) / groups
 

@@ -75,7 +75,7 @@ DragSigma = Literal["auto"] | float | Callable[[CatalogObject], float]
 #: The statuses an object can end with (:class:`Status` values).
 STATUSES = ("propagated", "decayed", "shortened", "failed")
 #: What ``errors`` of :func:`propagate_catalog` accepts.
-ERRORS = ("raise", "record")
+ERRORS = ("raise", "record")  # the values of errors= (rhoprop._validate.Errors)
 
 
 @dataclass(frozen=True)
@@ -840,7 +840,7 @@ def propagate_catalog(
     client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     chunk_size: int = 50,
     progress: bool = True,
-    errors: str = "raise",
+    errors: _validate.Errors = "raise",
     initial_covariance: InitialCovariance = None,
     zonal_degree: int = 2,
     drag_sigma: DragSigma = "auto",
@@ -899,8 +899,7 @@ def propagate_catalog(
         raise ValueError("the catalog has no objects")
     if method not in ("ccsp", "monte_carlo"):
         raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
-    if errors not in ERRORS:
-        raise ValueError(f"errors must be 'raise' or 'record', got {errors!r}")
+    errors = _validate.errors_argument("propagate_catalog", errors)
     bad = [o for o in objs if not isinstance(o, CatalogObject)]
     if bad:
         raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")

@@ -12,7 +12,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -82,7 +82,7 @@ ScreenObject = CatalogObject | tuple[OrbitState, Spacecraft] | tuple[OrbitState,
 class Reached(enum.IntEnum):
     """How far one secondary got through stages 2-5 of :func:`screen`."""
 
-    #: Not screened: decayed before the window's first grid step, or (``errors="skip"``)
+    #: Not screened: decayed before the window's first grid step, or (``errors="record"``)
     #: its propagation raised.
     SKIPPED = 0
     #: Propagated; no grid step within reach of the primary.
@@ -97,7 +97,7 @@ class Reached(enum.IntEnum):
 class _Outcome:
     """One secondary's stages 2-5: how far it got, why it was skipped or what to note
     (its decay inside the window), its events within the distance, the exception that
-    skipped it (``errors="skip"``) and the time per stage (s)."""
+    skipped it (``errors="record"``) and the time per stage (s)."""
 
     reached: Reached
     reason: str = ""
@@ -122,7 +122,7 @@ class ScreeningResult:
             within ``distance``), ``interpolated`` (the cubic Hermite interpolant comes
             within ``distance`` plus its margin) and ``events`` (objects with an event).
         skipped: (name, reason) of the secondaries not screened (decayed before
-            ``start``; with ``errors="skip"``, failed ones).
+            ``start``; with ``errors="record"``, failed ones).
         notes: (name, note) of objects screened only in part (decayed inside the window).
         timings: seconds spent per stage, summed over the worker threads (``primary``:
             the primary's field and propagation, ``radial``: the vectorised prefilter,
@@ -354,7 +354,7 @@ def screen(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = 2,
     threads: int | None = None,
-    errors: str = "raise",
+    errors: _validate.Errors | Literal["skip"] = "raise",
     progress: bool | Callable[[int], None] = True,
     dynamics: Dynamics | None = None,
 ) -> ScreeningResult:
@@ -435,8 +435,7 @@ def screen(
         settings.floor_altitude,
         settings.zonal_degree,
     )
-    if errors not in ("raise", "skip"):
-        raise ValueError(f"errors must be 'raise' or 'skip', got {errors!r}")
+    errors = _validate.errors_argument("screen", errors)
     workers = worker_count(threads)
     if workers < 1:
         raise ValueError(f"threads must be >= 1, got {threads!r}")
@@ -690,7 +689,7 @@ def _run_threads(
         try:
             return _screen_one(obj, dyn, prim, start, span, step, limit)
         except Exception as err:
-            if errors == "skip":
+            if errors == "record":
                 return _Outcome(Reached.SKIPPED, f"{type(err).__name__}: {err}", error=err)
             named = _object_error(err, obj)
             if named is err:
