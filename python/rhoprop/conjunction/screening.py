@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .. import _core, _validate
+from .. import _validate
 from ..catalog.elements import CatalogObject
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, MU, R_EARTH, R_POLE
 from ..density.model import ModelLike, as_atmosphere
@@ -28,9 +28,10 @@ from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import (
     MAX_STEP_FRACTION,
     check_model,
+    core_propagate,
     orbital_period,
 )
-from ..time import EpochLike, add_seconds, seconds_between, to_datetime64, to_seconds, ut1_seconds
+from ..time import EpochLike, add_seconds, seconds_between, to_datetime64, to_seconds
 from .approach import (
     DEFAULT_FINE_STEP,
     CloseApproach,
@@ -263,17 +264,15 @@ def _coarse_track(
         atmosphere = as_atmosphere(obj.model, obj.state, lead)  # backwards: lead < 0
         # The core integrates backwards with the fixed-step RK8 only (as the debiasing's
         # backward orbit does); 30 s steps keep it at the millimetre level over days.
-        _t, states, _d, _e, _c = _core.propagate(
+        _t, states, _d, _e, _c = core_propagate(
             atmosphere,
-            ut1_seconds(obj.state.epoch),
-            obj.state.state,
+            obj.state,
             obj.craft.drag_parameter,
             np.array([0.0, lead]),
-            "rk8",
-            BACKWARD_STEP,
-            None,
-            dyn.floor,
-            dyn.degree,
+            integrator="rk8",
+            step=BACKWARD_STEP,
+            floor_altitude=dyn.floor,
+            zonal_degree=dyn.degree,
         )
         state0 = OrbitState(start, states[-1, :3], states[-1, 3:])
     tr = dyn.forward(state0, obj.craft, obj.model, span, grid_step)

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _core, _validate, frames
+from .. import _validate, frames
 from ..density.model import DensityModel, ModelLike, as_atmosphere
 from ..propagation import OrbitState, Spacecraft
-from ..time import offsets_to_epochs, ut1_seconds
+from ..propagation.propagate import DEFAULT_STEP, core_propagate
+from ..time import offsets_to_epochs
 
 #: Cadence of the density samples along the backward orbit, s.
 DEBIAS_CADENCE = 60.0
@@ -26,16 +27,16 @@ def backward_orbit(
     atmosphere = as_atmosphere(model, state, -window)
     times = -np.arange(0.0, window + 0.5 * cadence, cadence)
     times[-1] = -window
-    t, states, _decayed, _, _ = _core.propagate(
+    t, states, _decayed, _, _ = core_propagate(
         atmosphere,
-        ut1_seconds(state.epoch),
-        state.state,
+        state,
         spacecraft.drag_parameter,
         times,
-        "rk8",
-        180.0,
-        None,
-        0.0,
+        integrator="rk8",
+        step=DEFAULT_STEP["rk8"],
+        # Backwards in time the orbit only rises: no floor to stop at.
+        floor_altitude=0.0,
+        zonal_degree=2,
     )
     return offsets_to_epochs(state.epoch, t), states[:, :3]
 

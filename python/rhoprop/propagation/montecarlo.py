@@ -21,6 +21,7 @@ from .propagate import (
     check_memory,
     check_model,
     check_steps,
+    core_propagate,
     explicit_times,
     fixed_step,
     output_grid,
@@ -242,17 +243,15 @@ def monte_carlo(
             if bar is not None:
                 bar.close()
         # The mean orbit: same integrator, step and field, kappa = 0, nominal Cd*A/m.
-        mean = _core.propagate(
+        mean = core_propagate(
             atmosphere,
-            epoch,
-            state.state,
+            state,
             spacecraft.drag_parameter,
             times,
-            method,
-            float(out["step"]),
-            None,
-            floor,
-            degree,
+            integrator=method,
+            step=float(out["step"]),
+            floor_altitude=floor,
+            zonal_degree=degree,
         )
         return out, trajectory_from_core(state.epoch, mean)
 

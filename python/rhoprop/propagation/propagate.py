@@ -168,6 +168,36 @@ def check_memory(estimate: float, limit: float, what: str) -> None:
         )
 
 
+def core_propagate(
+    atmosphere: AtmosphereLike,
+    state: OrbitState,
+    drag_parameter: float,
+    times: np.ndarray,
+    *,
+    integrator: str,
+    step: float | None,
+    floor_altitude: float,
+    zonal_degree: int,
+    rtol: float | None = None,
+) -> _core._Propagated:
+    """The one call of ``_core.propagate``: ``state`` through ``atmosphere`` to ``times``
+    (s from its epoch, increasing from 0, or decreasing for a backward run) with Cd*A/m
+    ``drag_parameter`` (m^2/kg); returns (times, states, decayed_at, RHS evaluations,
+    clipped evaluations)."""
+    return _core.propagate(
+        atmosphere,
+        ut1_seconds(state.epoch),
+        state.state,
+        drag_parameter,
+        times,
+        integrator,
+        step,
+        rtol,
+        floor_altitude,
+        zonal_degree,
+    )
+
+
 def run_in_field(
     model: ModelLike, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
 ) -> T:
@@ -289,21 +319,19 @@ def propagate(
     floor = _validate.real("floor_altitude", floor_altitude)
     degree = zonal_degree_argument(zonal_degree)
     times = output_grid(span, output_step)
-    epoch = ut1_seconds(state.epoch)
     tol = DEFAULT_RTOL if rtol is None and method == "dop853" else rtol
 
     def run(atmosphere: AtmosphereLike) -> tuple[Any, ...]:
-        return _core.propagate(
+        return core_propagate(
             atmosphere,
-            epoch,
-            state.state,
+            state,
             spacecraft.drag_parameter,
             times,
-            method,
-            step,
-            tol,
-            floor,
-            degree,
+            integrator=method,
+            step=step,
+            rtol=tol,
+            floor_altitude=floor,
+            zonal_degree=degree,
         )
 
     return trajectory_from_core(state.epoch, run_in_field(model, state, span, floor, run))
