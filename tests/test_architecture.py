@@ -27,6 +27,7 @@ STAGES = {
     "constants": 0,
     "errors": 0,
     "frames": 0,
+    "options": 0,
     "parallel": 0,
     "progress": 0,
     "time": 0,

@@ -6,9 +6,10 @@ import datetime as _dt
 import math
 import warnings
 from numbers import Real
-from typing import Literal
 
 import numpy as np
+
+from .options import Errors
 
 
 def real(name: str, value: object) -> float:
@@ -60,12 +61,6 @@ def vector3(name: str, value: object) -> np.ndarray:
         raise ValueError(f"{name}[{bad[0]}] must be finite, got {arr[bad[0]]}")
     arr.flags.writeable = False
     return arr
-
-
-#: ``errors=`` of every function that can go on past a failure: "raise" (the first
-#: failure raises) or "record" (each failure is recorded, with its reason, and the rest
-#: goes on).
-Errors = Literal["raise", "record"]
 
 
 def errors_argument(function: str, value: object) -> Errors:

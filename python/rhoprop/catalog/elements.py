@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import _validate
 from ..density.model import ModelLike
+from ..options import Errors
 from ..parallel import worker_count
 from ..propagation import OrbitState
 from ..time import from_jd
@@ -233,7 +234,7 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
 def load(
     path: str | Path,
     *,
-    errors: _validate.Errors | Literal["skip"] = "raise",
+    errors: Errors | Literal["skip"] = "raise",
     drag_parameters: dict[int, float] | None = None,
     fit: bool = False,
     model: ModelLike | None = None,

@@ -6,12 +6,13 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 
 from ..density import DensityModel, Exponential, Msis
 from ..io import OutputFolder, command_line, oem_names, sanitise, write_oem, write_summary
+from ..options import Duplicates, UncertaintyMethod
 from ..spaceweather import SpaceWeather
 from .covariance import COVARIANCE_NAMES
 from .elements import load
@@ -30,7 +31,8 @@ def model_by_name(name: str) -> DensityModel:
         raise ValueError(f"unknown model {name!r}; expected one of {', '.join(MODEL_NAMES)}")
     # The last refreshed record (else the bundled one), with its predictions usable as
     # forecast drivers (uncertainty growing with lead time, PredictedDriversWarning).
-    return Msis(name, space_weather=SpaceWeather.cached().with_forecast())
+    version = cast(Literal["2.1", "2.0", "00"], name)  # checked against MODEL_NAMES above
+    return Msis(version, space_weather=SpaceWeather.cached().with_forecast())
 
 
 def initial_covariance_option(value: str | None) -> Any:
@@ -143,14 +145,14 @@ def run_catalog_file(
     end: str,
     out: str | Path,
     *,
-    method: str = "ccsp",
+    method: UncertaintyMethod = "ccsp",
     members: int = 100,
     model: str = "2.1",
     output_step: float = 3600.0,
     scheduler: str | None = None,
     skip_bad: bool = False,
     overwrite: bool = False,
-    duplicates: str = "error",
+    duplicates: Duplicates = "error",
     command: str | None = None,
     fit: bool = False,
     initial_covariance: str | None = None,

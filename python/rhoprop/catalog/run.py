@@ -17,6 +17,7 @@ import numpy as np
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel
+from ..options import Errors, UncertaintyMethod
 from ..progress import ProgressBar
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.kappa import GaussMarkov, KappaProcess
@@ -60,7 +61,7 @@ CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
 #: The statuses an object can end with (:class:`Status` values).
 STATUSES = ("propagated", "decayed", "shortened", "failed")
 #: What ``errors`` of :func:`propagate_catalog` accepts.
-ERRORS = ("raise", "record")  # the values of errors= (rhoprop._validate.Errors)
+ERRORS = ("raise", "record")  # the values of errors= (rhoprop.Errors)
 
 
 @dataclass(frozen=True)
@@ -218,7 +219,7 @@ def propagate_catalog(
     model: DensityModel,
     end: EpochLike,
     *,
-    method: str = "ccsp",
+    method: UncertaintyMethod = "ccsp",
     n: int = 100,
     kappa: KappaProcess | None = None,
     seed: int = 0,
@@ -228,7 +229,7 @@ def propagate_catalog(
     client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     chunk_size: int = 50,
     progress: bool = True,
-    errors: _validate.Errors = "raise",
+    errors: Errors = "raise",
     initial_covariance: InitialCovariance = None,
     zonal_degree: int = 2,
     drag_sigma: DragSigma = "auto",

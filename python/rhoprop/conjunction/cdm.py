@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -369,7 +369,7 @@ def relative_rtn(message: ConjunctionMessage) -> np.ndarray:
     return np.concatenate([basis @ (b.position - a.position), basis @ (b.velocity - a.velocity)])
 
 
-def cdm_text(message: ConjunctionMessage, format: str = "kvn") -> str:
+def cdm_text(message: ConjunctionMessage, format: Literal["kvn", "xml"] = "kvn") -> str:
     """The CDM of ``message`` as KVN (``format="kvn"``) or XML text."""
     io, formats, models = _library()
     if format not in ("kvn", "xml"):
@@ -378,11 +378,13 @@ def cdm_text(message: ConjunctionMessage, format: str = "kvn") -> str:
     return str(out)
 
 
-def write_cdm(message: ConjunctionMessage, path: str | Path, format: str | None = None) -> Path:
+def write_cdm(
+    message: ConjunctionMessage, path: str | Path, format: Literal["kvn", "xml"] | None = None
+) -> Path:
     """Writes ``message`` as a CDM; ``format`` "kvn" or "xml" (default: from the suffix,
     ``.xml`` is XML, anything else KVN). Returns the path."""
     path = Path(path)
-    fmt = format or ("xml" if path.suffix.lower() == ".xml" else "kvn")
+    fmt: Literal["kvn", "xml"] = format or ("xml" if path.suffix.lower() == ".xml" else "kvn")
     text = cdm_text(message, fmt)
     path.write_text(text)
     return path

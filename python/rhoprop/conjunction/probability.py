@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import Any
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from .. import _core, _validate
 from ..ensemble.mixture import GaussianMixture
 from ..frames import rtn_basis
+from ..options import HardBodyShape, NpdPolicy
 from ..propagation.results import MonteCarloResult
 
 Array = NDArray[Any]
@@ -147,7 +148,10 @@ class MonteCarloPcResult:
 # ---------------------------------------------------------------------- checks
 
 
-def _choice(name: str, value: object, choices: tuple[str, ...]) -> str:
+_S = TypeVar("_S")
+
+
+def _choice(name: str, value: _S, choices: tuple[str, ...]) -> _S:
     if not isinstance(value, str):
         raise TypeError(f"{name} must be a string, one of {choices}, got {value!r}")
     if value not in choices:
@@ -240,9 +244,9 @@ def pc_2d(
     cov2: object,
     hard_body_radius: object,
     *,
-    frame: str = "inertial",
-    shape: str = "circle",
-    npd: str = "repair",
+    frame: Literal["inertial", "rtn"] = "inertial",
+    shape: HardBodyShape = "circle",
+    npd: NpdPolicy = "repair",
 ) -> PcResult:
     """Short-encounter 2-D probability of collision of two objects at TCA.
 
@@ -352,8 +356,8 @@ def pc_mixture(
     *,
     velocity1: object = None,
     velocity2: object = None,
-    shape: str = "circle",
-    npd: str = "repair",
+    shape: HardBodyShape = "circle",
+    npd: NpdPolicy = "repair",
 ) -> MixturePcResult:
     """Probability of collision of two objects whose states at TCA are Gaussian mixtures.
 

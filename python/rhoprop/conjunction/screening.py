@@ -21,6 +21,7 @@ from ..catalog.elements import CatalogObject
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, MU, R_EARTH, R_POLE
 from ..density.model import ModelLike, as_atmosphere
 from ..errors import DecayError
+from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft
@@ -353,7 +354,7 @@ def screen(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = 2,
     threads: int | None = None,
-    errors: _validate.Errors | Literal["skip"] = "raise",
+    errors: Errors | Literal["skip"] = "raise",
     progress: bool | Callable[[int], None] = True,
     dynamics: Dynamics | None = None,
 ) -> ScreeningResult:

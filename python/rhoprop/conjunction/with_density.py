@@ -30,6 +30,7 @@ from ..density.model import ModelLike
 from ..ensemble import EnsembleResult
 from ..ensemble import ensemble as run_ensemble
 from ..frames import rtn_basis
+from ..options import HardBodyShape, UncertaintyMethod
 from ..propagation import OrbitState, Spacecraft, propagate
 from .cdm import CdmObject, ConjunctionMessage
 
@@ -290,7 +291,7 @@ def _object_mixture(
     reference: str,
     lead: float,
     tca: np.datetime64,
-    method: str,
+    method: UncertaintyMethod,
     options: dict[str, Any],
 ) -> tuple[EnsembleResult, np.ndarray, np.ndarray]:
     """One object's ensemble from ``lead`` before TCA; its per-model inertial offsets
@@ -317,9 +318,9 @@ def density_pc(
     hard_body_radius: float | None = None,
     lead_time: float | None = None,
     drag_parameters: tuple[float | None, float | None] = (None, None),
-    method: str = "ccsp",
+    method: UncertaintyMethod = "ccsp",
     weights: npt.ArrayLike | None = None,
-    shape: str = "circle",
+    shape: HardBodyShape = "circle",
     **method_options: Any,
 ) -> DensityPc:
     """The Pc of ``message`` with density-model uncertainty added (module docstring).

@@ -10,7 +10,7 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -155,7 +155,7 @@ class Msis(SampledModel):
 
     def __init__(
         self,
-        version: str = "2.1",
+        version: Literal["2.1", "2", "2.0", "00", "0"] = "2.1",
         space_weather: SpaceWeather | None = None,
         uncertainty: DriverUncertainty | RelativeSigma | None = None,
         *,

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -108,7 +108,7 @@ class PcaRom(SampledModel):
         coeff_mean: Any,
         coeff_std: Any,
         *,
-        method: str = "analytic",
+        method: Literal["analytic", "sampling"] = "analytic",
         samples: int = 1000,
         seed: int | None = 0,
         resolution: FieldResolution | None = None,

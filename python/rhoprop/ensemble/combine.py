@@ -11,6 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..density import DensityModel
+from ..options import UncertaintyMethod
 from ..propagation import (
     CcspResult,
     MonteCarloResult,
@@ -219,7 +220,7 @@ def ensemble(
     models: dict[str, DensityModel],
     reference: str,
     *,
-    method: str = "monte_carlo",
+    method: UncertaintyMethod = "monte_carlo",
     weights: npt.ArrayLike | None = None,
     debias_window: float = 8 * 3600.0,
     duration: float = 259200.0,

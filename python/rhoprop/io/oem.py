@@ -7,10 +7,11 @@ import contextlib
 import datetime as _dt
 from collections import Counter
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from ..options import Duplicates
 from ..propagation import CcspResult, MonteCarloResult, Trajectory
 from .files import _iso, atomic_path, sanitise
 
@@ -33,7 +34,7 @@ def duplicate_ids(objects: list[Any]) -> list[int]:
     return sorted(i for i, c in counts.items() if c > 1)
 
 
-def oem_names(objects: list[Any], duplicates: str = "error") -> list[str]:
+def oem_names(objects: list[Any], duplicates: Duplicates = "error") -> list[str]:
     """OEM file names per object: ``<NORAD id>.oem``; a repeated id is an error naming
     it (``duplicates="error"``) or gets ``_2``, ``_3``, ... in input order
     (``duplicates="suffix"``)."""
@@ -158,12 +159,12 @@ def write_oem(
     directory: str | Path,
     *,
     originator: str = "rhoprop",
-    duplicates: str = "error",
+    duplicates: Duplicates = "error",
     object_name: str = "OBJECT",
     object_id: str = "OBJECT",
     ref_frame: str | None = None,
-    covariance_frame: str = "inertial",
-    file_format: str = "kvn",
+    covariance_frame: Literal["inertial", "rtn"] = "inertial",
+    file_format: Literal["kvn", "xml"] = "kvn",
 ) -> list[Path]:
     """Writes CCSDS OEM 2.0 files into ``directory``: mean states (km, km/s) and a
     covariance block at each epoch (km^2, km^2/s, km^2/s^2), time system UTC. Every file

@@ -13,6 +13,7 @@ import numpy.typing as npt
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
+from ..options import Perturbation
 from ..time import DurationLike, ut1_seconds
 from .dynamics import Dynamics, resolve, zonal_degree_argument
 from .montecarlo import drag_sigma_argument
@@ -48,7 +49,7 @@ def ccsp(
     update_interval: float = 3600.0,
     initial_covariance: npt.ArrayLike | None = None,
     scaling: tuple[float, float] = (3.0, 3.0),
-    perturbation: str = "additive",
+    perturbation: Perturbation = "additive",
     step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     update_times: npt.ArrayLike | None = None,

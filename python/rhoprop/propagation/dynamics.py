@@ -10,16 +10,13 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
+from ..options import Integrator
 
-#: The integrators: adaptive DOP853 (deterministic runs only), fixed-step RK8 and RK4, and
-#: Adams-Bashforth-Moulton (fixed step, RK8 start).
-Integrator = Literal["dop853", "rk8", "rk4", "abm"]
 INTEGRATORS: tuple[Integrator, ...] = ("dop853", "rk8", "rk4", "abm")
 #: Highest zonal degree the dynamics include (J2..J6).
 MAX_ZONAL_DEGREE = 6

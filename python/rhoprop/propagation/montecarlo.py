@@ -12,9 +12,10 @@ import numpy.typing as npt
 from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike
+from ..options import Integrator, Perturbation
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
-from .dynamics import Dynamics, Integrator, integrator_argument, resolve, zonal_degree_argument
+from .dynamics import Dynamics, integrator_argument, resolve, zonal_degree_argument
 from .kappa import GaussMarkov, KappaProcess
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -75,7 +76,7 @@ def monte_carlo(
     output_step: float | None = 3600.0,
     output_times: npt.ArrayLike | None = None,
     initial_covariance: npt.ArrayLike | None = None,
-    perturbation: str = "additive",
+    perturbation: Perturbation = "additive",
     record_density: bool = False,
     progress: bool | Callable[[int], object] = True,
     integrator: Integrator | None = None,

@@ -16,10 +16,10 @@ import numpy.typing as npt
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
 from ..density.model import AtmosphereLike, CoreAtmosphere, DensityModel, ModelLike, as_atmosphere
+from ..options import Integrator
 from ..time import DurationLike, ut1_seconds
 from .dynamics import (
     Dynamics,
-    Integrator,
     integrator_argument,
     resolve,
     zonal_degree_argument,

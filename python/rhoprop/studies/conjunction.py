@@ -20,6 +20,7 @@ import numpy as np
 from ..conjunction import pc_2d, pc_monte_carlo
 from ..ensemble import EnsembleResult
 from ..frames import rtn_basis
+from ..options import UncertaintyMethod
 from ..propagation import MonteCarloResult
 
 
@@ -259,7 +260,7 @@ def assess_cdm(
     *,
     hard_body_radius: float | None = None,
     lead_time: float | None = None,
-    method: str = "ccsp",
+    method: UncertaintyMethod = "ccsp",
     members: int = 200,
     drag_parameters: tuple[float | None, float | None] = (None, None),
     json_path: str | Path | None = None,

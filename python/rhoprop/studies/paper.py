@@ -15,8 +15,8 @@ from .. import frames
 from ..density import Msis
 from ..density.model import DensityModel, ModelLike
 from ..ensemble import debias_drag_coefficient, ensemble
+from ..options import Integrator, UncertaintyMethod
 from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
-from ..propagation.dynamics import Integrator
 from ..spaceweather import SpaceWeather
 from . import scenarios
 from .scenarios import LABELS
@@ -298,7 +298,7 @@ def case_ensembles(
     *,
     n: int = 1000,
     duration: float = scenarios.PAPER_DURATION,
-    method: str = "monte_carlo",
+    method: UncertaintyMethod = "monte_carlo",
     seed: int = 0,
     progress: bool = True,
     record: SpaceWeather | None = None,
