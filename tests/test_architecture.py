@@ -237,3 +237,15 @@ def test_models_that_travel_pickle_themselves(model):
     back = pickle.loads(pickle.dumps(model))
     where = ("2002-09-07T01:00", 10.0, 20.0, 400e3)
     np.testing.assert_array_equal(back.mean_std(*where), model.mean_std(*where))
+
+
+def test_api_shape_stays_within_its_limits():
+    # Issue 27's bars: at most 10 public parameters typed Any (each commented where a value
+    # is truly arbitrary), no function over 80 lines in catalog/ and conjunction/, no
+    # regular expression over an exception's message, no _core function returning a dict.
+    import api_shape
+
+    assert len(api_shape.any_parameters()) <= 10, api_shape.any_parameters()
+    assert not api_shape.long_functions(), api_shape.long_functions()
+    assert not api_shape.message_regexes(), api_shape.message_regexes()
+    assert not api_shape.dict_returns(), api_shape.dict_returns()

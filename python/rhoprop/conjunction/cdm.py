@@ -122,7 +122,11 @@ class ConjunctionMessage:
         """TCA minus the creation date, s: how long the states were predicted ahead."""
         return float((self.tca - self.creation_date) / np.timedelta64(1, "ns")) * 1e-9
 
-    def pc(self, hard_body_radius: float | None = None, **options: Any) -> Any:
+    def pc(
+        self,
+        hard_body_radius: float | None = None,
+        **options: Any,  # pc_2d's keywords, passed on as they are
+    ) -> Any:
         """The 2-D Pc of the message's own Gaussians (covariances in each object's RTN);
         ``hard_body_radius`` in m (default: the message's HBR comment); ``options`` go to
         :func:`~rhoprop.conjunction.pc_2d`."""

@@ -321,7 +321,7 @@ def density_pc(
     method: UncertaintyMethod = "ccsp",
     weights: npt.ArrayLike | None = None,
     shape: HardBodyShape = "circle",
-    **method_options: Any,
+    **method_options: Any,  # the keywords of ensemble(), passed on as they are
 ) -> DensityPc:
     """The Pc of ``message`` with density-model uncertainty added (module docstring).
 

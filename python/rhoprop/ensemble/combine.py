@@ -225,7 +225,7 @@ def ensemble(
     debias_window: float = 8 * 3600.0,
     duration: float = 259200.0,
     cds: dict[str, float] | None = None,
-    **method_options: Any,
+    **method_options: Any,  # monte_carlo()/ccsp() keywords, passed on as they are
 ) -> EnsembleResult:
     """Propagates ``state`` through every model and combines them into a Gaussian mixture.
 

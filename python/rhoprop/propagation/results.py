@@ -66,7 +66,11 @@ def iso_utc(epoch: np.datetime64) -> str:
     return f"{np.datetime_as_string(np.asarray(epoch, dtype='datetime64[ns]'))}Z"
 
 
-def dataset_attrs(result_type: str, frame: str, **extra: Any) -> dict[str, Any]:
+def dataset_attrs(
+    result_type: str,
+    frame: str,
+    **extra: Any,  # further attributes of any JSON-able type
+) -> dict[str, Any]:
     """The attributes every rhoprop dataset carries (netCDF-safe: str, int, float) plus
     ``extra`` (None values left out)."""
     attrs: dict[str, Any] = {
