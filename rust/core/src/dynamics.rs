@@ -35,6 +35,24 @@ pub enum Perturbation {
     Lognormal,
 }
 
+impl Perturbation {
+    /// The names of the forms, as the binding and Python spell them.
+    pub const NAMES: [&'static str; 2] = ["additive", "lognormal"];
+
+    /// The form named `name` (one of [`Perturbation::NAMES`]).
+    pub fn from_name(name: &str) -> Result<Self, CoreError> {
+        match name {
+            "additive" => Ok(Self::Additive),
+            "lognormal" => Ok(Self::Lognormal),
+            other => Err(CoreError::UnknownName {
+                what: "perturbation",
+                name: other.to_string(),
+                expected: &Self::NAMES,
+            }),
+        }
+    }
+}
+
 /// Highest zonal degree the dynamics can include (J2..J6).
 pub const MAX_ZONAL_DEGREE: u8 = 6;
 /// Unnormalised zonal coefficients by degree (0 and 1 unused).

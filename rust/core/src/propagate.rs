@@ -25,6 +25,37 @@ pub enum Method {
     Dop853(AdaptiveOptions),
 }
 
+impl Method {
+    /// The names of the integrators, as the binding and Python spell them.
+    pub const NAMES: [&'static str; 4] = ["dop853", "rk8", "rk4", "abm"];
+
+    /// The integrator named `name` (one of [`Method::NAMES`]): a fixed-step scheme needs
+    /// `step` (s); DOP853 takes `rtol` (default [`AdaptiveOptions`]'s) and `step` as its
+    /// largest step.
+    pub fn from_name(name: &str, step: Option<f64>, rtol: Option<f64>) -> Result<Self, CoreError> {
+        if name == "dop853" {
+            return Ok(Self::Dop853(AdaptiveOptions {
+                rtol: rtol.unwrap_or(AdaptiveOptions::default().rtol),
+                max_step: step.unwrap_or(f64::INFINITY),
+                ..Default::default()
+            }));
+        }
+        let scheme = FixedMethod::from_name(name).map_err(|_| CoreError::UnknownName {
+            what: "integrator",
+            name: name.to_string(),
+            expected: &Self::NAMES,
+        })?;
+        let step = step.ok_or_else(|| {
+            CoreError::rejected("step", format!("integrator {name:?} needs a step"))
+        })?;
+        Ok(match scheme {
+            FixedMethod::Rk4 => Self::Rk4 { step },
+            FixedMethod::Rk8 => Self::Rk8 { step },
+            FixedMethod::Abm => Self::Abm { step },
+        })
+    }
+}
+
 /// A propagated trajectory: states at the output times reached.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trajectory {
@@ -453,5 +484,30 @@ mod tests {
         )
         .unwrap();
         assert_eq!(p.done.load(Ordering::Relaxed), 3);
+    }
+
+    #[test]
+    fn integrators_are_parsed_by_name() {
+        assert_eq!(
+            Method::from_name("rk8", Some(180.0), None).unwrap(),
+            Method::Rk8 { step: 180.0 }
+        );
+        assert_eq!(
+            Method::from_name("abm", Some(80.0), None).unwrap(),
+            Method::Abm { step: 80.0 }
+        );
+        let Method::Dop853(o) = Method::from_name("dop853", None, Some(1e-9)).unwrap() else {
+            panic!("dop853")
+        };
+        assert_eq!((o.rtol, o.max_step), (1e-9, f64::INFINITY));
+        let e = Method::from_name("euler", Some(1.0), None).unwrap_err();
+        assert!(
+            e.to_string().contains("unknown integrator \"euler\""),
+            "{e}"
+        );
+        let e = Method::from_name("rk4", None, None).unwrap_err();
+        assert!(e.to_string().contains("needs a step"), "{e}");
+        assert!(crate::dynamics::Perturbation::from_name("additive").is_ok());
+        assert!(FixedMethod::from_name("dop853").is_err());
     }
 }

@@ -7,6 +7,7 @@ use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::PyResult;
 use rhoprop_core::dynamics::Perturbation;
+use rhoprop_core::problem::Problem;
 
 /// A (n,) float64 array as a view.
 pub fn vector<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<ArrayView1<'a, f64>> {
@@ -72,13 +73,24 @@ pub fn matrix6(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<[[f64; 6];
     Ok(std::array::from_fn(|i| std::array::from_fn(|j| v[[i, j]])))
 }
 
-/// The perturbation form from its Python name.
+/// The perturbation form from its Python name (parsed by the core).
 pub fn perturbation(name: &str) -> PyResult<Perturbation> {
-    match name {
-        "additive" => Ok(Perturbation::Additive),
-        "lognormal" => Ok(Perturbation::Lognormal),
-        other => Err(PyValueError::new_err(format!(
-            "unknown perturbation {other:?}; expected 'additive' or 'lognormal'"
-        ))),
-    }
+    Perturbation::from_name(name).map_err(crate::errors::to_py)
+}
+
+/// The initial-value problem of a run, the one place the binding builds it.
+pub fn problem(
+    epoch: f64,
+    state: &PyReadonlyArray1<'_, f64>,
+    drag: f64,
+    floor_altitude: f64,
+    zonal_degree: u8,
+) -> PyResult<Problem> {
+    Ok(Problem {
+        epoch,
+        y0: fixed::<6>("state", state)?,
+        drag,
+        floor_altitude,
+        zonal_degree,
+    })
 }

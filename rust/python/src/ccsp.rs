@@ -1,6 +1,5 @@
 //! `ccsp`: the consider-covariance sigma-point filter.
 
-use crate::arrays::fixed;
 use crate::density::{with_atmosphere, AtmosphereRef};
 use crate::long_call::long_call;
 use numpy::ndarray::{Array1, Array2, Array3};
@@ -9,7 +8,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use rhoprop_core::ccsp::{ccsp as core_ccsp, ccsp_many as core_ccsp_many, CcspConfig, CcspOutput};
 use rhoprop_core::integrators::FixedMethod;
-use rhoprop_core::problem::Problem;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
 /// decayed_at (s, or None: when a sigma point crossed the floor; the outputs end before it),
@@ -38,13 +36,7 @@ pub fn ccsp<'py>(
     let perturbation = crate::arrays::perturbation(perturbation)?;
     let p0 = crate::arrays::matrix6("initial_covariance", &initial_covariance)?;
     let cfg = CcspConfig {
-        problem: Problem {
-            epoch,
-            y0: fixed::<6>("state", &state)?,
-            drag,
-            floor_altitude,
-            zonal_degree,
-        },
+        problem: crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree)?,
         p0,
         update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),
         scaling,
@@ -99,13 +91,13 @@ pub fn ccsp_many<'py>(
         .iter()
         .map(|(epoch, state, drag, p0, times, step, drag_sigma)| {
             Ok(CcspConfig {
-                problem: Problem {
-                    epoch: *epoch,
-                    y0: fixed::<6>("state", state)?,
-                    drag: *drag,
+                problem: crate::arrays::problem(
+                    *epoch,
+                    state,
+                    *drag,
                     floor_altitude,
                     zonal_degree,
-                },
+                )?,
                 p0: crate::arrays::matrix6("initial_covariance", p0)?,
                 update_times: crate::arrays::vector("update_times", times)?.to_vec(),
                 scaling,

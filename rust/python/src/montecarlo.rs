@@ -1,6 +1,6 @@
 //! `monte_carlo`: the ensemble run.
 
-use crate::arrays::{fixed, vector};
+use crate::arrays::vector;
 use crate::density::{with_atmosphere, AtmosphereRef};
 use crate::errors::to_py;
 use crate::long_call::long_call;
@@ -12,7 +12,6 @@ use pyo3::types::PyDict;
 use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::kappa::KappaProcess;
 use rhoprop_core::montecarlo::{covariance_factor, monte_carlo as core_mc, MonteCarloConfig};
-use rhoprop_core::problem::Problem;
 
 /// Most worker threads a run may ask for (each costs a stack; more than cores only adds
 /// switching).
@@ -49,16 +48,7 @@ pub fn monte_carlo<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
-    let method = match method {
-        "rk8" => FixedMethod::Rk8,
-        "rk4" => FixedMethod::Rk4,
-        "abm" => FixedMethod::Abm,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown method {other:?}; a Monte Carlo uses 'rk8', 'rk4' or 'abm'"
-            )))
-        }
-    };
+    let method = FixedMethod::from_name(method).map_err(to_py)?;
     let initial_factor = match initial_covariance {
         None => None,
         Some(c) => Some(
@@ -66,13 +56,7 @@ pub fn monte_carlo<'py>(
         ),
     };
     let cfg = MonteCarloConfig {
-        problem: Problem {
-            epoch,
-            y0: fixed::<6>("state", &state)?,
-            drag,
-            floor_altitude,
-            zonal_degree,
-        },
+        problem: crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree)?,
         initial_factor,
         kappa: KappaProcess::from_spec(&kappa.0, kappa.1, kappa.2).map_err(to_py)?,
         perturbation,

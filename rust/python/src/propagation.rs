@@ -1,13 +1,11 @@
 //! `propagate`: one deterministic trajectory.
 
-use crate::arrays::{fixed, from_rows, from_vec, vector};
+use crate::arrays::{from_rows, from_vec, vector};
 use crate::density::{with_atmosphere, AtmosphereRef};
+use crate::errors::to_py;
 use crate::long_call::long_call;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use rhoprop_core::integrators::AdaptiveOptions;
-use rhoprop_core::problem::Problem;
 use rhoprop_core::propagate::{propagate as core_propagate, Method, Trajectory};
 
 /// Result tuple: (times (n,), states (n, 6), decayed_at or None, rhs evaluations, clipped).
@@ -38,31 +36,9 @@ pub fn propagate<'py>(
     zonal_degree: u8,
 ) -> PyResult<PropagateOut<'py>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
-    let problem = Problem {
-        epoch,
-        y0: fixed::<6>("state", &state)?,
-        drag,
-        floor_altitude,
-        zonal_degree,
-    };
+    let problem = crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree)?;
     let outputs = vector("output_times", &output_times)?.to_vec();
-    let need_step =
-        || step.ok_or_else(|| PyValueError::new_err(format!("method {method:?} needs a step")));
-    let method = match method {
-        "rk4" => Method::Rk4 { step: need_step()? },
-        "rk8" => Method::Rk8 { step: need_step()? },
-        "abm" => Method::Abm { step: need_step()? },
-        "dop853" => Method::Dop853(AdaptiveOptions {
-            rtol: rtol.unwrap_or(AdaptiveOptions::default().rtol),
-            max_step: step.unwrap_or(f64::INFINITY),
-            ..Default::default()
-        }),
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown method {other:?}; expected one of 'dop853', 'rk8', 'rk4', 'abm'"
-            )))
-        }
-    };
+    let method = Method::from_name(method, step, rtol).map_err(to_py)?;
     let tr: Trajectory = long_call(py, None, |progress| {
         with_atmosphere!(&atm, |a| core_propagate(
             a, &problem, &outputs, method, progress

@@ -27,6 +27,25 @@ pub enum FixedMethod {
     Abm,
 }
 
+impl FixedMethod {
+    /// The names of the fixed-step schemes, as the binding and Python spell them.
+    pub const NAMES: [&'static str; 3] = ["rk8", "rk4", "abm"];
+
+    /// The scheme named `name` (one of [`FixedMethod::NAMES`]).
+    pub fn from_name(name: &str) -> Result<Self, CoreError> {
+        match name {
+            "rk8" => Ok(Self::Rk8),
+            "rk4" => Ok(Self::Rk4),
+            "abm" => Ok(Self::Abm),
+            other => Err(CoreError::UnknownName {
+                what: "fixed-step integrator",
+                name: other.to_string(),
+                expected: &Self::NAMES,
+            }),
+        }
+    }
+}
+
 /// Back values of the multistep method.
 pub const ABM_STEPS: usize = 10;
 
