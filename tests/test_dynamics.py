@@ -90,3 +90,17 @@ def test_errors_has_one_spelling(tmp_path):
     assert len(old) == len(cat)
     with pytest.raises(ValueError, match="errors must be 'raise' or 'record'"):
         rp.catalog.load(bad, errors="ignore")
+
+
+def test_progress_is_a_bool_or_a_callable_everywhere():
+    from test_catalog import END, SAMPLE
+
+    seen = []
+    rp.catalog.propagate_catalog(
+        rp.catalog.load(SAMPLE),
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        progress=seen.append,
+    )
+    assert seen and seen[-1] == len(rp.catalog.load(SAMPLE))

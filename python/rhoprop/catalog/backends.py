@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import threading
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from ..parallel import map_in_threads, worker_count
-from ..progress import ProgressBar
 from .objects import ObjectOutcome, ObjectPlan, RunSettings, _ccsp_chunk, _run_object
 
 #: Most objects per core call of a local CCSP run (:func:`_ccsp_chunk`).
@@ -47,7 +47,7 @@ def _run_on_dask(
     chunks: list[list[ObjectPlan]],
     epochs: np.ndarray,
     cfg: RunSettings,
-    bar: ProgressBar | None,
+    bar: Callable[[int], object] | None,
 ) -> dict[int, ObjectOutcome]:
     """Runs the chunks on a Dask cluster. The atmosphere is scattered to every worker once
     (broadcast); tasks retry twice; a chunk whose task is lost with a dying worker (or
@@ -99,7 +99,7 @@ def _run_local(
     shipped: Any,
     epochs: np.ndarray,
     cfg: RunSettings,
-    bar: ProgressBar | None,
+    bar: Callable[[int], object] | None,
 ) -> dict[int, ObjectOutcome]:
     """Objects on threads (the core releases the GIL), each also parallel over its own
     sigma points or members. Ctrl-C (or an error) cancels the objects not started and

@@ -8,7 +8,7 @@ the :class:`CatalogResult`; one object's plan, run and outcome are
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -228,7 +228,7 @@ def propagate_catalog(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     chunk_size: int = 50,
-    progress: bool = True,
+    progress: bool | Callable[[int], object] = True,
     errors: Errors = "raise",
     initial_covariance: InitialCovariance = None,
     zonal_degree: int = 2,
@@ -251,7 +251,8 @@ def propagate_catalog(
             ``chunk_size``, the atmosphere is sent once and replicated to every worker
             (recomputed if a worker dies), failed tasks are retried twice; results equal
             the local run.
-        progress: show a progress bar (objects done) on a terminal for runs over a second.
+        progress: True shows a progress bar (objects done) on a terminal for runs over a
+            second; or a callable, called with the number of objects done.
         errors: ``"raise"`` (default): the first object that fails raises its error (same
             type, the object named, chained to the cause); ``"record"``: it gets status
             "failed" with the error as reason and no valid output, and the run goes on.
@@ -329,7 +330,12 @@ def propagate_catalog(
     notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step)
     shipped = _shipped_model(model)
-    bar = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
+    shown = None
+    if callable(progress):
+        bar: Callable[[int], object] | None = progress
+    else:
+        shown = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
+        bar = shown
     try:
         if client is None:
             results = _run_local(plans, shipped, epochs, cfg, bar)
@@ -338,8 +344,8 @@ def propagate_catalog(
             chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
             results = _run_on_dask(client, shipped, chunks, epochs, cfg, bar)
     finally:
-        if bar is not None:
-            bar.close()
+        if shown is not None:
+            shown.close()
     order = [results[i] for i in range(len(objs))]
     decay = np.array(
         [

@@ -355,7 +355,7 @@ def screen(
     zonal_degree: int = 2,
     threads: int | None = None,
     errors: Errors | Literal["skip"] = "raise",
-    progress: bool | Callable[[int], None] = True,
+    progress: bool | Callable[[int], object] = True,
     dynamics: Dynamics | None = None,
 ) -> ScreeningResult:
     """Screens one primary against many secondaries for close approaches within
@@ -677,7 +677,7 @@ def _run_threads(
     limit: float,
     workers: int,
     errors: str,
-    progress: bool | Callable[[int], None],
+    progress: bool | Callable[[int], object],
 ) -> list[_Outcome]:
     """Stages 2-5 for every object on ``workers`` threads, results in order. Ctrl-C (or
     an error) cancels the objects not started; the running ones end within ~1 ms."""
@@ -696,7 +696,7 @@ def _run_threads(
                 raise
             raise named from err
 
-    bar: Callable[[int], None] | None
+    bar: Callable[[int], object] | None
     shown: ProgressBar | None = None
     if callable(progress):
         bar = progress
