@@ -35,7 +35,7 @@ import math
 import re
 import sys
 from collections.abc import Sequence
-from typing import Any, Protocol, overload
+from typing import Any, Literal, Protocol, overload
 
 import erfa  # type: ignore[import-untyped]
 import numpy as np
@@ -381,14 +381,20 @@ def _index_of(i: int, shape: tuple[int, ...]) -> Any:
 
 
 @overload
-def from_jd(jd: float, jd2: float = 0.0, *, scale: str = "utc") -> np.datetime64: ...
+def from_jd(
+    jd: float, jd2: float = 0.0, *, scale: Literal["utc", "tai", "tt"] = "utc"
+) -> np.datetime64: ...
 
 
 @overload
-def from_jd(jd: npt.ArrayLike, jd2: npt.ArrayLike = 0.0, *, scale: str = "utc") -> Any: ...
+def from_jd(
+    jd: npt.ArrayLike, jd2: npt.ArrayLike = 0.0, *, scale: Literal["utc", "tai", "tt"] = "utc"
+) -> Any: ...
 
 
-def from_jd(jd: npt.ArrayLike, jd2: npt.ArrayLike = 0.0, *, scale: str = "utc") -> Any:
+def from_jd(
+    jd: npt.ArrayLike, jd2: npt.ArrayLike = 0.0, *, scale: Literal["utc", "tai", "tt"] = "utc"
+) -> Any:
     """A Julian date ``jd + jd2`` (days; the two-part form keeps full precision) on the
     time scale ``scale`` as UTC ``datetime64[ns]``: a scalar for scalars, else an array.
 
