@@ -57,20 +57,27 @@ def cache_dir(override: str | os.PathLike[str] | None = None) -> Path:
     return Path.home() / ".cache" / "rhoprop"
 
 
-def max_bytes() -> int:
-    """The size cap of a cache directory, bytes: ``$RHOPROP_CACHE_MAX_BYTES`` (a number
-    >= 0, e.g. ``5e8``) or :data:`DEFAULT_MAX_BYTES`. ValueError naming the variable if it
-    is not a number >= 0."""
-    text = os.environ.get(MAX_BYTES_ENV, "").strip()
+def bytes_from_env(name: str, default: int) -> int:
+    """A number of bytes from the environment variable ``name`` (a number >= 0, e.g.
+    ``5e8``), or ``default`` when it is unset or empty. ValueError naming the variable if
+    it is not a number >= 0."""
+    text = os.environ.get(name, "").strip()
     if not text:
-        return DEFAULT_MAX_BYTES
+        return default
     try:
         value = float(text)
     except ValueError:
         value = float("nan")
     if not value >= 0 or value == float("inf"):
-        raise ValueError(f"{MAX_BYTES_ENV} must be a number of bytes >= 0, got {text!r}")
+        raise ValueError(f"{name} must be a number of bytes >= 0, got {text!r}")
     return int(value)
+
+
+def max_bytes() -> int:
+    """The size cap of a cache directory, bytes: ``$RHOPROP_CACHE_MAX_BYTES`` (a number
+    >= 0, e.g. ``5e8``) or :data:`DEFAULT_MAX_BYTES`. ValueError naming the variable if it
+    is not a number >= 0."""
+    return bytes_from_env(MAX_BYTES_ENV, DEFAULT_MAX_BYTES)
 
 
 def checksum(arrays: Mapping[str, np.ndarray]) -> str:

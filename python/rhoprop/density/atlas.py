@@ -51,11 +51,11 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _core
-from ..cache import cache_dir, entry_lock, load_entry, store_entry
+from ..cache import bytes_from_env, cache_dir, entry_lock, load_entry, store_entry
 from ..errors import OutsideRecordError
 from ..time import EpochLike, EpochsLike, add_seconds, to_datetime64, ut1_seconds
 from ._inputs import StateLike
-from .field import FieldResolution, time_nodes
+from .field import FieldResolution, _entry_matches, time_nodes
 
 #: Top of every atlas grid, m (above it: the exponential extrapolation of the module doc).
 #: 1,500 km holds every LEO orbit's density with its own shape; higher, drag on any object
@@ -77,19 +77,6 @@ MAX_TILE_BYTES = 2_000_000_000
 #: Version of the tile format; part of the key, so tiles of another format are misses.
 TILE_FORMAT = 1
 _NS_PER_S = 1_000_000_000
-
-
-def _budget_from_env() -> int:
-    text = os.environ.get(MEMORY_ENV, "").strip()
-    if not text:
-        return DEFAULT_MEMORY
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not value >= 0 or value == float("inf"):
-        raise ValueError(f"{MEMORY_ENV} must be a number of bytes >= 0, got {text!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -124,7 +111,7 @@ class _TileMemory:
 
     def _budget(self) -> int:
         if self.budget is None:
-            self.budget = _budget_from_env()
+            self.budget = bytes_from_env(MEMORY_ENV, DEFAULT_MEMORY)
         return self.budget
 
     def get(self, key: str) -> Any:
@@ -358,7 +345,7 @@ class Atlas:
             nodes, epochs, left = self._nodes(w0, w1)
             shape = (len(nodes), self.altitude[2], self.latitude[2], self.n_lon)
             saved = load_entry(path) if path is not None else None
-            if saved is not None and _matches(saved, key, shape):
+            if saved is not None and _entry_matches(saved, key, shape):
                 ln_mean, rel_sigma = saved["ln_mean"], saved["rel_sigma"]
             else:
                 ln_mean, rel_sigma = self._sample(epochs, left)
@@ -460,15 +447,3 @@ def _describe(folder: Path, description: Any, atlas: Atlas) -> None:
         os.replace(temporary, target)
     except OSError:
         pass  # only the listing loses its label; store_entry warns about the tile itself
-
-
-def _matches(saved: dict[str, np.ndarray], key: str, shape: tuple[int, ...]) -> bool:
-    """Whether a (checksum-verified) entry holds this key's tile."""
-    try:
-        return (
-            str(saved["key"]) == key
-            and saved["ln_mean"].shape == shape
-            and saved["rel_sigma"].shape == shape
-        )
-    except KeyError:
-        return False
