@@ -211,7 +211,7 @@ def test_dask_workers_sample_or_read_tiles_and_give_the_same_bits(tmp_path, monk
     monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
     with (
         distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
