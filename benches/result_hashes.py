@@ -10,17 +10,16 @@ Run:  RHOPROP_CACHE=$(mktemp -d) python benches/result_hashes.py [tests/data/sam
 import hashlib
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 
-warnings.simplefilter("ignore")
 import rhoprop as rp
 from rhoprop import catalog
 
+warnings.simplefilter("ignore")
 SAMPLE = (
-    sys.argv[1]
-    if len(sys.argv) > 1
-    else str(__import__("pathlib").Path(__file__).parents[1] / "tests/data/sample.tle")
+    sys.argv[1] if len(sys.argv) > 1 else str(Path(__file__).parents[1] / "tests/data/sample.tle")
 )
 out = {}
 
