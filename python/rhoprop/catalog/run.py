@@ -346,7 +346,18 @@ def propagate_catalog(
     finally:
         if shown is not None:
             shown.close()
-    order = [results[i] for i in range(len(objs))]
+    return _result(objs, epochs, method, [results[i] for i in range(len(objs))], plans, notes)
+
+
+def _result(
+    objs: list[CatalogObject],
+    epochs: np.ndarray,
+    method: str,
+    order: list[ObjectOutcome],
+    plans: list[ObjectPlan],
+    notes: list[str],
+) -> CatalogResult:
+    """The :class:`CatalogResult` of the objects' outcomes, in catalog order."""
     decay = np.array(
         [
             np.datetime64("NaT", "ns") if r.decay is None else add_seconds(o.state.epoch, r.decay)
