@@ -388,10 +388,11 @@ def build_parser() -> argparse.ArgumentParser:
         "cache",
         help="show or clear the user cache (density atlas tiles, sampled fields, downloads)",
         description="The cache ($RHOPROP_CACHE, else $XDG_CACHE_HOME/rhoprop or "
-        "~/.cache/rhoprop) holds sampled density fields (recomputed when missing) and "
-        "downloaded space-weather and JB2008 files. Each folder is kept under "
+        "~/.cache/rhoprop) holds the density atlas's day tiles (one folder per model and "
+        "grid; sampled again when missing), sampled density fields and downloaded "
+        "space-weather and JB2008 files. Each folder is kept under "
         "$RHOPROP_CACHE_MAX_BYTES (default 2 GB) by deleting the least recently used "
-        "entries.",
+        "entries; tiles in memory stay under $RHOPROP_FIELD_MEMORY (default 1 GB).",
     )
     cache_sub = cache.add_subparsers(dest="cache_command", metavar="ACTION")
     cache_sub.add_parser("info", help="where the cache is and what it holds")
