@@ -292,3 +292,18 @@ def test_rhoprop_conjunction_reads_the_example_cdm(tmp_path, capsys):
     pcs = list(figures["pc_models"].values())
     assert figures["pc_mixture"] == pytest.approx(sum(pcs) / len(pcs), rel=1e-12)
     assert figures["lead_time_s"] == 2 * 86400.0 and figures["hard_body_radius_m"] == 15.0
+
+
+def test_a_name_cannot_forge_a_line(cara_rtn_cases, tmp_path):
+    # A name carrying a newline and a KVN keyword stays one sanitised value (issue 26 item
+    # 4): the written message has exactly one COLLISION_PROBABILITY line, or none.
+    msg = cdm.read_cdm(_kvn(cara_rtn_cases[0]))
+    evil = "EVIL\nCOLLISION_PROBABILITY = 0.99"
+    msg = dataclasses.replace(
+        msg, object1=dataclasses.replace(msg.object1, name=evil), message_id="ID\nX = 1"
+    )
+    text = cdm.write_cdm(msg, tmp_path / "event.kvn").read_text()
+    lines = [ln.strip() for ln in text.splitlines()]
+    assert not any(ln.startswith("COLLISION_PROBABILITY = 0.99") for ln in lines)
+    assert not any(ln.startswith("X = 1") for ln in lines)
+    assert cdm.read_cdm(tmp_path / "event.kvn").object1.name == "EVIL_COLLISION_PROBABILITY = 0.99"

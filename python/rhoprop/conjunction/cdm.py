@@ -17,6 +17,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..io.files import sanitise
 from ..time import to_datetime64
 
 #: Inertial reference frames a CDM may use for its states (all treated as one inertial
@@ -310,10 +311,10 @@ def _build(message: ConjunctionMessage, m: Any) -> Any:
     for k, obj in enumerate((message.object1, message.object2), start=1):
         meta = m.CdmMetadata(
             object_value=m.ObjectType(f"OBJECT{k}"),
-            object_designator=obj.designator or "UNKNOWN",
+            object_designator=sanitise(obj.designator) or "UNKNOWN",
             catalog_name="SATCAT",
-            object_name=obj.name,
-            international_designator=obj.international_designator or "UNKNOWN",
+            object_name=sanitise(obj.name) or "UNKNOWN",
+            international_designator=sanitise(obj.international_designator) or "UNKNOWN",
             ephemeris_name="NONE",
             covariance_method=m.CovarianceMethodType("CALCULATED"),
             maneuverable=m.ManeuverableType("N/A"),
@@ -354,9 +355,9 @@ def _build(message: ConjunctionMessage, m: Any) -> Any:
         segments.append(m.CdmSegment(metadata=meta, data=data))
     header = m.CdmHeader(
         creation_date=_iso(message.creation_date),
-        originator=message.originator or "rhoprop",
-        message_for=message.message_for or None,
-        message_id=message.message_id or "rhoprop",
+        originator=sanitise(message.originator) or "rhoprop",
+        message_for=sanitise(message.message_for) or None,
+        message_id=sanitise(message.message_id) or "rhoprop",
     )
     if message.hard_body_radius is not None:
         rel = replace(rel, comment=[f"HBR = {message.hard_body_radius:.6g} m"])
