@@ -321,7 +321,7 @@ def build_parser() -> argparse.ArgumentParser:
         "reentry",
         help="reentry windows of a TLE/OMM catalog",
         description="Monte Carlo over density and ballistic-coefficient uncertainty for "
-        "every element set of FILE: the 2.5 %%, median and 97.5 %% decay epochs within "
+        "every element set of FILE: the 2.5 %, median and 97.5 % decay epochs within "
         "--horizon days and the fraction of members decayed; printed and written to "
         "OUT/reentry.csv.",
     )
