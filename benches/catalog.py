@@ -26,7 +26,7 @@ from sgp4 import exporter
 from sgp4.api import WGS72, Satrec
 
 import rhoprop as rp
-from machine import describe, peak_rss_mb
+from machine import describe, element_sets, peak_rss_mb, perigee_altitude
 from rhoprop import catalog
 
 JD_EPOCH = 2452524.0  # 2002-09-06 12:00 UTC
@@ -63,17 +63,11 @@ def synthetic_tle(n: int, seed: int = 0) -> str:
 def leo_subset(text: str, limit: int) -> str:
     """The first ``limit`` 3-line element sets with perigee below 700 km and B* > 0,
     without the manoeuvring constellations (Starlink, OneWeb)."""
-    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
     out: list[str] = []
-    for k in range(0, len(lines) - 2, 3):
-        name, l1, l2 = lines[k : k + 3]
-        if not (l1.startswith("1 ") and l2.startswith("2 ")):
-            continue
+    for name, l1, l2, sat in element_sets(text):
         if any(tag in name.upper() for tag in ("STARLINK", "ONEWEB")):
             continue
-        sat = Satrec.twoline2rv(l1, l2)
-        a = (3.986004418e14 / (sat.no_kozai / 60.0) ** 2) ** (1 / 3)
-        if sat.bstar > 0 and a * (1 - sat.ecco) - 6378137.0 < 700e3:
+        if sat.bstar > 0 and perigee_altitude(sat) < 700e3:
             out += [name, l1, l2]
         if len(out) >= 3 * limit:
             break
@@ -84,13 +78,8 @@ def below_subset(text: str, km: float) -> str:
     """Every 3-line element set whose SGP4 altitude at its own epoch is below ``km`` (the
     selection a user makes first: HEO objects near perigee, stale epochs and manoeuvring
     constellations included)."""
-    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
     out: list[str] = []
-    for k in range(0, len(lines) - 2, 3):
-        name, l1, l2 = lines[k : k + 3]
-        if not (l1.startswith("1 ") and l2.startswith("2 ")):
-            continue
-        sat = Satrec.twoline2rv(l1, l2)
+    for name, l1, l2, sat in element_sets(text):
         err, r, _v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
         if err == 0 and np.linalg.norm(r) - 6378.137 < km:
             out += [name, l1, l2]

@@ -36,3 +36,21 @@ def peak_rss_mb() -> float:
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def element_sets(text: str):
+    """(name, line 1, line 2) of every 3-line element set of a TLE file's text, and its
+    ``sgp4`` Satrec."""
+    from sgp4.api import Satrec
+
+    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
+    for k in range(0, len(lines) - 2, 3):
+        name, l1, l2 = lines[k : k + 3]
+        if l1.startswith("1 ") and l2.startswith("2 "):
+            yield name, l1, l2, Satrec.twoline2rv(l1, l2)
+
+
+def perigee_altitude(sat) -> float:
+    """Mean perigee altitude of an element set, m (Kozai mean motion, spherical Earth)."""
+    a = (3.986004418e14 / (sat.no_kozai / 60.0) ** 2) ** (1 / 3)
+    return a * (1 - sat.ecco) - 6378137.0

@@ -18,10 +18,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from sgp4.api import Satrec
 
 import rhoprop as rp
-from machine import describe, peak_rss_mb
+from machine import describe, element_sets, peak_rss_mb, perigee_altitude
 
 FILES = (
     "history/celestrak_active_20230704.txt.gz",
@@ -33,15 +32,9 @@ FILES = (
 
 def low_perigee(text: str, km: float) -> list[str]:
     """The 3-line element sets whose mean perigee is below ``km``."""
-    lines = [ln.rstrip() for ln in text.splitlines() if ln.strip()]
     out: list[str] = []
-    for k in range(0, len(lines) - 2, 3):
-        name, l1, l2 = lines[k : k + 3]
-        if not (l1.startswith("1 ") and l2.startswith("2 ")):
-            continue
-        sat = Satrec.twoline2rv(l1, l2)
-        a = (3.986004418e14 / (sat.no_kozai / 60.0) ** 2) ** (1 / 3)
-        if a * (1 - sat.ecco) - 6378137.0 < km * 1e3:
+    for name, l1, l2, sat in element_sets(text):
+        if perigee_altitude(sat) < km * 1e3:
             out += [name, l1, l2]
     return out
 

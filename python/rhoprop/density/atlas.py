@@ -350,7 +350,8 @@ class Atlas:
             else:
                 ln_mean, rel_sigma = self._sample(epochs, left)
                 if path is not None:
-                    _describe(path.parent, self.model.cache_key(w0, w1), self)
+                    if not (path.parent / "model.json").exists():
+                        _describe(path.parent, self.model.cache_key(w0, w1), self)
                     store_entry(
                         path, {"ln_mean": ln_mean, "rel_sigma": rel_sigma, "key": np.array(key)}
                     )

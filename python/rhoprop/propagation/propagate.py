@@ -198,14 +198,12 @@ def core_propagate(
     )
 
 
-def run_in_field(
-    model: ModelLike, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
-) -> T:
+def run_in_field(model: ModelLike, state: OrbitState, span: float, run: Callable[[Any], T]) -> T:
     """``run(atmosphere)`` with the core atmosphere of ``model`` for ``span`` s from
     ``state`` (negative: backwards). A sampled model's atmosphere is the field of its
     atlas's day tiles over the span, every altitude from the model's lowest one up
     (:mod:`rhoprop.density.atlas`), so an object that comes down reaches the floor inside
-    the field and is reported as decayed. ``floor`` (m) is the run's decay floor."""
+    the field and is reported as decayed."""
     check_model(model)
     return run(as_atmosphere(model, state, span))
 
@@ -334,4 +332,4 @@ def propagate(
             zonal_degree=degree,
         )
 
-    return trajectory_from_core(state.epoch, run_in_field(model, state, span, floor, run))
+    return trajectory_from_core(state.epoch, run_in_field(model, state, span, run))
