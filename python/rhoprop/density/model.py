@@ -46,7 +46,7 @@ class DensityModel(Protocol):
 #: The core's atmospheres (what a model's ``atmosphere`` gives the propagators).
 AtmosphereLike = _core.ExponentialAtmosphere | _core.GriddedAtmosphere
 #: What the propagators accept as ``model``: a density model or a core atmosphere.
-ModelLike = DensityModel | _core.ExponentialAtmosphere | _core.GriddedAtmosphere
+ModelLike = DensityModel | AtmosphereLike
 
 
 def as_atmosphere(model: ModelLike, state: StateLike, duration: float) -> Any:
