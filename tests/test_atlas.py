@@ -221,3 +221,19 @@ def test_dask_workers_sample_or_read_tiles_and_give_the_same_bits(tmp_path, monk
     np.testing.assert_array_equal(remote.mean, local.mean)
     np.testing.assert_array_equal(remote.covariance, local.covariance)
     assert rp.cache.cache_info(tmp_path)["tiles"], "the workers wrote their own tiles"
+
+
+def test_a_floor_below_the_atlas_is_refused_and_stages_below_the_bottom_read_it():
+    # JB2008-like models start at 90 km: a floor below that is refused up front. In an
+    # open field a lookup below the bottom reads the bottom level (only stages of a step
+    # that crosses the floor get there).
+    model = rp.density.FromFunction(exp_function, name="analytic")  # lowest 50 km
+    state = rp.scenarios.paper_state()
+    with pytest.raises(ValueError, match="lowest altitude"):
+        rp.propagate(state, rp.Spacecraft(2.2, 0.01), model, 3600.0, floor_altitude=30e3)
+    field = model.atlas.field("2002-09-07T00:00", "2002-09-07T06:00")
+    t = np.full(2, np.datetime64("2002-09-07T03:00", "ns"))
+    mean, _ = field.mean_sigma(
+        ut1_seconds(t), inertial(t, np.full(2, 10.0), np.full(2, 20.0), np.array([50e3, 20e3]))
+    )
+    assert mean[1] == pytest.approx(mean[0], rel=1e-9)  # 50 km is the bottom node

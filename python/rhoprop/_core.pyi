@@ -89,9 +89,7 @@ class GriddedAtmosphere:
         rel_sigma: _F64,
     ) -> Self: ...
     @staticmethod
-    def from_tiles(
-        epoch: float, tiles: list[FieldTile], extrapolate_above: bool
-    ) -> GriddedAtmosphere:
+    def from_tiles(epoch: float, tiles: list[FieldTile], open_altitude: bool) -> GriddedAtmosphere:
         """A field of tiles that follow each other in time on one spatial grid."""
     @property
     def nbytes(self) -> int:

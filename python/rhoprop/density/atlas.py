@@ -12,8 +12,10 @@ a catalog, their epochs or their orbits.
 * Above the ceiling the core continues ln(mean) along the top cell's slope (an exponential
   with the local scale height of the top levels) and holds sigma/mean: continuous, and
   drag is negligible there. HEO and GEO objects need no taller grid.
-* Below the lowest altitude a lookup is an error; the decay floor (default 100 km) stops a
-  run long before.
+* Below the lowest altitude the core holds the bottom level's values. Only an integrator
+  stage of a step that crosses the decay floor (default 120 km) goes there, and such a step
+  is cut at the crossing, so those values never enter a result; a run whose floor is below
+  the model's lowest altitude is refused (:func:`~rhoprop.propagation.propagate.run_in_field`).
 * A time outside the model's drivers (:meth:`SampledModel._coverage`) is an
   :class:`~rhoprop.OutsideRecordError` naming the span; tiles at the ends of the drivers
   are cut to them.

@@ -108,6 +108,10 @@ class Gridded(SampledModel):
             self, start, end, altitude_range=altitude_range, resolution=resolution, cache=cache
         )
 
+    def served_by(self) -> None:
+        """None: the native grid itself reaches the core (an error outside it)."""
+        return None
+
     def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The native field."""
         return self._field.core

@@ -119,6 +119,11 @@ class SampledModel(abc.ABC):
             self.__dict__["_atlas"] = atlas
         return atlas
 
+    def served_by(self) -> Atlas | None:
+        """The atlas that serves the model to the core (None: the model gives its own
+        field, as :class:`~rhoprop.density.Gridded` does)."""
+        return self.atlas
+
     def __getstate__(self) -> dict[str, Any]:
         # The atlas (locks, weak references) is made again where the model arrives.
         state = dict(self.__dict__)

@@ -157,7 +157,7 @@ def ccsp(
             args.drag_sigma,
         )
 
-    out = run_in_field(model, state, span, run)
+    out = run_in_field(model, state, span, args.floor, run)
     return _result(state, out, args.drag_sigma)
 
 

@@ -256,7 +256,7 @@ def monte_carlo(
         )
         return out, trajectory_from_core(state.epoch, mean)
 
-    out, mean = run_in_field(model, state, span, run)
+    out, mean = run_in_field(model, state, span, floor, run)
     decay = np.asarray(out["decay_times"], dtype=float)
     alive = times[None, :] < decay[:, None]
     positions, velocities = out["positions"], out["velocities"]

@@ -15,7 +15,15 @@ import numpy.typing as npt
 
 from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
-from ..density.model import AtmosphereLike, CoreAtmosphere, DensityModel, ModelLike, as_atmosphere
+from ..density.atlas import Atlas
+from ..density.model import (
+    AtmosphereLike,
+    CoreAtmosphere,
+    DensityModel,
+    ModelLike,
+    SampledModel,
+    as_atmosphere,
+)
 from ..options import Integrator
 from ..time import DurationLike, ut1_seconds
 from .dynamics import (
@@ -198,13 +206,22 @@ def core_propagate(
     )
 
 
-def run_in_field(model: ModelLike, state: OrbitState, span: float, run: Callable[[Any], T]) -> T:
+def run_in_field(
+    model: ModelLike, state: OrbitState, span: float, floor: float, run: Callable[[Any], T]
+) -> T:
     """``run(atmosphere)`` with the core atmosphere of ``model`` for ``span`` s from
     ``state`` (negative: backwards). A sampled model's atmosphere is the field of its
     atlas's day tiles over the span, every altitude from the model's lowest one up
     (:mod:`rhoprop.density.atlas`), so an object that comes down reaches the floor inside
-    the field and is reported as decayed."""
+    the field and is reported as decayed. A decay ``floor`` (m) below the atlas's lowest
+    altitude is a ValueError: the field holds its bottom level below it."""
     check_model(model)
+    atlas = model.served_by() if isinstance(model, SampledModel) else model
+    if isinstance(atlas, Atlas) and floor < atlas.altitude[0]:
+        raise ValueError(
+            f"floor_altitude = {floor:g} m is below {atlas.model!r}'s lowest altitude "
+            f"({atlas.altitude[0]:g} m); raise the floor or use a model defined lower"
+        )
     return run(as_atmosphere(model, state, span))
 
 
@@ -332,4 +349,4 @@ def propagate(
             zonal_degree=degree,
         )
 
-    return trajectory_from_core(state.epoch, run_in_field(model, state, span, run))
+    return trajectory_from_core(state.epoch, run_in_field(model, state, span, floor, run))

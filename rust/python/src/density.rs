@@ -70,17 +70,18 @@ impl PyGridded {
     }
 
     /// A field of `tiles` (each starting where the one before ends, one spatial grid;
-    /// times in s from `epoch`). `extrapolate_above`: above the top altitude node ln(mean)
-    /// continues along the top cell's slope and sigma/mean is held, instead of an error.
+    /// times in s from `epoch`). `open_altitude`: above the top altitude node ln(mean)
+    /// continues along the top cell's slope and sigma/mean is held, below the bottom node
+    /// the bottom level is held, instead of an error.
     #[staticmethod]
-    #[pyo3(signature = (epoch, tiles, extrapolate_above))]
+    #[pyo3(signature = (epoch, tiles, open_altitude))]
     fn from_tiles(
         epoch: f64,
         tiles: Vec<PyRef<'_, PyFieldTile>>,
-        extrapolate_above: bool,
+        open_altitude: bool,
     ) -> PyResult<Self> {
         let tiles = tiles.iter().map(|t| t.0.clone()).collect();
-        GriddedField::from_tiles(epoch, tiles, extrapolate_above)
+        GriddedField::from_tiles(epoch, tiles, open_altitude)
             .map(|f| Self(Arc::new(f)))
             .map_err(to_py)
     }

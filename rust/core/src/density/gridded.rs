@@ -309,10 +309,12 @@ pub struct GriddedField {
     /// Reciprocals of the altitude, latitude and longitude steps and of the longitude
     /// count, for the lane lookup (computed once: four divisions per evaluation showed).
     inv: [f64; 4],
-    /// Above the top altitude node: ln(mean) continues along the top cell's slope (an
-    /// exponential with the local scale height) and sigma/mean keeps its top value;
-    /// without it, an error.
-    extrapolate_above: bool,
+    /// Open in altitude (an atlas field): above the top node ln(mean) continues along the
+    /// top cell's slope (an exponential with the local scale height) and sigma/mean keeps
+    /// its top value; below the bottom node both keep the bottom level's values (only an
+    /// integrator stage of a step that crosses the decay floor goes there: such a step is
+    /// cut at the crossing). Without it, either is an error.
+    open_altitude: bool,
 }
 
 impl GriddedField {
@@ -334,13 +336,13 @@ impl GriddedField {
     }
 
     /// A field from `tiles` (times in seconds from `epoch`), each starting where the one
-    /// before ends, on one spatial grid. With `extrapolate_above`, altitudes above the top
+    /// before ends, on one spatial grid. With `open_altitude`, altitudes above the top
     /// node are served by the top cell's ln(mean) slope and sigma/mean (see the module
     /// doc) instead of an error.
     pub fn from_tiles(
         epoch: f64,
         tiles: Vec<Arc<FieldTile>>,
-        extrapolate_above: bool,
+        open_altitude: bool,
     ) -> Result<Self, CoreError> {
         finite("field epoch", epoch)?;
         let Some(first) = tiles.first().cloned() else {
@@ -397,7 +399,7 @@ impl GriddedField {
                 1.0 / (TAU / nlon as f64),
                 1.0 / nlon as f64,
             ],
-            extrapolate_above,
+            open_altitude,
             tiles,
         })
     }
@@ -439,10 +441,13 @@ impl GriddedField {
             max: self.time.end(),
             t,
         })?;
-        let above = self.extrapolate_above && alt > self.alt.end();
+        let above = self.open_altitude && alt > self.alt.end();
+        let below = self.open_altitude && alt < self.alt.start;
         let (ia, fa_s, fa_m) = if above {
             let ia = self.alt.len - 2;
             (ia, 1.0, (alt - self.alt.start) / self.alt.step - ia as f64)
+        } else if below {
+            (0, 0.0, 0.0)
         } else {
             let (ia, fa) = self
                 .alt
@@ -531,11 +536,11 @@ impl Atmosphere for GriddedField {
         let (tile, table, local) = self.cell(it);
         let (na, nl, no) = (self.alt.len, self.lat.len, self.nlon);
         let (last_a, last_l, nof) = ((na - 1) as f64, (nl - 1) as f64, no as f64);
-        // The altitude cell index above which a lane is outside (infinite: extrapolated).
-        let top_a = if self.extrapolate_above {
-            f64::INFINITY
+        // The altitude cell indices outside which a lane is outside (infinite: open).
+        let (bottom_a, top_a) = if self.open_altitude {
+            (f64::NEG_INFINITY, f64::INFINITY)
         } else {
-            last_a + 1e-9
+            (-1e-9, last_a + 1e-9)
         };
         let [inv_alt, inv_lat, inv_lon, inv_nlon] = self.inv;
         // Straight-line lane loops (no clamp asserts, no integer work) so that they
@@ -562,7 +567,8 @@ impl Atmosphere for GriddedField {
             let ua = (alt[l] - self.alt.start) * inv_alt;
             let ul = (lat[l] - self.lat.start) * inv_lat;
             // `&`, not `&&`: no branches in a lane loop.
-            outside[l] = !((ua >= -1e-9) & (ua <= top_a) & (ul >= -1e-9) & (ul <= last_l + 1e-9));
+            outside[l] =
+                !((ua >= bottom_a) & (ua <= top_a) & (ul >= -1e-9) & (ul <= last_l + 1e-9));
             let ia = ua.floor().max(0.0).min(last_a - 1.0);
             let il = ul.floor().max(0.0).min(last_l - 1.0);
             fa[l] = (ua - ia).clamp(0.0, 1.0);
@@ -1157,5 +1163,40 @@ mod tests {
             );
             assert!(((s[l] - ss) / ss).abs() < 1e-9, "lane {l}");
         }
+    }
+
+    #[test]
+    fn below_the_bottom_an_open_field_holds_the_bottom_level() {
+        // Scalar and lane lookups below an open field's bottom (300 km) read the values at
+        // 300 km; a closed field still refuses.
+        use crate::frames::{geodetic_to_fixed, Geodetic};
+        let tile = Arc::new(affine_tile(&[0.0, 600.0, 1200.0]));
+        let open = GriddedField::from_tiles(100.0, vec![tile.clone()], true).unwrap();
+        let closed = GriddedField::from_tiles(100.0, vec![tile], false).unwrap();
+        let at = |h: f64| open.at_geodetic(600.0, 0.3, 0.4, h).unwrap();
+        assert_eq!(at(-5e3), at(300e3));
+        assert_eq!(at(299e3), at(300e3));
+        assert!(closed.at_geodetic(600.0, 0.3, 0.4, 299e3).is_err());
+        let rot = EarthRotation::new(0.2);
+        let r = rot.to_inertial(geodetic_to_fixed(Geodetic {
+            lat: 0.3,
+            lon: 0.9,
+            alt: 50e3,
+        }));
+        let (mut m, mut sg) = ([0.0; 8], [0.0; 8]);
+        open.mean_sigma_lanes(
+            600.0,
+            &[r[0]; 8],
+            &[r[1]; 8],
+            &[r[2]; 8],
+            &[1.0; 8],
+            &rot,
+            &mut m,
+            &mut sg,
+            &mut LaneMemory::default(),
+        )
+        .unwrap();
+        let (ms, ss) = open.mean_sigma(600.0, r, &rot).unwrap();
+        assert!(((m[0] - ms) / ms).abs() < 1e-9 && ((sg[5] - ss) / ss).abs() < 1e-9);
     }
 }
