@@ -21,8 +21,9 @@ use crate::frames::EarthRotation;
 pub struct LaneMemory<const W: usize> {
     /// Per lane: first table index of the cell whose corners are held (NaN: none).
     pub(crate) cell: [f64; W],
-    /// The cell's corner values per (time node, value) pair and corner (4 altitude bit
-    /// + 2 latitude bit + longitude bit), per lane.
+    /// The cell's corners per (time node, value) pair and corner (4 altitude bit + 2
+    /// latitude bit + longitude bit), per lane: at an even index the corner's value, at the
+    /// odd one after it the step to its longitude neighbour.
     pub(crate) corners: [[f64; W]; 32],
     /// The field's time cell of the previous evaluation (a hint).
     pub(crate) time_cell: usize,
