@@ -477,3 +477,20 @@ def test_sampled_field_across_a_leap_second():
     grid, _ = field.mean_std(nodes, 0.0, 0.0, 400e3)
     direct, _ = fn(nodes, 0.0, 0.0, 400e3)
     np.testing.assert_allclose(grid, direct, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize(
+    ("text", "expect"),
+    [
+        # Issue 26 item 1: 10-18 fractional digits wrapped (1969-12-12T19:38:51.87).
+        ("2002-09-07T01:00:00.0000000004Z", "2002-09-07T01:00:00.000000000"),
+        ("2002-09-07T01:00:00.123456789012345678Z", "2002-09-07T01:00:00.123456789"),
+        ("2002-09-07T01:00:00.0000000005Z", "2002-09-07T01:00:00.000000001"),
+        ("2002-09-07T23:59:59.9999999996Z", "2002-09-08T00:00:00.000000000"),
+        ("2002-09-07T01:00:00.25000000000+01:00", "2002-09-07T00:00:00.250000000"),
+    ],
+)
+def test_epoch_strings_with_10_to_18_fractional_digits_round_to_the_nanosecond(text, expect):
+    assert rp.time.to_datetime64(text) == np.datetime64(expect, "ns")
+    state = rp.OrbitState(text, [7e6, 0.0, 0.0], [0.0, 7.5e3, 0.0])
+    assert state.epoch == np.datetime64(expect, "ns")

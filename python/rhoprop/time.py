@@ -217,7 +217,13 @@ def _parse(text: str, name: str) -> np.datetime64:
         leap = s == "60"
         if leap:
             s = "59"  # parsed as 23:59:59 and moved 1 s on below
-        base = f"{match['date']}T{h}:{m}:{s}{match['f'] or ''}"
+        base = f"{match['date']}T{h}:{m}:{s}"
+        # The fraction is applied here, rounded to the nanosecond: numpy would parse 10-18
+        # digits at ps-as resolution, whose range (days to seconds around 1970) wraps.
+        digits = (match["f"] or ".")[1:]
+        fraction_ns = int(digits[:9].ljust(9, "0")) + (len(digits) > 9 and digits[9] >= "5")
+        if leap:
+            fraction_ns = min(fraction_ns, _NS_PER_S - 1)
         zone = match["zone"]
         if zone and zone not in ("Z", "z"):
             sign = -1 if zone[0] == "-" else 1
@@ -228,12 +234,16 @@ def _parse(text: str, name: str) -> np.datetime64:
             offset_min = sign * (60 * hours + minutes)
     else:
         base = stripped
+        fraction_ns = 0
     try:
         value = np.datetime64(base)
     except ValueError as err:
         raise ValueError(f"{name} {text!r} is not {_FMT_HINT}") from err
+    if np.datetime_data(value.dtype)[0] in ("ps", "fs", "as"):
+        raise ValueError(f"{name} {text!r}: finer than nanoseconds; expected {_FMT_HINT}")
     _check_range(value, name)
     ns = int(value.astype("datetime64[ns]").astype(np.int64)) - offset_min * 60 * _NS_PER_S
+    ns += fraction_ns
     if leap:
         # 23:59:59[.f] + 1 s (whole seconds: the fraction lies inside the leap second).
         end = ns - ns % _NS_PER_S + _NS_PER_S
