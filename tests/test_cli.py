@@ -88,18 +88,26 @@ def test_cache_info_and_clear(tmp_path, monkeypatch, capsys):
 
 
 def test_threads_option_sets_every_pool(monkeypatch, capsys):
+    import os
+
     from rhoprop import parallel
 
     monkeypatch.delenv("RHOPROP_THREADS", raising=False)
     monkeypatch.delenv("RAYON_NUM_THREADS", raising=False)
     with pytest.raises(SystemExit):
         main(["--threads", "0", "cache", "info"])
-    assert "--threads must be at least 1" in capsys.readouterr().err
-    import os
+    assert "--threads: threads must be a whole number >= 1" in capsys.readouterr().err
+    # Issue 26 item 8: 100,000 threads were accepted (17,000 started).
+    with pytest.raises(SystemExit):
+        main(["--threads", "100000", "cache", "info"])
+    assert f"more than {parallel.max_threads()}" in capsys.readouterr().err
+    assert "RHOPROP_THREADS" not in os.environ
+    with pytest.raises(ValueError, match="more than"):
+        parallel.worker_count(parallel.max_threads() + 1)
 
     assert main(["--threads", "3", "cache", "info"]) == 0
     assert os.environ["RHOPROP_THREADS"] == "3" == os.environ["RAYON_NUM_THREADS"]
-    assert parallel.worker_count() == 3 and parallel.worker_count(5) == 5
+    assert parallel.worker_count() == 3 and parallel.worker_count(2) == 2
     monkeypatch.setenv("RHOPROP_THREADS", "two")
     with pytest.raises(ValueError, match=r"\$RHOPROP_THREADS must be a whole number"):
         parallel.worker_count()

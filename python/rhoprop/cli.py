@@ -418,11 +418,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "members", None) is not None and args.members < 2:
         parser.error("--members must be at least 2")
     if args.threads is not None:
-        if args.threads < 1:
-            parser.error("--threads must be at least 1")
         from .parallel import set_threads
 
-        set_threads(args.threads)
+        try:
+            set_threads(args.threads)
+        except ValueError as err:
+            parser.error(f"--threads: {err}")
     try:
         return int(args.run(args))
     except KeyboardInterrupt:

@@ -16,11 +16,19 @@ R = TypeVar("R")
 
 #: Environment variable of the default worker count.
 THREADS_ENV = "RHOPROP_THREADS"
+#: Most worker threads per CPU core a run may ask for (more only thrash and, by the
+#: thousand, exhaust the process's threads).
+MAX_THREADS_PER_CPU = 4
+
+
+def max_threads() -> int:
+    """The most worker threads a run may use: 4 per CPU core."""
+    return MAX_THREADS_PER_CPU * (os.cpu_count() or 1)
 
 
 def worker_count(threads: int | None = None) -> int:
     """``threads`` if given, else ``$RHOPROP_THREADS``, else the CPU count; ValueError
-    naming the source unless a whole number >= 1."""
+    naming the source unless a whole number from 1 to :func:`max_threads`."""
     source = "threads"
     value: object = threads
     if threads is None:
@@ -34,6 +42,11 @@ def worker_count(threads: int | None = None) -> int:
         count = 0
     if isinstance(value, bool) or count < 1 or str(count) != str(value).strip():
         raise ValueError(f"{source} must be a whole number >= 1, got {value!r}")
+    if count > max_threads():
+        raise ValueError(
+            f"{source} = {count} is more than {max_threads()} ({MAX_THREADS_PER_CPU} per CPU "
+            "core of this machine)"
+        )
     return count
 
 

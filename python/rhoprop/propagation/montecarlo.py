@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -13,6 +12,7 @@ from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike
 from ..options import Integrator, Perturbation
+from ..parallel import MAX_THREADS_PER_CPU, max_threads
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
 from .dynamics import Dynamics, integrator_argument, resolve, zonal_degree_argument
@@ -37,13 +37,6 @@ if TYPE_CHECKING:
 
 #: Methods of :func:`monte_carlo` (fixed step: kappa nodes fall on step boundaries).
 METHODS = ("rk8", "rk4", "abm")
-#: Most worker threads per CPU core a run may ask for.
-MAX_THREADS_PER_CPU = 4
-
-
-def max_threads() -> int:
-    """The most worker threads a run may use: 4 per CPU core."""
-    return MAX_THREADS_PER_CPU * (os.cpu_count() or 1)
 
 
 def drag_sigma_argument(value: object) -> float:
