@@ -215,3 +215,18 @@ def test_rhoprop_run_writes_a_manifest_and_refuses_to_mix(tmp_path, capsys):
     assert main(["run", str(path), "--out", str(out)]) == 1
     assert "--overwrite" in capsys.readouterr().err
     assert main(["run", str(path), "--out", str(out), "--overwrite"]) == 0
+
+
+def test_scenario_models_whose_names_clean_to_one_id_write_separate_oem_files():
+    # Issue 26 item 3: "X/Y" and "X_Y" (also "é"/"ü", long names differing at the end)
+    # wrote the same oem/X_Y.oem; one silently replaced the other.
+    from rhoprop.studies.scenario_file import oem_ids
+
+    long_a, long_b = "M" * 120 + "a", "M" * 120 + "b"
+    names = ["X/Y", "X_Y", "NRLMSIS 2.1", "NRLMSIS_2.1", "é", "ü", long_a, long_b, "JB2008"]
+    ids = oem_ids(names)
+    assert len(set(ids.values())) == len(names)
+    assert ids["JB2008"] == "JB2008"  # a name that collides with none keeps its plain id
+    assert ids["X/Y"].startswith("X_Y_") and ids["X_Y"].startswith("X_Y_")
+    assert all(c.isascii() and c.isprintable() and c not in " /" for c in "".join(ids.values()))
+    assert oem_ids(list(reversed(names))) == ids  # the same ids whatever the order

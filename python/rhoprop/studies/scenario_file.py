@@ -3,6 +3,7 @@ bad key, then run as an ensemble. See ``examples/scenario.toml`` for the schema.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import sys
 from dataclasses import fields
@@ -259,6 +260,21 @@ def _output_directory(scenario: Path, value: str) -> Path:
     return target
 
 
+def oem_ids(names: list[str]) -> dict[str, str]:
+    """Object ids (and so OEM file names) of the scenario's models: the name as safe
+    ASCII, spaces and slashes as ``_``; names that would share an id ("X/Y" and "X_Y",
+    "é" and "ü", long names that differ past the cut) all get 8 hex digits of their
+    name's SHA-256 appended, so that no model's file replaces another's."""
+    plain = {n: sanitise(n, 80).replace(" ", "_").replace("/", "_") or "MODEL" for n in names}
+    counts: dict[str, int] = {}
+    for oid in plain.values():
+        counts[oid] = counts.get(oid, 0) + 1
+    return {
+        n: oid if counts[oid] == 1 else f"{oid}_{hashlib.sha256(n.encode()).hexdigest()[:8]}"
+        for n, oid in plain.items()
+    }
+
+
 def run_scenario_file(
     path: str | Path,
     out: str | Path | None = None,
@@ -299,8 +315,9 @@ def run_scenario_file(
     with folder.path("ensemble.png") as tmp:
         ensemble_figure({name: ens}, tmp)
     written = [directory / "ensemble.png"]
+    ids = oem_ids(list(ens.results))
     for model_name, result in ens.results.items():
-        oid = sanitise(model_name).replace(" ", "_").replace("/", "_") or "MODEL"
+        oid = ids[model_name]
         paths = write_oem(
             result, directory / "oem", object_name=name, object_id=oid, originator="rhoprop run"
         )
