@@ -314,3 +314,15 @@ def test_multistep_members_equal_the_deterministic_multistep_orbit(paper_state, 
     assert np.linalg.norm(det.positions[-1] - rk8.positions[-1]) < 1.0
     # Two evaluations a step (80 s) after the RK8 start: about half RK8's (180 s) count.
     assert det.evaluations < 0.6 * rk8.evaluations
+
+
+@pytest.mark.parametrize("seed", [2**64, 2**64 + 5, 2**70, -1, 1.5, True])
+def test_seeds_outside_64_bits_are_refused_naming_the_seed(setup, seed):
+    # Issue 26 item 11: seed 2**70 raised OverflowError from the binding, and a seed of
+    # 2**64 + 5 must not silently give seed 5's numbers.
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    with pytest.raises(ValueError, match="seed must be"):
+        rp.monte_carlo(state, craft, model, 3600.0, n=4, seed=seed, progress=False)
+    largest = rp.monte_carlo(state, craft, model, 3600.0, n=4, seed=2**64 - 1, progress=False)
+    assert np.isfinite(largest.positions).all()

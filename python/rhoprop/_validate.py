@@ -30,6 +30,17 @@ def positive(name: str, value: object) -> float:
     return out
 
 
+def seed(value: object, name: str = "seed", limit: int = 2**64) -> int:
+    """A random seed: a whole number from 0 to ``limit - 1`` (the core's streams take
+    64-bit seeds; a larger one would overflow or, reduced, repeat a smaller seed's
+    numbers)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
+    if value >= limit:
+        raise ValueError(f"{name} must be below 2**{limit.bit_length() - 1}, got {value}")
+    return int(value)
+
+
 def seconds(name: str, value: object) -> float:
     """A finite duration in seconds from a number, ``datetime.timedelta`` or
     ``timedelta64`` (NaT is a ValueError naming ``name``)."""

@@ -320,7 +320,8 @@ def propagate_catalog(
         method=method,
         n=int(n),
         kappa=process,
-        seed=int(seed),
+        # Object i runs with seed + i: room for any catalog below 2**64.
+        seed=_validate.seed(seed, limit=2**63),
         update_interval=_validate.positive("update_interval", update_interval),
         floor_altitude=floor,
         errors=errors,
