@@ -12,7 +12,7 @@ from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike
 from ..options import Integrator, Perturbation
-from ..parallel import MAX_THREADS_PER_CPU, max_threads
+from ..parallel import worker_count
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
 from .dynamics import Dynamics, integrator_argument, resolve, zonal_degree_argument
@@ -157,12 +157,7 @@ def monte_carlo(
     if threads is not None:
         if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
             raise ValueError(f"threads must be a positive integer, got {threads!r}")
-        if threads > max_threads():
-            raise ValueError(
-                f"threads = {threads} is more than {max_threads()} "
-                f"({MAX_THREADS_PER_CPU} per CPU core of this machine)"
-            )
-        threads = int(threads)
+        threads = worker_count(int(threads))  # the limit of every pool
     dyn = resolve(
         "monte_carlo",
         dynamics,
