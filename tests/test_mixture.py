@@ -232,6 +232,21 @@ def test_two_equal_normals_are_bimodal_beyond_two_sigma(separation, expected):
     assert two_normals(separation).n_modes() == expected
 
 
+def test_two_equal_normals_exactly_two_sigma_apart_have_one_flat_mode():
+    """Issue 26 item 14: exactly 2 sigma apart the top is quartic (the Hessian vanishes),
+    and rounding decided between 1 and 0 modes (11 of 300 placements gave 0). Any
+    placement and scale must give the one mode, at the midpoint."""
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        low, sigma = rng.uniform(-1e3, 1e3), 10 ** rng.uniform(-3, 3)
+        g = GaussianMixture([1.0, 1.0], [low, low + 2 * sigma], [sigma**2, sigma**2])
+        (mode,) = g.modes()
+        # A quartic top: mean-shift stops ~1e-5 sigma from the midpoint.
+        assert mode[0] == pytest.approx(low + sigma, abs=1e-4 * sigma)
+        apart = GaussianMixture([1.0, 1.0], [low, low + 2.001 * sigma], [sigma**2] * 2)
+        assert apart.n_modes() == 2
+
+
 def test_modes_of_merged_and_separated_components():
     (single,) = two_normals(1.0).modes()
     assert single == pytest.approx([0.5], abs=1e-9)

@@ -416,10 +416,11 @@ class GaussianMixture:
         analytic gradient and Hessian while the Hessian is negative definite (this only
         matters at nearly degenerate modes, where mean-shift converges slowly). Points
         closer than ``tol s`` are merged, and a point is kept only if the analytic Hessian
-        of the density is negative definite there (the iteration can also stop at a saddle
-        or minimum, e.g. by symmetry). A mode not reached from any component mean is missed;
-        this is rare, but in d >= 2 a mixture can have more modes than components
-        (Carreira-Perpinan & Williams 2003).
+        of the density is negative definite there, or, at a flat top whose curvature
+        vanishes to rounding, if the density falls ``s / 100`` away along the flat
+        directions (the iteration can also stop at a saddle or minimum, e.g. by symmetry).
+        A mode not reached from any component mean is missed; this is rare, but in d >= 2
+        a mixture can have more modes than components (Carreira-Perpinan & Williams 2003).
         """
         tol = float(tol)
         if not (math.isfinite(tol) and tol > 0.0):
@@ -430,7 +431,7 @@ class GaussianMixture:
         points = self._mean_shift(self._means[active].copy(), step_tol, max_iter)
         points = np.array([self._newton_polish(p, step_tol, scale) for p in points])
         candidates = self._merge(points, tol * scale)
-        keep = [self._is_local_maximum(c) for c in candidates]
+        keep = [self._is_local_maximum(c, scale) for c in candidates]
         return np.asarray(candidates[np.array(keep, dtype=bool)])
 
     def n_modes(self, tol: float = 1e-4) -> int:
@@ -511,6 +512,23 @@ class GaussianMixture:
             return False
         return True
 
-    def _is_local_maximum(self, x: np.ndarray) -> bool:
-        """True if the Hessian of the density at x (d,) is negative definite."""
-        return self._negative_definite(self._scaled_hessian(x))
+    def _is_local_maximum(self, x: np.ndarray, scale: float) -> bool:
+        """True if x (d,) is a local maximum of the density: its Hessian is negative
+        definite or, where it is degenerate (a flat top, e.g. two equal normals exactly
+        2 sigma apart, whose Hessian vanishes to rounding), negative semidefinite with the
+        density lower ``scale / 100`` away along every direction of vanishing curvature
+        (``scale``: the smallest component sigma; a quartic top falls by ~1e-9 there, far
+        above the rounding of the log-density)."""
+        hess = self._scaled_hessian(x)
+        if self._negative_definite(hess):
+            return True
+        eigval, eigvec = np.linalg.eigh(hess)
+        # Curvature indistinguishable from rounding of the Hessian's O(1/s^2) terms
+        # (s = scale, the smallest component sigma): below sqrt(eps) / s^2.
+        flat = 1.5e-8 / scale**2
+        if np.any(eigval > flat):
+            return False
+        probes = eigvec[:, np.abs(eigval) <= flat].T * (0.01 * scale)
+        centre = float(self.logpdf(x[None, :])[0])
+        around = self.logpdf(np.concatenate([x + probes, x - probes]))
+        return bool(np.all(around < centre))
