@@ -89,10 +89,14 @@ def test_index_lags_and_midnight_rule(indices: rp.density.Jb2008Indices) -> None
     t = np.array(["2009-12-02T00:00", "2009-12-02T00:00:01"], dtype="datetime64[ns]")
     row = (np.datetime64("2009-12-02") - first).astype(int)
     got = indices.at(t)
-    # 00:00 belongs to the previous day: F10 of t - 1 day -> 2009-11-30 at 00:00.
-    assert got[0, 0] == sol[row - 2, 0] and got[1, 0] == sol[row - 1, 0]
-    assert got[0, 4] == sol[row - 3, 4] and got[1, 4] == sol[row - 2, 4]
-    assert got[0, 6] == sol[row - 6, 6] and got[1, 6] == sol[row - 5, 6]
+    # Issue 26 item 13: 00:00 belongs to the day it starts, as in the reference driver
+    # (INDX = INT(T1950 - FS1950)): F10 of t - 1 day -> 2009-12-01, at 00:00 as at 00:00:01.
+    # The day before differs in all three (so the test tells the rules apart).
+    assert got[0, 0] == got[1, 0] == sol[row - 1, 0] != sol[row - 2, 0]
+    assert got[0, 4] == got[1, 4] == sol[row - 2, 4] != sol[row - 3, 4]
+    assert got[0, 6] == got[1, 6] == sol[row - 5, 6] != sol[row - 6, 6]
+    just_before = indices.at(t[:1] - np.timedelta64(1, "ns"))
+    assert just_before[0, 0] == sol[row - 2, 0]
     # dTc interpolated between hours then rounded: 2009-336 has 0 at 12 h, 17 at 13 h.
     t = np.array(["2009-12-02T12:00", "2009-12-02T12:29", "2009-12-02T12:31"], "datetime64[ns]")
     np.testing.assert_array_equal(indices.at(t)[:, 8], [0.0, 8.0, 9.0])
@@ -102,8 +106,8 @@ def test_outside_span_names_the_span(indices: rp.density.Jb2008Indices) -> None:
     with pytest.raises(rp.OutsideRecordError, match="outside the JB2008 index files' span"):
         indices.at(np.array(["2019-01-01"], dtype="datetime64[ns]"))
     first, last = indices.span
-    # 1997-001 is the first record: Y10 (5-day lag) exists from just after 1997-01-06.
-    assert first == np.datetime64("1997-01-06T00:00:00.000000001")
+    # 1997-001 is the first record: Y10 (5-day lag) exists from 1997-01-06 00:00.
+    assert first == np.datetime64("1997-01-06T00:00:00")
     got = indices.at(np.array([first, last]))
     np.testing.assert_array_equal(got[0, 6:8], indices._sol[0, 6:8])
     assert np.isfinite(got).all()

@@ -10,8 +10,10 @@ download them into the user cache with :meth:`Jb2008Indices.refresh`.
 Conventions of the reference driver (Bowman 2008, SET release), matched exactly:
 
 * F10/S10 and their means are taken from the record of the day containing t - 1 day, M10
-  from t - 2 days, Y10 from t - 5 days; a time at exactly 00:00 UTC belongs to the
-  previous calendar day (see :data:`MIDNIGHT_BELONGS_TO_PREVIOUS_DAY`).
+  from t - 2 days, Y10 from t - 5 days; a time at exactly 00:00 UTC belongs to the day it
+  starts (the driver's ``INDX = INT(T1950 - FS1950)`` on exact day numbers: the half-open
+  day [00:00, 24:00)). An earlier rhoprop took the previous day at 00:00, which moved
+  densities at 00:00 by up to 12 % from the reference driver's.
 * dTc sits on the hour; the value at t is interpolated linearly between hours and then
   rounded to an integer kelvin (half up).
 * The Sun's right ascension/declination and the Greenwich right ascension are the
@@ -48,8 +50,6 @@ ENV_VAR = "RHOPROP_JB2008_DATA"
 #: Sub-directory of the user cache that :meth:`Jb2008Indices.refresh` writes.
 CACHE_SUBDIR = "jb2008"
 FILES = ("SOLFSMY.TXT", "DTCFILE.TXT")
-#: The index lag rule at 00:00 UTC (see the module docstring).
-MIDNIGHT_BELONGS_TO_PREVIOUS_DAY = True
 #: Lags of F10/S10, M10 and Y10, days.
 LAGS = {"F10": 1, "S10": 1, "M10": 2, "Y10": 5}
 #: Modified Julian date of the Unix epoch.
@@ -234,16 +234,13 @@ class Jb2008Indices:
         with the reference's lags (5 days after the first solar record, to the last dTc
         hour and one day after the last solar record)."""
         n_sol = len(self._sol)
-        # With the midnight rule a lagged time at exactly 00:00 takes the day before, so
-        # the first valid time is just after the first record's day + 5 days and the last
-        # is 00:00 two days after the last record; without it, the other way round.
+        # Days are half-open [00:00, 24:00): Y10 (lag 5) exists from 00:00 five days after
+        # the first record's day, F10 (lag 1) until just before 00:00 two days after the
+        # last record's day.
         one = np.timedelta64(1, "ns")
         first_sol = (self._sol_first + np.timedelta64(5, "D")).astype("datetime64[ns]")
         last_sol = (self._sol_first + np.timedelta64(n_sol + 1, "D")).astype("datetime64[ns]")
-        if MIDNIGHT_BELONGS_TO_PREVIOUS_DAY:
-            first_sol = first_sol + one
-        else:
-            last_sol = last_sol - np.timedelta64(1, "D") - one
+        last_sol = last_sol - one
         first_dtc = self._dtc_first.astype("datetime64[ns]")
         last_dtc = (self._dtc_first + np.timedelta64(len(self._dtc) - 1, "h")).astype(
             "datetime64[ns]"
@@ -266,11 +263,7 @@ class Jb2008Indices:
         ns = (t - self._sol_first.astype("datetime64[ns]")).astype(np.int64)
         out = np.empty((len(t), 9))
         for lag, cols in ((1, (0, 1, 2, 3)), (2, (4, 5)), (5, (6, 7))):
-            shifted = ns - lag * _NS_PER_DAY
-            if MIDNIGHT_BELONGS_TO_PREVIOUS_DAY:
-                row = -((-shifted) // _NS_PER_DAY) - 1
-            else:
-                row = shifted // _NS_PER_DAY
+            row = (ns - lag * _NS_PER_DAY) // _NS_PER_DAY
             out[:, cols] = self._sol[row][:, cols]
         hours = (t - self._dtc_first.astype("datetime64[ns]")).astype(np.int64) / 3.6e12
         k = np.minimum(np.floor(hours).astype(np.int64), len(self._dtc) - 2)
@@ -402,5 +395,5 @@ class Jb2008(PointModel):
             "uncertainty": asdict(self.uncertainty),
             "dtc": self.dtc,
             "indices": self.indices.digest(start, end),
-            "lags": "midnight-previous" if MIDNIGHT_BELONGS_TO_PREVIOUS_DAY else "midnight-same",
+            "lags": "midnight-same",
         }
