@@ -111,7 +111,8 @@ def monte_carlo(
         integrator: ``"rk8"`` (default), ``"rk4"`` or ``"abm"`` fixed step. ``"abm"`` (2
             evaluations a step, restarted with RK8 at every kappa node) pays for held kappa
             processes (``Constant``, long ``PiecewiseConstant``): about half RK8's cost
-            at its 80-s default; with a node every step (``GaussMarkov``) it is slower.
+            at its 80-s default; with nodes every 180 s (``GaussMarkov``) its step becomes
+            60 s and it restarts every third step.
         step: largest integration step, s (None: the method's default, RK8 180 s, RK4 5 s,
             ABM 80 s;
             at most 1/20 of the orbital period); the step used divides the kappa node

@@ -133,7 +133,10 @@ fn runs(c: &mut Criterion) {
     let mc = MonteCarloConfig {
         problem,
         initial_factor: None,
-        kappa: KappaProcess::GaussMarkov { half_life: 1080.0 },
+        kappa: KappaProcess::GaussMarkov {
+            half_life: 1080.0,
+            interval: 180.0,
+        },
         perturbation: Perturbation::Additive,
         method: FixedMethod::Rk8,
         max_step: 180.0,

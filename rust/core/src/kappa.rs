@@ -11,9 +11,11 @@ pub enum KappaProcess {
     White { step: f64 },
     /// i.i.d. N(0,1) nodes every `interval` s, linear in between (paper's method 1).
     Interpolated { interval: f64 },
-    /// First-order Gauss-Markov with the given half-life (s), exact discretisation at the
-    /// integration step, linear between nodes (paper's method 2).
-    GaussMarkov { half_life: f64 },
+    /// First-order Gauss-Markov with the given half-life (s), exact discretisation on
+    /// nodes every `interval` s, linear between them (paper's method 2). The nodes are the
+    /// process's own, not the integrator's: a member's path depends on its seed and time
+    /// only, whatever the integrator and step.
+    GaussMarkov { half_life: f64, interval: f64 },
     /// One N(0,1) draw per member held for the whole run.
     Constant,
     /// N(0,1) held over each `interval`, AR(1) with `correlation` across intervals (the
@@ -33,12 +35,16 @@ impl KappaProcess {
     ];
 
     /// The process named `kind` (one of [`KappaProcess::KINDS`]) with parameters `a`
-    /// (step, interval or half-life, s) and `b` (correlation of "piecewise_constant").
+    /// (step, interval or half-life, s) and `b` (correlation of "piecewise_constant", node
+    /// interval of "gauss_markov", s).
     pub fn from_spec(kind: &str, a: f64, b: f64) -> Result<Self, CoreError> {
         Ok(match kind {
             "white" => Self::White { step: a },
             "interpolated" => Self::Interpolated { interval: a },
-            "gauss_markov" => Self::GaussMarkov { half_life: a },
+            "gauss_markov" => Self::GaussMarkov {
+                half_life: a,
+                interval: b,
+            },
             "constant" => Self::Constant,
             "piecewise_constant" => Self::PiecewiseConstant {
                 interval: a,
@@ -61,8 +67,12 @@ impl KappaProcess {
             Self::Interpolated { interval } => {
                 positive("Interpolated interval", interval).map(|_| ())
             }
-            Self::GaussMarkov { half_life } => {
-                positive("GaussMarkov half_life", half_life).map(|_| ())
+            Self::GaussMarkov {
+                half_life,
+                interval,
+            } => {
+                positive("GaussMarkov half_life", half_life)?;
+                positive("GaussMarkov interval", interval).map(|_| ())
             }
             Self::Constant => Ok(()),
             Self::PiecewiseConstant {
@@ -82,15 +92,14 @@ impl KappaProcess {
         }
     }
 
-    /// Spacing of the kappa nodes for an integrator whose largest step is `max_step`;
-    /// None for a process without nodes after t = 0 (Constant).
-    pub fn node_spacing(&self, max_step: f64) -> Option<f64> {
+    /// Spacing of the kappa nodes, s (independent of the integrator); None for a process
+    /// without nodes after t = 0 (Constant).
+    pub fn node_spacing(&self) -> Option<f64> {
         match *self {
             Self::White { step } => Some(step),
-            Self::Interpolated { interval } | Self::PiecewiseConstant { interval, .. } => {
-                Some(interval)
-            }
-            Self::GaussMarkov { .. } => Some(max_step),
+            Self::Interpolated { interval }
+            | Self::PiecewiseConstant { interval, .. }
+            | Self::GaussMarkov { interval, .. } => Some(interval),
             Self::Constant => None,
         }
     }
@@ -103,7 +112,7 @@ impl KappaProcess {
     /// The integration step: the largest step <= `max_step` that divides the node spacing
     /// (so that every node is a step boundary).
     pub fn integration_step(&self, max_step: f64) -> f64 {
-        match self.node_spacing(max_step) {
+        match self.node_spacing() {
             Some(d) => d / (d / max_step * (1.0 - 1e-12)).ceil().max(1.0),
             None => max_step,
         }
@@ -118,7 +127,7 @@ impl KappaProcess {
     pub fn next(&self, prev: f64, dt: f64, stream: &mut MemberStream) -> f64 {
         match *self {
             Self::White { .. } | Self::Interpolated { .. } => stream.normal(),
-            Self::GaussMarkov { half_life } => {
+            Self::GaussMarkov { half_life, .. } => {
                 let a = (-std::f64::consts::LN_2 / half_life * dt).exp();
                 a * prev + (1.0 - a * a).sqrt() * stream.normal()
             }
@@ -201,7 +210,10 @@ mod tests {
     fn gauss_markov_is_stationary_with_half_life_correlation() {
         // 4000 members: standard errors 0.016 (mean), 0.022 (variance), 0.014
         // (correlation near 0.5); tolerances are ~4 of them.
-        let p = KappaProcess::GaussMarkov { half_life: 1080.0 };
+        let p = KappaProcess::GaussMarkov {
+            half_life: 1080.0,
+            interval: 180.0,
+        };
         let ps = paths(p, 4000, 61, 180.0);
         for node in [0, 30, 60] {
             let xs: Vec<f64> = ps.iter().map(|p| p[node]).collect();
@@ -226,6 +238,14 @@ mod tests {
         let s = KappaProcess::White { step: 600.0 }.integration_step(180.0);
         assert_eq!(s, 150.0);
         assert_eq!(KappaProcess::Constant.integration_step(180.0), 180.0);
+        // Gauss-Markov nodes are the process's own: ABM's 80 s becomes 60 s.
+        let gm = KappaProcess::GaussMarkov {
+            half_life: 1080.0,
+            interval: 180.0,
+        };
+        assert_eq!(gm.integration_step(80.0), 60.0);
+        assert_eq!(gm.integration_step(180.0), 180.0);
+        assert_eq!(gm.node_spacing(), Some(180.0));
     }
 
     #[test]
@@ -234,8 +254,11 @@ mod tests {
             assert!(KappaProcess::from_spec(kind, 60.0, 0.5).is_ok(), "{kind}");
         }
         assert_eq!(
-            KappaProcess::from_spec("gauss_markov", 1080.0, 0.0).unwrap(),
-            KappaProcess::GaussMarkov { half_life: 1080.0 }
+            KappaProcess::from_spec("gauss_markov", 1080.0, 180.0).unwrap(),
+            KappaProcess::GaussMarkov {
+                half_life: 1080.0,
+                interval: 180.0
+            }
         );
         let e = KappaProcess::from_spec("brownian", 1.0, 0.0).unwrap_err();
         assert!(

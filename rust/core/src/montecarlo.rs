@@ -274,7 +274,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
         let mut dynamics = Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, drag);
         dynamics.perturbation = cfg.perturbation;
         dynamics.zonal_degree = cfg.problem.zonal_degree;
-        let spacing = cfg.kappa.node_spacing(h);
+        let spacing = cfg.kappa.node_spacing();
         let mut kappa = KappaLanes::<W> {
             t0: 0.0,
             t1: spacing.unwrap_or(f64::INFINITY),
@@ -513,7 +513,13 @@ mod tests {
         // AVX-512, AVX2 and portable code, in batches of 8, 16 and 32: same members, same
         // numbers, including batches only partly filled (45 members) and decays.
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.3).unwrap();
-        let mut cfg = config(45, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        let mut cfg = config(
+            45,
+            KappaProcess::GaussMarkov {
+                half_life: 1080.0,
+                interval: 180.0,
+            },
+        );
         cfg.output_times = vec![0.0, 1000.0, 7200.0];
         let mut runs = Vec::new();
         for p in SimdPath::available() {
@@ -535,7 +541,13 @@ mod tests {
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
         let (ra, rp) = (R_EARTH + 600e3, R_EARTH + 90e3);
         let va = (MU * (2.0 / ra - 2.0 / (ra + rp))).sqrt();
-        let mut cfg = config(5, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        let mut cfg = config(
+            5,
+            KappaProcess::GaussMarkov {
+                half_life: 1080.0,
+                interval: 180.0,
+            },
+        );
         cfg.problem.y0 = [ra, 0.0, 0.0, 0.0, va, 0.0];
         cfg.problem.epoch = 0.0;
         let out = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
@@ -560,7 +572,13 @@ mod tests {
     #[test]
     fn zero_sigma_reproduces_the_deterministic_orbit_exactly() {
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
-        let cfg = config(5, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        let cfg = config(
+            5,
+            KappaProcess::GaussMarkov {
+                half_life: 1080.0,
+                interval: 180.0,
+            },
+        );
         let out = monte_carlo(&atm, &cfg, &Progress::default()).unwrap();
         let det = propagate(
             &atm,
@@ -680,7 +698,13 @@ mod tests {
         // factor, bit for bit, on every SIMD path; the factors depend only on seed and
         // member index.
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
-        let mut cfg = config(11, KappaProcess::GaussMarkov { half_life: 1080.0 });
+        let mut cfg = config(
+            11,
+            KappaProcess::GaussMarkov {
+                half_life: 1080.0,
+                interval: 180.0,
+            },
+        );
         cfg.drag_sigma = 0.2;
         let runs: Vec<_> = SimdPath::available()
             .into_iter()
