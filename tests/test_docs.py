@@ -85,3 +85,72 @@ def test_page_examples_run(page, tmp_path, monkeypatch, capsys):
     out = capsys.readouterr().out
     for expected in PAGES[page]:
         assert expected in out, f"docs/{page} no longer prints {expected!r}:\n{out}"
+
+
+def _api_rewrite():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("sphinx_roles", DOCS / "_ext" / "sphinx_roles.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_api_reference_escapes_stars_and_splits_multi_name_entries():
+    """Issue 26 item 16: the API reference showed ``Cd*A/m ... B*`` as italics and
+    TleAccuracy's ``radial, along_track, cross_track`` as one broken row."""
+    ext = _api_rewrite()
+    assert ext.escape_stars("Cd*A/m from B*, x**2, ``a*b``, `c*d`, *density*") == (
+        r"Cd\*A/m from B\*, x\*\*2, ``a*b``, `c*d`, *density*"
+    )
+    text = "RMS.\n\nAttributes:\n    a, b: errors, m.\n        at epoch.\n    c: rate.\n"
+    assert ext.split_multi_names(text) == (
+        "RMS.\n\nAttributes:\n    a: errors, m.\n        at epoch.\n"
+        "    b: errors, m.\n        at epoch.\n    c: rate.\n"
+    )
+
+
+def test_no_api_docstring_renders_unintended_italics():
+    """Every public docstring, rewritten as the site's griffe extension does and rendered
+    by Python-Markdown (mkdocs' renderer): an <em> only where the source wrote *word*."""
+    import inspect
+
+    import markdown
+
+    import rhoprop as rp
+
+    ext = _api_rewrite()
+    seen: set[int] = set()
+    docs: list[tuple[str, str]] = []
+
+    def visit(name: str, obj: object, depth: int) -> None:
+        if id(obj) in seen or depth > 4:
+            return
+        seen.add(id(obj))
+        if isinstance(obj, (property, staticmethod, classmethod)):
+            obj = obj.fget if isinstance(obj, property) else obj.__func__
+        home = obj.__name__ if inspect.ismodule(obj) else getattr(obj, "__module__", None)
+        if not str(home).startswith("rhoprop"):
+            return
+        doc = inspect.getdoc(obj)
+        if doc:
+            docs.append((name, doc))
+        if inspect.ismodule(obj):
+            for key in getattr(obj, "__all__", [k for k in dir(obj) if not k.startswith("_")]):
+                visit(f"{name}.{key}", getattr(obj, key, None), depth + 1)
+        elif inspect.isclass(obj):
+            for key, value in vars(obj).items():
+                if not key.startswith("_"):
+                    visit(f"{name}.{key}", value, depth + 1)
+
+    visit("rhoprop", rp, 0)
+    assert len(docs) > 250
+    # Emphasis as a writer means it: *word(s)* with the stars outside words.
+    intended = re.compile(r"(?<![\w*])\*(\w[^*\n]*?\w|\w)\*(?![\w*])")
+    bad = []
+    for name, doc in docs:
+        html = markdown.markdown(ext.rewrite(doc))
+        meant = set(intended.findall(doc))
+        bad += [(name, em) for em in re.findall(r"<em>(.*?)</em>", html) if em not in meant]
+    assert not bad, bad[:5]
