@@ -74,17 +74,42 @@ def test_console_script_module_entry():
 def test_cache_info_and_clear(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
     (tmp_path / "fields").mkdir()
-    (tmp_path / "fields" / "a.npz").write_bytes(b"x" * 1000)
-    (tmp_path / "fields" / "b.npz").write_bytes(b"x" * 500)
+    (tmp_path / "fields" / ("a" * 32 + ".npz")).write_bytes(b"x" * 1000)
+    (tmp_path / "fields" / ("b" * 32 + ".npz")).write_bytes(b"x" * 500)
+    tiles = tmp_path / "tiles" / "msis-0123456789ab"
+    tiles.mkdir(parents=True)
+    (tiles / ("2023-11-13_" + "c" * 24 + ".npz")).write_bytes(b"x")
+    (tiles / "model.json").write_text("{}")
     (tmp_path / "SW-All.csv").write_text("header\n")
+    (tmp_path / "jb2008").mkdir()
+    (tmp_path / "jb2008" / "SOLFSMY.TXT").write_text("x")
     assert main(["cache", "info"]) == 0
     out = capsys.readouterr().out
     assert str(tmp_path) in out and "fields: 2 files, 0.0 MB" in out and "2 GB" in out
     assert main(["cache", "clear"]) == 0
-    assert "deleted 2 sampled density fields" in capsys.readouterr().out
-    assert (tmp_path / "SW-All.csv").exists() and not list((tmp_path / "fields").iterdir())
+    assert "deleted 4 sampled density fields" in capsys.readouterr().out
+    assert (tmp_path / "SW-All.csv").exists() and not (tmp_path / "fields").exists()
+    assert not (tmp_path / "tiles").exists()
     assert main(["cache", "clear", "--all"]) == 0
-    assert not (tmp_path / "SW-All.csv").exists()
+    assert not (tmp_path / "SW-All.csv").exists() and not (tmp_path / "jb2008").exists()
+
+
+def test_cache_clear_deletes_only_files_rhoprop_writes(tmp_path, monkeypatch, capsys):
+    """Issue 26 item 2: RHOPROP_CACHE=DIR rhoprop cache clear --all deleted every file
+    under DIR. Files of names rhoprop does not write there stay, and are reported."""
+    monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
+    (tmp_path / "fields").mkdir()
+    (tmp_path / "fields" / ("a" * 32 + ".npz")).write_bytes(b"x")
+    (tmp_path / "fields" / "results.npz").write_bytes(b"mine")
+    (tmp_path / "thesis.tex").write_text("precious")
+    (tmp_path / "photos").mkdir()
+    (tmp_path / "photos" / "cat.jpg").write_bytes(b"jpg")
+    assert main(["cache", "clear", "--all"]) == 0
+    out = capsys.readouterr().out
+    assert "deleted 1 cached files" in out and "left 3 files rhoprop did not write" in out
+    assert (tmp_path / "thesis.tex").read_text() == "precious"
+    assert (tmp_path / "photos" / "cat.jpg").exists()
+    assert (tmp_path / "fields" / "results.npz").exists()
 
 
 def test_threads_option_sets_every_pool(monkeypatch, capsys):

@@ -54,6 +54,63 @@ def test_output_folder_claims_lists_and_refuses(tmp_path):
     assert (mine / "thesis.tex").read_text() == "precious"
 
 
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {
+        p.relative_to(folder).as_posix(): p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and not p.is_symlink()
+    }
+
+
+def test_overwrite_never_deletes_a_file_the_run_did_not_write(tmp_path):
+    """Issue 26 item 2: --overwrite deleted a user file added to an earlier run's folder
+    and an index.html beside another tool's manifest.json. Now such a folder is refused
+    and nothing is deleted."""
+    out = tmp_path / "run"
+    folder = OutputFolder(out, command="rhoprop test")
+    folder.write_text("oem/1.oem", "A")
+    folder.finish()
+    (out / "notes.txt").write_text("mine")
+    (out / "oem" / "plot.py").write_text("mine too")
+    before = _tree(out)
+    lists = r"no rhoprop manifest of it lists \(notes\.txt, oem/plot"
+    with pytest.raises(FileExistsError, match=lists):
+        OutputFolder(out, command="again", overwrite=True)
+    assert _tree(out) == before
+    # Another tool's manifest.json: not rhoprop's, nothing deleted.
+    other = tmp_path / "site"
+    other.mkdir()
+    (other / MANIFEST).write_text(json.dumps({"name": "my app", "files": ["index.html"]}))
+    (other / "index.html").write_text("<html>")
+    with pytest.raises(FileExistsError, match=r"holds no manifest\.json of an earlier rhoprop"):
+        OutputFolder(other, command="x", overwrite=True)
+    assert (other / "index.html").exists()
+
+
+def test_overwrite_deletes_an_interrupted_runs_files_and_nothing_outside(tmp_path):
+    out = tmp_path / "run"
+    folder = OutputFolder(out, command="rhoprop test")
+    folder.expect([out / "oem" / "1.oem", out / "oem" / "2.oem"])
+    (out / "oem").mkdir()
+    (out / "oem" / "1.oem").write_text("written before the stop")
+    (out / "oem" / ".2.tmp123-7f00.oem").write_text("half written")
+    # (the run stops here: no finish, the manifest lists no files, the journal does)
+    with pytest.raises(FileExistsError, match="earlier run"):
+        OutputFolder(out, command="again")
+    OutputFolder(out, command="again", overwrite=True)
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST]
+    # A forged manifest naming files outside the folder or through a link: never followed.
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "keep.txt").write_text("keep")
+    (out / "linked").symlink_to(outside, target_is_directory=True)
+    forged = {"rhoprop_version": "0", "files": ["../outside/keep.txt", "linked/keep.txt"]}
+    (out / MANIFEST).write_text(json.dumps(forged))
+    with pytest.raises(FileExistsError, match="no rhoprop manifest of it lists \\(linked\\)"):
+        OutputFolder(out, command="x", overwrite=True)
+    assert (outside / "keep.txt").read_text() == "keep"
+
+
 def test_a_failed_write_leaves_no_file(tmp_path):
     target = tmp_path / "x.txt"
     target.write_text("old")

@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import secrets
 import threading
 import warnings
@@ -240,29 +241,63 @@ def tiles_on_disk(root: Path) -> list[dict[str, Any]]:
     return out
 
 
+#: The files rhoprop writes into its cache, by relative path (the layout is the cache's
+#: manifest: ``cache clear`` deletes these and nothing else). Entries, then downloads.
+_ENTRIES = re.compile(
+    r"^(fields/[0-9a-f]{32}\.npz|tiles/[^/]+/(\d{4}-\d{2}-\d{2}_[0-9a-f]{24}\.npz|model\.json))$"
+)
+_DOWNLOADS = re.compile(r"^(SW-All\.(csv|txt)|jb2008/(SOLFSMY|DTCFILE)\.TXT)$")
+#: Temporaries of the writers above (store_entry, the atlas's model.json, downloads).
+_TEMPORARIES = re.compile(
+    r"^(fields/|tiles/[^/]+/)?\.[^/]+\.tmp$|^(jb2008/)?\.(SW-All|SOLFSMY\.TXT|DTCFILE\.TXT)-[^/]*\.part$"
+)
+
+
+def owned_files(
+    override: str | os.PathLike[str] | None = None, *, everything: bool = False
+) -> tuple[list[Path], list[Path]]:
+    """The files under the cache directory as (rhoprop's: the sampled fields and atlas
+    tiles, with ``everything`` also the downloads and temporaries of interrupted writes;
+    the rest). Symbolic links are never followed."""
+    root = cache_dir(override)
+    ours: list[Path] = []
+    rest: list[Path] = []
+    for here, dirs, files in os.walk(root):
+        dirs.sort()
+        for name in sorted(files):
+            path = Path(here) / name
+            rel = path.relative_to(root).as_posix()
+            mine = _ENTRIES.match(rel) or (
+                everything and (_DOWNLOADS.match(rel) or _TEMPORARIES.match(rel))
+            )
+            (ours if mine and not path.is_symlink() else rest).append(path)
+    return ours, rest
+
+
 def clear_cache(
     override: str | os.PathLike[str] | None = None, *, everything: bool = False
 ) -> tuple[int, int]:
     """Deletes the sampled density fields and atlas tiles (``fields/*.npz``,
-    ``tiles/*/*.npz``), or with ``everything`` every
-    file rhoprop keeps in the cache (also the downloaded space-weather record and JB2008
-    indices, which ``rhoprop data refresh`` fetches again). Returns (files, bytes)
-    deleted."""
+    ``tiles/*/*.npz`` and the tiles' ``model.json``), or with ``everything`` also the
+    downloaded space-weather record and JB2008 indices (which ``rhoprop data refresh``
+    fetches again) and temporaries of interrupted writes. Only files of the names rhoprop
+    writes there are deleted (a file of the user's in the cache directory stays); folders
+    left empty are removed. Returns (files, bytes) deleted."""
     root = cache_dir(override)
-    pattern = (
-        root.rglob("*")
-        if everything
-        else [*(root / "fields").glob("*.npz"), *(root / "tiles").glob("*/*.npz")]
-    )
+    ours, _ = owned_files(override, everything=everything)
     files = n_bytes = 0
-    for path in sorted(pattern, reverse=True):
-        if path.is_file() or path.is_symlink():
+    for path in ours:
+        try:
             size = path.lstat().st_size
             path.unlink()
-            files, n_bytes = files + 1, n_bytes + size
-        elif everything and path.is_dir():
+        except FileNotFoundError:
+            continue  # removed meanwhile by another process
+        files, n_bytes = files + 1, n_bytes + size
+    for parent in sorted({p.parent for p in ours}, key=lambda d: -len(d.parts)):
+        while parent != root and parent.is_relative_to(root):
             try:
-                path.rmdir()
+                parent.rmdir()  # only if empty
             except OSError:
-                pass
+                break
+            parent = parent.parent
     return files, n_bytes

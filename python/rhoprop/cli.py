@@ -119,12 +119,16 @@ def _seed(parser: argparse.ArgumentParser) -> None:
 
 
 def _cache(args: argparse.Namespace) -> int:
-    from .cache import cache_info, clear_cache
+    from .cache import cache_info, clear_cache, owned_files
 
     if args.cache_command == "clear":
         files, n_bytes = clear_cache(everything=args.all)
         what = "cached files" if args.all else "sampled density fields and atlas tiles"
         print(f"deleted {files} {what} ({n_bytes / 1e6:.1f} MB)")
+        _, rest = owned_files(everything=True)
+        if rest:
+            shown = ", ".join(str(p) for p in rest[:3]) + (", ..." if len(rest) > 3 else "")
+            print(f"left {len(rest)} files rhoprop did not write there: {shown}")
         return 0
     info = cache_info()
     print(f"cache: {info['directory']}")

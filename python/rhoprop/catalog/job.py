@@ -233,6 +233,9 @@ def run_catalog_file(
     )
     wall = time.perf_counter() - t0
     directory = folder.directory
+    # Announced before they are written, so that an interrupted run's files are its own.
+    folder.expect([directory / "oem" / n for n in oem_names(result.objects, duplicates)])
+    folder.expect([directory / "summary.parquet"])
     paths = write_oem(result, directory / "oem", duplicates=duplicates)
     folder.add(paths)
     summary = write_summary(result, directory / "summary.parquet")

@@ -316,6 +316,7 @@ def run_scenario_file(
         ensemble_figure({name: ens}, tmp)
     written = [directory / "ensemble.png"]
     ids = oem_ids(list(ens.results))
+    folder.expect([directory / "oem" / f"{oid}.oem" for oid in ids.values()])
     for model_name, result in ens.results.items():
         oid = ids[model_name]
         paths = write_oem(
