@@ -1,6 +1,6 @@
 """How many workers run at once: the ``--threads`` option of the command line and
-``$RHOPROP_THREADS``. The core's thread pool reads ``$RAYON_NUM_THREADS`` when it first
-starts; the Python pools that run objects side by side (catalogs, fits, screening) read
+``$RHOPROP_THREADS``. The core's thread pool reads ``$RAYON_NUM_THREADS`` at each call
+(it is made again when that changes, and in a forked child); the Python pools that run objects side by side (catalogs, fits, screening) read
 :func:`worker_count`. Results never depend on the count (fixed seeds per member)."""
 
 from __future__ import annotations
@@ -52,8 +52,8 @@ def worker_count(threads: int | None = None) -> int:
 
 def set_threads(threads: int) -> None:
     """Makes ``threads`` the default of this process: the Python pools (through
-    ``$RHOPROP_THREADS``) and the core's pool (``$RAYON_NUM_THREADS``, read when the
-    core first runs parallel work, so call this before any run)."""
+    ``$RHOPROP_THREADS``) and the core's pool (``$RAYON_NUM_THREADS``, read at the next
+    core call)."""
     count = worker_count(threads)
     os.environ[THREADS_ENV] = str(count)
     os.environ["RAYON_NUM_THREADS"] = str(count)

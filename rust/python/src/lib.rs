@@ -12,6 +12,7 @@ mod frames;
 mod long_call;
 mod models;
 mod montecarlo;
+mod pool;
 mod propagation;
 
 use pyo3::prelude::*;

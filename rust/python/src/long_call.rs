@@ -1,7 +1,8 @@
 //! The one way every long core call (propagate, monte_carlo, ccsp) runs: on a worker
 //! thread with the GIL released, while the calling thread wakes every 50 ms to honour
 //! Ctrl-C and report progress, cancels the core through its `Progress` on any Python
-//! exception, and converts core errors.
+//! exception, and converts core errors. Parallel work runs on `pool::current()` (made
+//! again after a fork).
 
 use crate::errors::to_py;
 use pyo3::prelude::*;
@@ -25,14 +26,16 @@ where
     T: Send,
     F: FnOnce(&Progress) -> Result<T, CoreError> + Send,
 {
+    let pool = crate::pool::current()?;
     let progress = Progress::default();
     let mut raised: Option<PyErr> = None;
     let result = py.detach(|| {
         std::thread::scope(|scope| {
             let (finished, wait) = sync_channel::<()>(1);
             let progress = &progress;
+            let pool = &pool;
             let worker = scope.spawn(move || {
-                let out = f(progress);
+                let out = pool.install(|| f(progress));
                 // The receiver lives until the worker is joined; a failed send is harmless.
                 let _ = finished.send(());
                 out

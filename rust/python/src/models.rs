@@ -38,12 +38,15 @@ fn par_eval<F>(py: Python<'_>, n: usize, f: F) -> PyResult<Vec<Jb2008Output>>
 where
     F: Fn(usize) -> Result<Jb2008Output, CoreError> + Sync,
 {
+    let pool = crate::pool::current()?;
     py.detach(|| {
-        (0..n)
-            .into_par_iter()
-            .with_min_len(CHUNK)
-            .map(&f)
-            .collect::<Result<Vec<_>, CoreError>>()
+        pool.install(|| {
+            (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(&f)
+                .collect::<Result<Vec<_>, CoreError>>()
+        })
     })
     .map_err(to_py)
 }
