@@ -62,6 +62,15 @@ RUNS = {
         "print('started', flush=True)\n"
         "catalog.propagate_catalog(list(cat) * 1000, model, '2002-09-10T00:00', progress=False)"
     ),
+    # Minutes: reentry windows of 5,000 members per object on threads (issue 26 item 9:
+    # 17-21 s to stop, as every running object finished its members first).
+    "reentry": (
+        "from pathlib import Path\n"
+        "from rhoprop import catalog\n"
+        f"cat = catalog.load(Path({os.path.dirname(__file__)!r}) / 'data' / 'sample.tle')\n"
+        "print('started', flush=True)\n"
+        "catalog.reentry(list(cat) * 10, model, n=5000, duration=30 * 86400.0)"
+    ),
     # ~80 s: two models of 100,000 members each.
     "ensemble": (
         "rp.ensemble(state, craft, {'a': model, 'b': model}, 'a', duration=3 * 86400.0, "

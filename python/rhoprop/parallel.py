@@ -1,7 +1,8 @@
 """How many workers run at once: the ``--threads`` option of the command line and
 ``$RHOPROP_THREADS``. The core's thread pool reads ``$RAYON_NUM_THREADS`` at each call
-(it is made again when that changes, and in a forked child); the Python pools that run objects side by side (catalogs, fits, screening) read
-:func:`worker_count`. Results never depend on the count (fixed seeds per member)."""
+(it is made again when that changes, and in a forked child); the Python pools that run
+objects side by side (catalogs, fits, screening) read :func:`worker_count`. Results never
+depend on the count (fixed seeds per member)."""
 
 from __future__ import annotations
 

@@ -16,8 +16,8 @@ the horizon counted as later than it, so a quantile beyond the horizon is NaT.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import datetime as _dt
+import threading
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -28,7 +28,7 @@ import numpy as np
 
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import ModelLike
-from ..parallel import worker_count
+from ..parallel import map_in_threads, worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, resolve
 from ..propagation.kappa import GaussMarkov, KappaProcess
@@ -178,6 +178,14 @@ def reentry(
     process = kappa or GaussMarkov()
     probabilities = (np.arange(groups) + 0.5) / groups
 
+    stop = threading.Event()
+
+    def check(_done: int) -> None:
+        # Called by the core about every 50 ms: a Ctrl-C (or an error) of another object
+        # ends this object's run too, instead of letting it finish (17-21 s before).
+        if stop.is_set():
+            raise KeyboardInterrupt("reentry run interrupted")
+
     def one(i: int, obj: CatalogObject) -> tuple[np.ndarray, float, float]:
         rel = _relative_sigma(obj, drag_sigma)
         normal = np.array([NormalDist().inv_cdf(float(p)) for p in probabilities])
@@ -193,7 +201,7 @@ def reentry(
                 kappa=process,
                 seed=seed + 1000 * i + g,
                 output_step=None,
-                progress=False,
+                progress=check,
                 dynamics=dyn,
                 threads=1,
             )
@@ -202,8 +210,7 @@ def reentry(
 
     # In epoch order, so that objects running at once share their day tiles.
     order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
-    with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
-        ran = list(pool.map(one, order, [objs[i] for i in order]))
+    ran = map_in_threads(lambda i: one(i, objs[i]), order, worker_count(threads), stop)
     done = [ran[k] for k in np.argsort(order)]
     nat = np.datetime64("NaT", "ns")
     med, lo, hi = (np.full(len(objs), nat) for _ in range(3))
