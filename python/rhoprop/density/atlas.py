@@ -57,7 +57,17 @@ from ..cache import bytes_from_env, cache_dir, entry_lock, load_entry, store_ent
 from ..errors import OutsideRecordError
 from ..time import EpochLike, EpochsLike, add_seconds, to_datetime64, ut1_seconds
 from ._inputs import StateLike
-from .field import FieldResolution, _entry_matches, time_nodes
+from .field import (
+    MAX_GRID_BYTES,
+    FieldResolution,
+    _entry_matches,
+    check_grid_size,
+    sample_grid,
+    time_nodes,
+)
+from .field import (
+    SAMPLE_POINTS as SAMPLE_POINTS,
+)
 
 #: Top of every atlas grid, m (above it: the exponential extrapolation of the module doc).
 #: 1,500 km holds every LEO orbit's density with its own shape; higher, drag on any object
@@ -70,12 +80,9 @@ MEMORY_ENV = "RHOPROP_FIELD_MEMORY"
 #: Default in-memory tile budget, bytes (1 GB: about 40 days of NRLMSIS at the default
 #: resolution).
 DEFAULT_MEMORY = 1_000_000_000
-#: Grid points per call of a model's sampling: bounds the memory of sampling (pymsis needs
-#: about 300 bytes per point with the driver perturbations).
-SAMPLE_POINTS = 1 << 18
-#: Largest tile, bytes: a resolution that needs more is refused before anything is
-#: allocated.
-MAX_TILE_BYTES = 2_000_000_000
+#: Largest tile, bytes (the limit of every sampled grid, ``field.MAX_GRID_BYTES``); tiles
+#: are sampled ``field.SAMPLE_POINTS`` grid points per model call.
+MAX_TILE_BYTES = MAX_GRID_BYTES
 #: Version of the tile format; part of the key, so tiles of another format are misses.
 TILE_FORMAT = 1
 _NS_PER_S = 1_000_000_000
@@ -226,11 +233,7 @@ class Atlas:
         points = n_alt * n_lat * self.n_lon
         # Time nodes of a day: the spacing and at most one driver step per 3 hours, twice.
         nodes = 86400.0 / res.time + 2 * 8 + 2
-        if 16 * points * nodes > MAX_TILE_BYTES:
-            raise ValueError(
-                f"resolution {res} is too fine: a day tile would hold about "
-                f"{16 * points * nodes / 1e9:.1f} GB (at most {MAX_TILE_BYTES / 1e9:g} GB)"
-            )
+        check_grid_size(points * nodes, res, "a day tile")
         self._lock = threading.Lock()
         self._keys: dict[np.datetime64, tuple[str, str | None]] = {}
         self._fields: weakref.WeakValueDictionary[tuple[Any, ...], Any] = (
@@ -386,15 +389,7 @@ class Atlas:
         alt = a0 + da * np.arange(na)
         lat = np.linspace(-90.0, 90.0, self.latitude[2])
         lon = np.arange(self.n_lon) * (360.0 / self.n_lon)
-        per_node = na * len(lat) * len(lon)
-        step = max(1, SAMPLE_POINTS // per_node)
-        ln_mean = np.empty((len(epochs), na, len(lat), len(lon)))
-        rel_sigma = np.empty_like(ln_mean)
-        for i in range(0, len(epochs), step):
-            part = slice(i, i + step)
-            ln_mean[part], rel_sigma[part] = self.model._grid_values(
-                epochs[part], left[part], alt, lat, lon
-            )
+        ln_mean, rel_sigma = sample_grid(self.model, epochs, left, alt, lat, lon)
         if (ln_mean[:, -1] > ln_mean[:, -2]).any():
             raise ValueError(
                 f"{self.model!r}: density increases with altitude at the atlas ceiling "

@@ -251,6 +251,47 @@ def grid_axes(
     return alt, np.linspace(-90.0, 90.0, nlat), np.arange(nlon) * resolution.longitude
 
 
+#: Largest sampled grid (a field, or a day tile of an atlas), bytes of its ln(mean) and
+#: sigma/mean: a resolution that needs more is refused before anything is allocated.
+MAX_GRID_BYTES = 2_000_000_000
+#: Grid points per call of a model's sampler: bounds its working memory (pymsis needs
+#: about 300 bytes per point with the driver perturbations).
+SAMPLE_POINTS = 1 << 18
+
+
+def check_grid_size(points: float, resolution: FieldResolution, what: str) -> None:
+    """ValueError if a grid of ``points`` nodes (times x altitudes x latitudes x
+    longitudes) at ``resolution`` would exceed :data:`MAX_GRID_BYTES`; ``what`` names the
+    grid ("a day tile", "the field")."""
+    if 16 * points > MAX_GRID_BYTES:
+        raise ValueError(
+            f"resolution {resolution} is too fine: {what} would hold about "
+            f"{16 * points / 1e9:.1f} GB (at most {MAX_GRID_BYTES / 1e9:g} GB); use a "
+            "coarser resolution or a shorter span"
+        )
+
+
+def sample_grid(
+    model: Any,
+    epochs: np.ndarray,
+    left: np.ndarray,
+    alt: np.ndarray,
+    lat: np.ndarray,
+    lon: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``model._grid_values`` over the grid, in chunks of time nodes of at most
+    :data:`SAMPLE_POINTS` points each (at least one node): (ln_mean, rel_sigma) arrays
+    (nt, nalt, nlat, nlon)."""
+    per_node = len(alt) * len(lat) * len(lon)
+    step = max(1, SAMPLE_POINTS // per_node)
+    ln_mean = np.empty((len(epochs), len(alt), len(lat), len(lon)))
+    rel_sigma = np.empty_like(ln_mean)
+    for i in range(0, len(epochs), step):
+        part = slice(i, i + step)
+        ln_mean[part], rel_sigma[part] = model._grid_values(epochs[part], left[part], alt, lat, lon)
+    return ln_mean, rel_sigma
+
+
 def sample_field(
     model: SampledModel,
     start: EpochLike,
@@ -275,10 +316,11 @@ def sample_field(
     breaks = np.asarray(model._breaks(t0, t1), dtype="datetime64[ns]")
     offsets = to_seconds(breaks, t0)
     nodes, left = time_nodes(span, res.time, offsets)
+    check_grid_size(len(nodes) * len(alt) * len(lat) * len(lon), res, "the field")
 
     key = model.cache_key(t0, t1) if cache else None
     if key is None:
-        ln_mean, rel_sigma = model._grid_values(offsets_to_epochs(t0, nodes), left, alt, lat, lon)
+        ln_mean, rel_sigma = sample_grid(model, offsets_to_epochs(t0, nodes), left, alt, lat, lon)
         return DensityField.from_arrays(t0, nodes, alt, lat, lon, ln_mean, rel_sigma)
     blob = json.dumps(
         {
@@ -304,8 +346,8 @@ def sample_field(
         if saved is not None and _entry_matches(saved, blob, shape):
             ln_mean, rel_sigma = saved["ln_mean"], saved["rel_sigma"]
         else:
-            ln_mean, rel_sigma = model._grid_values(
-                offsets_to_epochs(t0, nodes), left, alt, lat, lon
+            ln_mean, rel_sigma = sample_grid(
+                model, offsets_to_epochs(t0, nodes), left, alt, lat, lon
             )
             store_entry(path, {"ln_mean": ln_mean, "rel_sigma": rel_sigma, "key": np.array(blob)})
         field = DensityField.from_arrays(t0, nodes, alt, lat, lon, ln_mean, rel_sigma)

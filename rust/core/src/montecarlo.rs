@@ -151,9 +151,25 @@ fn run<A: Atmosphere + ?Sized, const W: usize>(
         .map(|m| member_drag_factor(cfg.seed, m, cfg.drag_sigma))
         .collect();
 
-    let results: Vec<BatchOut<W>> = (0..batches)
+    // Each batch writes its members' rows into its own slice of the output, as it
+    // finishes: no second copy of the ensemble is ever held (the peak is the output).
+    positions.resize(n * nt * 3, 0.0);
+    velocities.resize(n * nt * 3, 0.0);
+    densities.resize(if cfg.record_density { n * nt } else { 0 }, 0.0);
+    let density_rows: Vec<&mut [f64]> = if cfg.record_density {
+        densities.chunks_mut(W * nt).collect()
+    } else {
+        (0..batches).map(|_| <&mut [f64]>::default()).collect()
+    };
+    let slots: Vec<_> = positions
+        .chunks_mut(W * nt * 3)
+        .zip(velocities.chunks_mut(W * nt * 3))
+        .zip(density_rows)
+        .collect();
+    let tails: Vec<([u64; W], [f64; W])> = slots
         .into_par_iter()
-        .map(|b| {
+        .enumerate()
+        .map(|(b, ((pos, vel), dens))| {
             progress.check()?;
             let first = b * W;
             let lanes = W.min(cfg.members - first);
@@ -169,22 +185,20 @@ fn run<A: Atmosphere + ?Sized, const W: usize>(
                     drag_factors: &drag_factors[first..first + lanes],
                 },
             )?;
+            pos.copy_from_slice(&out.positions[..lanes * nt * 3]);
+            vel.copy_from_slice(&out.velocities[..lanes * nt * 3]);
+            dens.copy_from_slice(&out.densities[..dens.len()]);
             progress.add(lanes);
-            Ok(out)
+            Ok((out.clipped, out.decay))
         })
         .collect::<Result<_, _>>()?;
 
     let mut clipped = Vec::with_capacity(n);
     let mut decay_times = Vec::with_capacity(n);
-    for (b, r) in results.into_iter().enumerate() {
+    for (b, (c, d)) in tails.into_iter().enumerate() {
         let lanes = W.min(n - b * W);
-        positions.extend_from_slice(&r.positions[..lanes * nt * 3]);
-        velocities.extend_from_slice(&r.velocities[..lanes * nt * 3]);
-        if cfg.record_density {
-            densities.extend_from_slice(&r.densities[..lanes * nt]);
-        }
-        clipped.extend_from_slice(&r.clipped[..lanes]);
-        decay_times.extend_from_slice(&r.decay[..lanes]);
+        clipped.extend_from_slice(&c[..lanes]);
+        decay_times.extend_from_slice(&d[..lanes]);
     }
     Ok(MonteCarloOutput {
         positions,
