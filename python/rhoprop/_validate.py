@@ -59,11 +59,33 @@ def seconds(name: str, value: object) -> float:
     return real(name, value)
 
 
+def real_array(name: str, value: object) -> np.ndarray:
+    """``value`` as a new float64 array, refusing what only converts by accident:
+    strings ("1e6"), complex numbers (their imaginary part would be dropped or raise),
+    dates. TypeError naming ``name`` (finiteness is the caller's check)."""
+    raw = value if isinstance(value, np.ndarray) else np.asarray(value, dtype=object)
+    kind = raw.dtype.kind
+    if kind == "O":
+        flat = raw.ravel()
+        if not all(
+            isinstance(x, (Real, np.floating, np.integer)) and not isinstance(x, bool) for x in flat
+        ):
+            bad = next(
+                x
+                for x in flat
+                if not isinstance(x, (Real, np.floating, np.integer)) or isinstance(x, bool)
+            )
+            raise TypeError(f"{name} must be real numbers, got {type(bad).__name__} {bad!r}")
+    elif kind not in "iuf":
+        raise TypeError(f"{name} must be real numbers, got an array of dtype {raw.dtype}")
+    return np.array(raw, dtype=float)
+
+
 def vector3(name: str, value: object) -> np.ndarray:
     """A finite float64 array of shape (3,)."""
     try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as err:
+        arr = real_array(name, value)
+    except ValueError as err:  # ragged nesting
         raise TypeError(f"{name} must be 3 numbers, got {value!r}") from err
     if arr.shape != (3,):
         raise ValueError(f"{name} must have shape (3,), got {arr.shape}")

@@ -8,13 +8,13 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from . import _core
+from . import _core, _validate
 from .time import EpochsLike, to_datetime64_array, ut1_seconds
 
 
 def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
     try:
-        a = np.asarray(value, dtype=float)
+        a = _validate.real_array(name, value)
     except (TypeError, ValueError) as err:
         raise TypeError(f"{name} must be numbers of shape (3,) or (n, 3): {err}") from None
     single = a.ndim == 1

@@ -185,7 +185,7 @@ def _astropy_time(value: Any) -> bool:
 def _check_range(value: np.datetime64 | NDArray[np.datetime64], name: str) -> None:
     """ValueError naming ``name`` for NaT or epochs outside [1678, 2262) (checked in whole
     seconds, so coarse units never overflow)."""
-    arr = np.asarray(value)
+    arr = _no_finer_than_ns(np.asarray(value))
     nat = np.isnat(arr)
     if nat.any():
         where = "" if arr.ndim == 0 else f" at index {_index(nat)}"
@@ -195,6 +195,28 @@ def _check_range(value: np.datetime64 | NDArray[np.datetime64], name: str) -> No
     if bad.any():
         where = "" if arr.ndim == 0 else f"[{_index(bad)}]"
         raise ValueError(f"{name}{where} = {arr[bad].flat[0]} is out of range: {_RANGE_HINT}")
+
+
+#: datetime64 units finer than the nanosecond, in attoseconds.
+_FINE_UNITS = {"ps": 10**6, "fs": 10**3, "as": 1}
+
+
+def _no_finer_than_ns(arr: np.ndarray) -> np.ndarray:
+    """A datetime64 array in ps, fs or as rounded to the nearest ns (numpy's own unit
+    conversion overflows there); others unchanged."""
+    if arr.dtype.kind != "M":
+        return arr
+    unit, count = np.datetime_data(arr.dtype)
+    if unit not in _FINE_UNITS:
+        return arr
+    tick = _FINE_UNITS[unit] * count  # attoseconds; Python ints, so nothing overflows
+    nat = np.isnat(arr)
+    ticks = np.where(nat, 0, arr.astype(np.int64)).ravel()
+    ns = np.array([(int(k) * tick + 5 * 10**8) // 10**9 for k in ticks], dtype=np.int64)
+    ns = ns.reshape(arr.shape)
+    out = ns.astype("datetime64[ns]")
+    out[nat] = np.datetime64("NaT")
+    return out
 
 
 def _index(mask: NDArray[np.bool_]) -> Any:
@@ -272,16 +294,21 @@ def _from_datetime(value: _dt.datetime | _dt.date, name: str) -> np.datetime64:
         ns: np.datetime64 = converted.astype("datetime64[ns]")
         return ns
     if isinstance(value, _dt.datetime) and value.tzinfo is not None:
+        # A tzinfo whose offset is None makes the datetime naive (Python's own rule): UTC.
         offset = value.utcoffset()
-        if offset is not None:
-            value = value.replace(tzinfo=None) - offset
+        value = value.replace(tzinfo=None) - (offset or _dt.timedelta(0))
     if not 1678 <= value.year < 2262:
         raise ValueError(f"{name} = {value.isoformat()} is out of range: {_RANGE_HINT}")
     return np.datetime64(value, "ns")
 
 
 def _from_time(value: Any, name: str) -> NDArray[np.datetime64]:
-    """astropy Time (any scale and shape) -> datetime64[ns] UTC array of its shape."""
+    """astropy Time (any scale and shape) -> datetime64[ns] UTC array of its shape; a
+    masked element is a ValueError (its hidden value is not an epoch)."""
+    mask = np.asarray(getattr(value, "mask", False))
+    if mask.any():
+        where = "" if mask.ndim == 0 else f" (element {int(np.flatnonzero(mask)[0])})"
+        raise ValueError(f"{name}: an astropy Time with a masked value{where} is not an epoch")
     try:
         utc = value.utc
     except Exception as err:  # e.g. scale 'local', or UT1 beyond the IERS tables
@@ -321,8 +348,9 @@ def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
             on a day without a leap second, and epochs outside the years 1678-2261.
     """
     if isinstance(epoch, np.datetime64):
-        _check_range(epoch, name)
-        ns: np.datetime64 = epoch.astype("datetime64[ns]")
+        coarse = _no_finer_than_ns(np.asarray(epoch))
+        _check_range(coarse, name)
+        ns: np.datetime64 = coarse.astype("datetime64[ns]")[()]  # type: ignore[assignment]
         return ns
     if isinstance(epoch, str):
         return _parse(epoch, name)
@@ -363,7 +391,7 @@ def to_datetime64_array(epochs: EpochsLike, name: str = "epochs") -> NDArray[np.
         return _from_time(epochs, name)
     if isinstance(epochs, (str, _dt.date, np.datetime64)):
         return np.asarray(to_datetime64(epochs, name))
-    arr = np.asarray(epochs)
+    arr = _no_finer_than_ns(np.asarray(epochs))
     if arr.dtype.kind == "M":
         _check_range(arr, name)
         return arr.astype("datetime64[ns]")

@@ -12,7 +12,8 @@ from __future__ import annotations
 import csv
 import io
 import json
-from collections.abc import Iterator
+import math
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -197,17 +198,66 @@ def _parse_tle(text: str, path: str) -> list[tuple[str, Any]]:
     return entries
 
 
+#: OMM fields sgp4 reads as numbers, by the type it converts them to.
+_OMM_FLOATS = (
+    "ARG_OF_PERICENTER",
+    "BSTAR",
+    "ECCENTRICITY",
+    "INCLINATION",
+    "MEAN_ANOMALY",
+    "MEAN_MOTION_DDOT",
+    "MEAN_MOTION_DOT",
+    "MEAN_MOTION",
+    "RA_OF_ASC_NODE",
+)
+_OMM_INTS = ("EPHEMERIS_TYPE", "ELEMENT_SET_NO", "REV_AT_EPOCH", "NORAD_CAT_ID")
+
+
+def _checked_omm(rec: dict[str, Any]) -> dict[str, Any]:
+    """The OMM record with each field sgp4 reads checked (ValueError naming the field
+    and its value) and EPOCH in the form sgp4 parses (fractional seconds added, a
+    trailing Z dropped: both are valid CCSDS epochs)."""
+    out = dict(rec)
+    for name in (*_OMM_FLOATS, *_OMM_INTS):
+        if name not in rec:
+            continue  # sgp4's KeyError names it
+        value = rec[name]
+        try:
+            if isinstance(value, bool):
+                raise ValueError
+            number = float(value) if name in _OMM_FLOATS else int(str(value).strip())
+        except (TypeError, ValueError):
+            raise ValueError(f"unreadable field {name} = {value!r}") from None
+        if not math.isfinite(number):
+            raise ValueError(f"unreadable field {name} = {value!r}")
+    if "EPOCH" in rec:
+        epoch = rec["EPOCH"]
+        if not isinstance(epoch, str):
+            raise ValueError(f"unreadable field EPOCH = {epoch!r}")
+        text = epoch.strip().removesuffix("Z")
+        out["EPOCH"] = text if "." in text else text + ".0"
+    return out
+
+
 def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
+    from xml.etree.ElementTree import ParseError
+
     from sgp4 import omm
     from sgp4.api import Satrec
 
     stripped = text.lstrip()
     if stripped.startswith(("[", "{")):
-        data = json.loads(text)
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{path}: not valid OMM JSON ({err})") from None
         records = data if isinstance(data, list) else [data]
         kind = "JSON"
     elif stripped.startswith("<"):
-        records = list(omm.parse_xml(io.StringIO(text)))
+        try:
+            records = list(omm.parse_xml(io.StringIO(text)))
+        except ParseError as err:
+            raise ValueError(f"{path}: not valid OMM XML ({err})") from None
         kind = "XML"
     else:
         records = list(csv.DictReader(io.StringIO(text)))
@@ -220,12 +270,15 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
             continue
         sat = Satrec()
         try:
-            omm.initialize(sat, rec)
+            omm.initialize(sat, _checked_omm(rec))
         except KeyError as err:
             entries.append((where, ValueError(f"{where}: missing field {err}")))
             continue
         except (ValueError, TypeError) as err:
-            entries.append((where, ValueError(f"{where}: unreadable field: {err}")))
+            text = (
+                str(err) if str(err).startswith("unreadable field") else f"unreadable field: {err}"
+            )
+            entries.append((where, ValueError(f"{where}: {text}")))
             continue
         entries.append((where, (sat, str(rec.get("OBJECT_NAME", "")).strip(), dict(rec))))
     return entries
@@ -281,6 +334,14 @@ def load(
     from ..propagation.dynamics import zonal_degree_argument
 
     zonal_degree = zonal_degree_argument(zonal_degree)
+    if drag_parameters is not None:
+        if not isinstance(drag_parameters, Mapping):
+            raise TypeError(
+                "drag_parameters must be a mapping {NORAD id: Cd*A/m (m^2/kg)}, got "
+                f"{type(drag_parameters).__name__}"
+            )
+        for key, value in drag_parameters.items():
+            _validate.positive(f"drag_parameters[{key!r}] (Cd*A/m, m^2/kg)", value)
     p = Path(path)
     raw = p.read_bytes()
     if raw[:2] == b"\x1f\x8b":  # gzip, as catalog archives are often stored

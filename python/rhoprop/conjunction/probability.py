@@ -161,7 +161,7 @@ def _choice(name: str, value: _S, choices: tuple[str, ...]) -> _S:
 
 def _array(name: str, value: object) -> Array:
     try:
-        arr = np.array(value, dtype=float)
+        arr = _validate.real_array(name, value)
     except (TypeError, ValueError) as err:
         raise TypeError(f"{name} must be an array of numbers: {err}") from None
     return arr

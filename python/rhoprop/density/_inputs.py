@@ -8,6 +8,7 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
+from .. import _validate
 from ..constants import MU, R_EARTH, R_POLE
 from ..time import EpochsLike, to_datetime64_array
 
@@ -34,7 +35,7 @@ def broadcast_inputs(
     t = to_datetime64_array(times, "times")
     arrays = []
     for name, value in (("lat", lat), ("lon", lon), ("alt", alt)):
-        a = np.asarray(value, dtype=float)
+        a = _validate.real_array(name, value)
         bad = ~np.isfinite(a)
         if bad.any():
             raise ValueError(f"{name} must be finite; got {a[bad].flat[0]}")

@@ -11,6 +11,7 @@ formulation's jump at 100 km, docs/density-models.md).
 from __future__ import annotations
 
 import hashlib
+import os
 from dataclasses import asdict
 from typing import Any
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import OutsideRecordError
-from ..spaceweather import SpaceWeather
+from ..spaceweather import SpaceWeather, space_weather_argument
 from .field import FieldResolution, resolution_arg
 from .point_model import ActivitySigma, PointModel
 
@@ -33,9 +34,10 @@ class JacchiaRoberts(PointModel):
     """Jacchia-Roberts 1971 mean density with :class:`ActivitySigma` in Kp.
 
     Args:
-        space_weather: the record giving F10.7, F10.7a and Kp (default: the bundled
-            CelesTrak record; a :meth:`~rhoprop.SpaceWeather.mean_geomagnetic` record holds
-            Kp at its long-term mean).
+        space_weather: the record giving F10.7, F10.7a and Kp, or a path to a CelesTrak
+            record file (default: the bundled CelesTrak record; a
+            :meth:`~rhoprop.SpaceWeather.mean_geomagnetic` record holds Kp at its
+            long-term mean).
         uncertainty: :class:`ActivitySigma` in Kp (default :data:`JR_SIGMA`).
         resolution: grid spacing of the sampled field (see :class:`FieldResolution`).
 
@@ -49,12 +51,12 @@ class JacchiaRoberts(PointModel):
 
     def __init__(
         self,
-        space_weather: SpaceWeather | None = None,
+        space_weather: SpaceWeather | str | os.PathLike[str] | None = None,
         uncertainty: ActivitySigma | None = None,
         *,
         resolution: FieldResolution | None = None,
     ) -> None:
-        self.space_weather = SpaceWeather() if space_weather is None else space_weather
+        self.space_weather = space_weather_argument(space_weather)
         self.uncertainty = JR_SIGMA if uncertainty is None else uncertainty
         if not isinstance(self.uncertainty, ActivitySigma):
             raise TypeError("uncertainty must be an ActivitySigma")

@@ -62,6 +62,12 @@ def as_atmosphere(model: ModelLike, state: StateLike, duration: float) -> Any:
     )
 
 
+#: Largest mean density a model may give, kg/m^3: ten times sea level. A model giving more
+#: is broken (units, a wrong formula), and the propagators would only fail later with a
+#: step-size underflow.
+MAX_DENSITY = 12.0
+
+
 class SampledModel(abc.ABC):
     """Base of density models that the core evaluates through a sampled field.
 
@@ -162,10 +168,23 @@ class SampledModel(abc.ABC):
             lon[None, None, None, :],
             alt[None, :, None, None],
         )
-        mean = np.broadcast_to(mean, (len(epochs), len(alt), len(lat), len(lon)))
+        shape = (len(epochs), len(alt), len(lat), len(lon))
+        mean = np.broadcast_to(mean, shape)
         std = np.broadcast_to(std, mean.shape)
-        if not (np.isfinite(mean).all() and (mean > 0).all()):
-            raise ValueError(f"{type(self).__name__}.mean_std gave a non-positive or NaN mean")
-        if not (np.isfinite(std).all() and (std >= 0).all()):
-            raise ValueError(f"{type(self).__name__}.mean_std gave a negative or NaN std")
+        model = type(self).__name__
+        for what, bad in (
+            ("a non-positive or NaN mean", ~(np.isfinite(mean) & (mean > 0))),
+            (
+                f"a mean above {MAX_DENSITY:g} kg/m^3 (sea level is 1.2)",
+                np.isfinite(mean) & (mean > MAX_DENSITY),
+            ),
+            ("a negative or NaN std", ~(np.isfinite(std) & (std >= 0))),
+        ):
+            if bad.any():
+                it, ia, jl, kl = np.unravel_index(int(np.flatnonzero(bad)[0]), shape)
+                raise ValueError(
+                    f"{model}.mean_std gave {what}: {mean[it, ia, jl, kl]:g} +- "
+                    f"{std[it, ia, jl, kl]:g} at {epochs[it]}, altitude {alt[ia]:g} m, "
+                    f"latitude {lat[jl]:g} deg, longitude {lon[kl]:g} deg"
+                )
         return np.log(mean), std / mean

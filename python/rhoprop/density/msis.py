@@ -8,6 +8,7 @@ record (pymsis' own downloader is never used). The storm-time ap mode of the mod
 from __future__ import annotations
 
 import hashlib
+import os
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any, Literal
@@ -16,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _validate
-from ..spaceweather import Drivers, SpaceWeather
+from ..spaceweather import Drivers, SpaceWeather, space_weather_argument
 from ..time import EpochsLike
 from ._inputs import broadcast_inputs
 from .field import FieldResolution, resolution_arg
@@ -140,8 +141,8 @@ class Msis(SampledModel):
 
     Args:
         version: ``"2.1"`` (default), ``"2.0"`` or ``"00"`` (NRLMSISE-00).
-        space_weather: the :class:`~rhoprop.SpaceWeather` record giving the drivers
-            (default: the bundled CelesTrak record).
+        space_weather: the :class:`~rhoprop.SpaceWeather` record giving the drivers, or
+            a path to a CelesTrak record file (default: the bundled CelesTrak record).
         uncertainty: :class:`DriverUncertainty` (default) or :class:`RelativeSigma`.
         resolution: grid spacing of the field the propagators sample the model into
             (:class:`~rhoprop.density.FieldResolution`; None: its defaults, 1 h, 25 km,
@@ -156,7 +157,7 @@ class Msis(SampledModel):
     def __init__(
         self,
         version: Literal["2.1", "2", "2.0", "00", "0"] = "2.1",
-        space_weather: SpaceWeather | None = None,
+        space_weather: SpaceWeather | str | os.PathLike[str] | None = None,
         uncertainty: DriverUncertainty | RelativeSigma | None = None,
         *,
         resolution: FieldResolution | None = None,
@@ -165,9 +166,7 @@ class Msis(SampledModel):
         if key not in _VERSIONS:
             raise ValueError(f"unknown NRLMSIS version {version!r}; expected '2.1', '2.0' or '00'")
         self.version = _VERSIONS[key]
-        if space_weather is None:
-            space_weather = SpaceWeather()
-        self.space_weather = space_weather
+        self.space_weather = space_weather_argument(space_weather)
         self.uncertainty = DriverUncertainty() if uncertainty is None else uncertainty
         if not isinstance(self.uncertainty, (DriverUncertainty, RelativeSigma)):
             raise TypeError("uncertainty must be a DriverUncertainty or RelativeSigma")
@@ -245,10 +244,16 @@ class Msis(SampledModel):
         self, times: EpochsLike, lat: npt.ArrayLike, lon: npt.ArrayLike, alt: npt.ArrayLike
     ) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of total mass density, kg/m^3, at UTC ``times``,
-        geodetic ``lat``/``lon`` (deg) and ``alt`` (m), broadcast together."""
+        geodetic ``lat``/``lon`` (deg) and ``alt`` (m, >= 0), broadcast together."""
         t, la, lo, al = broadcast_inputs(times, lat, lon, alt)
         shape = la.shape
         t, la, lo, al = (a.ravel() for a in (t, la, lo, al))
+        below = al < self.lowest_altitude
+        if below.any():
+            raise ValueError(
+                f"alt = {al[below][0]:g} m is below the ground, where NRLMSIS is not defined "
+                "(it returned 0 there)"
+            )
         drivers = self.space_weather.drivers(t)
         if len(t) == 0:
             return np.zeros(shape), np.zeros(shape)

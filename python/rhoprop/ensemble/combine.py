@@ -4,12 +4,14 @@ RTN frame of the reference model's mean orbit."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
+from .. import _validate
 from ..density import DensityModel
 from ..options import UncertaintyMethod
 from ..propagation import (
@@ -221,7 +223,7 @@ def ensemble(
     reference: str,
     *,
     method: UncertaintyMethod = "monte_carlo",
-    weights: npt.ArrayLike | None = None,
+    weights: npt.ArrayLike | Mapping[str, float] | None = None,
     debias_window: float = 8 * 3600.0,
     duration: float = 259200.0,
     cds: dict[str, float] | None = None,
@@ -235,7 +237,8 @@ def ensemble(
         models: {name: density model}; ``reference`` names the reference model.
         method: ``"monte_carlo"`` (default; GaussMarkov 18 min unless ``kappa`` is given)
             or ``"ccsp"``.
-        weights: mixture weights per model, in the order of ``models`` (default equal).
+        weights: mixture weights per model, in the order of ``models`` or as a mapping
+            {model name: weight} (default equal).
         debias_window: s before the epoch over which each model's Cd is debiased against
             the reference (:func:`~rhoprop.debias_drag_coefficient`); ``cds`` overrides it
             per model.
@@ -258,7 +261,14 @@ def ensemble(
         except TypeError as err:
             raise TypeError(f"models[{name!r}]: {err}") from err
     names = list(models)
-    w = np.ones(len(names)) if weights is None else np.asarray(weights, dtype=float)
+    if isinstance(weights, Mapping):
+        if set(weights) != set(names):
+            raise ValueError(
+                f"weights given by model name must name exactly the models {names}, got "
+                f"{list(weights)}"
+            )
+        weights = [weights[name] for name in names]
+    w = np.ones(len(names)) if weights is None else _validate.real_array("weights", weights)
     if w.shape != (len(names),) or not np.isfinite(w).all() or (w < 0).any() or w.sum() <= 0:
         raise ValueError(f"weights must be {len(names)} finite non-negative numbers, not all 0")
     cd: dict[str, float] = {}

@@ -25,7 +25,7 @@ from ..density.model import (
     as_atmosphere,
 )
 from ..options import Integrator
-from ..time import DurationLike, ut1_seconds
+from ..time import DurationLike, add_seconds, ut1_seconds
 from .dynamics import (
     Dynamics,
     integrator_argument,
@@ -48,6 +48,8 @@ METHODS = ("dop853", "rk8", "rk4", "abm")
 DEFAULT_STEP = {"rk8": 180.0, "rk4": 5.0, "abm": 80.0}
 #: Default relative tolerance of the adaptive DOP853 (per step, on |r| and |v|).
 DEFAULT_RTOL = 1e-10
+#: Accepted relative tolerances of DOP853 (a few hundred times float64's epsilon up).
+MIN_RTOL, MAX_RTOL = 1e-14, 1e-2
 #: A fixed step may be at most this fraction of the orbital period: beyond it a run is
 #: meaningless (RK8 at 86400 s ends 3.6e9 m off), so it is refused rather than run.
 MAX_STEP_FRACTION = 1.0 / 20.0
@@ -216,6 +218,13 @@ def run_in_field(
     the field and is reported as decayed. A decay ``floor`` (m) below the atlas's lowest
     altitude is a ValueError: the field holds its bottom level below it."""
     check_model(model)
+    try:
+        add_seconds(state.epoch, span)  # results carry datetime64[ns] epochs
+    except ValueError as err:
+        raise ValueError(
+            f"a run of {span:g} s from {state.epoch} would end outside the epochs rhoprop "
+            f"can represent ({err})"
+        ) from None
     atlas = model.served_by() if isinstance(model, SampledModel) else model
     if isinstance(atlas, Atlas) and floor < atlas.altitude[0]:
         raise ValueError(
@@ -326,6 +335,12 @@ def propagate(
         rtol = _validate.positive("rtol", rtol)
         if method != "dop853":
             raise ValueError(f"rtol applies to integrator 'dop853' only, not {method!r}")
+        if not MIN_RTOL <= rtol <= MAX_RTOL:
+            raise ValueError(
+                f"rtol = {rtol:g} is outside [{MIN_RTOL:g}, {MAX_RTOL:g}]: below, float64 "
+                "rounding (2.2e-16 per operation) is larger than the error asked for and "
+                "the step shrinks without end; above, the solution has no digits"
+            )
     if method in DEFAULT_STEP:
         step = fixed_step(method, step, state)
         check_steps(span, step, "step")

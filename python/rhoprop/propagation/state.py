@@ -22,7 +22,7 @@ MAX_RADII = 10.0
 SPEED_RANGE = (0.3, 1.5)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class OrbitState:
     """An inertial orbit state.
 
@@ -58,6 +58,22 @@ class OrbitState:
     def state(self) -> np.ndarray:
         """[x, y, z, vx, vy, vz] (6,), m and m/s."""
         return np.concatenate([self.position, self.velocity])
+
+    def __eq__(self, other: object) -> bool:
+        """Equal epochs and bitwise-equal position and velocity (the dataclass default
+        compared the arrays element-wise and raised)."""
+        if not isinstance(other, OrbitState):
+            return NotImplemented
+        return bool(
+            self.epoch == other.epoch
+            and np.array_equal(self.position, other.position)
+            and np.array_equal(self.velocity, other.velocity)
+        )
+
+    def __hash__(self) -> int:
+        return hash(
+            (int(self.epoch.astype(np.int64)), self.position.tobytes(), self.velocity.tobytes())
+        )
 
 
 @dataclass(frozen=True)

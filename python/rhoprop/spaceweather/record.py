@@ -507,3 +507,19 @@ class SpaceWeather:
         return SpaceWeather._from_columns(
             columns, self.source, self.declared_counts, (first, last), self._forecast
         )
+
+
+def space_weather_argument(value: object, name: str = "space_weather") -> SpaceWeather:
+    """A model's ``space_weather`` keyword: a :class:`SpaceWeather`, a path to a CelesTrak
+    record file (read with ``SpaceWeather(path)``), or None (the bundled record);
+    TypeError naming ``name`` otherwise."""
+    if value is None:
+        return SpaceWeather()
+    if isinstance(value, SpaceWeather):
+        return value
+    if isinstance(value, (str, os.PathLike)):
+        return SpaceWeather(value)
+    raise TypeError(
+        f"{name} must be a rhoprop.SpaceWeather, a path to a CelesTrak record file or None, "
+        f"got {type(value).__name__}"
+    )

@@ -278,10 +278,17 @@ fn density_below(h: f64, tx: f64, tinf: f64, corr: f64) -> f64 {
     }
 }
 
+/// (T_inf - T(z)) / (T_inf - Tx) at height `z` km >= 125, computed directly: T(z) reaches
+/// T_inf to rounding above ~2,000 km, where this ratio (which scales every constituent's
+/// density) is still far from 0, so taking it from T(z) made the density exactly 0.
+fn excess_ratio_above(z: f64, tx: f64, tinf: f64) -> f64 {
+    let l = poly(tinf, &LA);
+    (-l * ((tx - T1) / (tinf - tx)) * ((z - ZX) / (ZX - Z1)) / (RA + z)).exp()
+}
+
 /// Temperature (K) at height `z` km >= 125 from Tx (inflection) and T_inf.
 fn temperature_above(z: f64, tx: f64, tinf: f64) -> f64 {
-    let l = poly(tinf, &LA);
-    tinf - (tinf - tx) * (-l * ((tx - T1) / (tinf - tx)) * ((z - ZX) / (ZX - Z1)) / (RA + z)).exp()
+    tinf - (tinf - tx) * excess_ratio_above(z, tx, tinf)
 }
 
 /// Output of one evaluation.
@@ -408,7 +415,7 @@ pub fn jacchia_roberts(
     // Roberts' eq. 25 for every constituent from its 125 km density (g/cm^3).
     let l = poly(tinf, &LA);
     let gamma = G0 * RA * RA / (RSTAR * l * tinf) * (tinf - tx) / (tx - T1) * (ZX - Z1) / (RA + ZX);
-    let ratio = (tinf - tz) / (tinf - tx);
+    let ratio = excess_ratio_above(h, tx, tinf);
     let mut rho = 0.0;
     for i in 0..5 {
         let rho125 = corr * MI[i] * 10f64.powf(poly(tinf, &DELTA[i])) / AV;
@@ -436,8 +443,8 @@ pub fn jacchia_roberts(
         let lt = t500.log10();
         let rho500_h = MI[5] / AV * 10f64.powf(73.13 - (39.4 - 5.5 * lt) * lt);
         let gh = MI[5] * gamma;
-        rho +=
-            corr * rho500_h * (t500 / tz).powf(1.0 + gh) * ((tinf - tz) / (tinf - t500)).powf(gh);
+        let ratio500 = ratio / excess_ratio_above(500.0, tx, tinf);
+        rho += corr * rho500_h * (t500 / tz).powf(1.0 + gh) * ratio500.powf(gh);
     }
     Ok(JrOutput {
         tinf,
@@ -449,6 +456,20 @@ pub fn jacchia_roberts(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn density_stays_positive_and_falling_up_to_geo() {
+        // Above ~2,000 km T(z) equals T_inf to rounding; the density came out exactly 0
+        // from 2,400 km when the temperature ratio was taken from T(z) (issue 26 item 6).
+        let mut last = f64::INFINITY;
+        for h_km in (1000..=36000).step_by(250) {
+            let rho = jacchia_roberts(57754.0, 45.0, 0.0, h_km as f64 * 1e3, 100.0, 100.0, 2.0)
+                .unwrap()
+                .rho;
+            assert!(rho > 0.0 && rho < last, "{h_km} km: {rho:e} after {last:e}");
+            last = rho;
+        }
+    }
 
     // GMAT R2018a values (via SatelliteToolboxAtmosphericModels.jl's tests; see
     // shared/data/reference/density_reference_values.json): 2017-01-01 00:00 UTC,

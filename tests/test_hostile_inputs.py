@@ -1,0 +1,275 @@
+"""Hostile and edge inputs (issue 26): each probe of the adversarial campaign as a minimal
+reproducer, and property-based tests (hypothesis) over the public API's numeric, time and
+file inputs. The rule they check: a clear ValueError/TypeError naming the argument, or a
+correct result; never another exception type, a NaN, a silent wrong value or a deleted
+file the user wrote."""
+
+from __future__ import annotations
+
+import datetime as dt
+import gzip
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import rhoprop as rp
+from rhoprop.ensemble.mixture import GaussianMixture
+from rhoprop.io import MANIFEST, OutputFolder
+
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+PAPER = rp.scenarios.paper_state()
+CRAFT = rp.scenarios.paper_spacecraft()
+MODEL = rp.scenarios.benchmark_exponential(0.2)
+GOOD = (ValueError, TypeError)
+
+# ------------------------------------------------------------------ item 6: wrong values
+
+
+def test_a_run_past_2262_is_refused_before_it_starts():
+    late = rp.OrbitState("2261-12-31T00:00:00Z", PAPER.position, PAPER.velocity)
+    with pytest.raises(ValueError, match="would end outside the epochs rhoprop can represent"):
+        rp.monte_carlo(late, CRAFT, MODEL, 200 * 86400.0, n=4, progress=False)
+
+
+def test_msis_below_the_ground_is_an_error_not_zero():
+    with pytest.raises(ValueError, match=r"alt = -10000 m is below the ground"):
+        rp.density.Msis("2.1").mean_std("2003-01-01", 0.0, 0.0, -10e3)
+
+
+def test_jacchia_roberts_is_positive_and_falling_far_above_2000_km():
+    """T(z) reaches T_inf to rounding above ~2,000 km; the density was exactly 0 from
+    2,400 km (and 0.3 % off at 2,000 km) when the temperature ratio came from T(z)."""
+    alt = np.array([1500e3, 2000e3, 2400e3, 3000e3, 3500e3, 36000e3])
+    mean, std = rp.density.JacchiaRoberts().mean_std("2003-01-01", 0.0, 0.0, alt)
+    assert (mean > 0).all() and (np.diff(mean) < 0).all() and (std > 0).all()
+    # Continuous with the values below (log-slope changes smoothly: no jump to 0).
+    slopes = np.diff(np.log(mean)) / np.diff(alt)
+    assert (np.abs(slopes) < 2e-5).all()
+
+
+def test_a_masked_astropy_time_is_not_an_epoch():
+    astropy_time = pytest.importorskip("astropy.time")
+    times = astropy_time.Time(["2003-01-01", "2003-01-02"])
+    times[1] = np.ma.masked
+    with pytest.raises(ValueError, match=r"masked value \(element 1\)"):
+        rp.time.to_datetime64_array(times)
+
+
+# ------------------------------------------------------------------ item 11: messages
+
+
+def test_omm_files_that_do_not_parse_name_the_file_and_field(tmp_path):
+    (tmp_path / "bad.xml").write_text("<ndm><omm><body>")
+    with pytest.raises(ValueError, match=r"bad\.xml: not valid OMM XML"):
+        rp.catalog.load(tmp_path / "bad.xml")
+    (tmp_path / "bad.json").write_text('[{"OBJECT_NAME": "X", ')
+    with pytest.raises(ValueError, match=r"bad\.json: not valid OMM JSON"):
+        rp.catalog.load(tmp_path / "bad.json")
+    record = {
+        "OBJECT_NAME": "ISS",
+        "OBJECT_ID": "1998-067A",
+        "EPOCH": "2023-11-13T12:00:00",  # no fraction: valid CCSDS, sgp4 refused it
+        "MEAN_MOTION": "15.5",
+        "ECCENTRICITY": 0.0005,
+        "INCLINATION": 51.6,
+        "RA_OF_ASC_NODE": 10.0,
+        "ARG_OF_PERICENTER": 20.0,
+        "MEAN_ANOMALY": 30.0,
+        "EPHEMERIS_TYPE": 0,
+        "CLASSIFICATION_TYPE": "U",
+        "NORAD_CAT_ID": 25544,
+        "ELEMENT_SET_NO": 999,
+        "REV_AT_EPOCH": 1,
+        "BSTAR": 0.0001,
+        "MEAN_MOTION_DOT": 0.0001,
+        "MEAN_MOTION_DDOT": 0,
+    }
+    (tmp_path / "ok.json").write_text(json.dumps([record]))
+    (obj,) = rp.catalog.load(tmp_path / "ok.json").objects
+    assert obj.state.epoch == np.datetime64("2023-11-13T12:00:00", "ns")
+    (tmp_path / "typed.json").write_text(json.dumps([{**record, "MEAN_MOTION": "abc"}]))
+    with pytest.raises(ValueError, match="unreadable field MEAN_MOTION = 'abc'"):
+        rp.catalog.load(tmp_path / "typed.json")
+
+
+def test_a_damaged_gzip_names_the_file(tmp_path):
+    data = gzip.compress(SAMPLE.read_bytes())
+    (tmp_path / "cut.tle.gz").write_bytes(data[: len(data) // 2])
+    with pytest.raises(ValueError, match=r"cut\.tle\.gz: damaged gzip file"):
+        rp.catalog.load(tmp_path / "cut.tle.gz")
+
+
+def test_epochs_finer_than_a_nanosecond_and_tzinfo_without_offset():
+    fine = np.datetime64("1970-01-01T00:00:01.123456789500", "as")
+    assert rp.time.to_datetime64(fine) == np.datetime64("1970-01-01T00:00:01.123456790")
+    array = np.array(["1970-01-01T00:00:02.0000000004"], dtype="datetime64[fs]")
+    assert rp.time.to_datetime64_array(array)[0] == np.datetime64("1970-01-01T00:00:02", "ns")
+
+    class NoOffset(dt.tzinfo):
+        def utcoffset(self, d):
+            return None
+
+        def dst(self, d):
+            return None
+
+    # Python's rule: a tzinfo whose offset is None makes the datetime naive (here: UTC).
+    naive = rp.time.to_datetime64(dt.datetime(2002, 9, 7, 1, tzinfo=NoOffset()))
+    assert naive == np.datetime64("2002-09-07T01:00:00", "ns")
+
+
+def test_space_weather_argument_takes_a_path_or_says_what_it_takes(tmp_path):
+    with pytest.raises(FileNotFoundError, match=r"nowhere\.txt"):
+        rp.density.Msis("2.1", space_weather=tmp_path / "nowhere.txt")
+    with pytest.raises(TypeError, match=r"space_weather must be a rhoprop\.SpaceWeather, a path"):
+        rp.density.JacchiaRoberts(space_weather=3)
+    bundled = rp.spaceweather.bundled_path()
+    assert rp.density.Msis("2.1", space_weather=bundled).space_weather.span is not None
+
+
+def test_messages_name_the_argument():
+    with pytest.raises(ValueError, match=r"rtol = 1e-20 is outside \[1e-14, 0\.01\]"):
+        rp.propagate(PAPER, CRAFT, MODEL, 86400.0, rtol=1e-20)
+
+    def huge(t, lat, lon, alt):
+        return lat * 0 + 1e300, lat * 0 + 1e299
+
+    with pytest.raises(ValueError, match=r"gave a mean above 12 kg/m\^3 .* altitude"):
+        rp.propagate(PAPER, CRAFT, rp.density.FromFunction(huge), 3600.0)
+    nid = rp.catalog.load(SAMPLE).objects[0].norad_id
+    with pytest.raises(ValueError, match=rf"drag_parameters\[{nid}\] .* must be > 0"):
+        rp.catalog.load(SAMPLE, drag_parameters={nid: -0.01})
+    with pytest.raises(TypeError, match="position must be real numbers, got an array of dtype"):
+        rp.OrbitState(PAPER.epoch, PAPER.position + 0j, PAPER.velocity)
+    with pytest.raises(TypeError, match="position must be real numbers, got str '1e6'"):
+        rp.OrbitState(PAPER.epoch, ["1e6", "2e6", "3e6"], PAPER.velocity)
+    with pytest.raises(TypeError, match="weights must be real numbers"):
+        GaussianMixture({"a": 1.0, "b": 1.0}, [0.0, 1.0], [1.0, 1.0])
+
+
+def test_equal_orbit_states_compare_equal():
+    a = rp.OrbitState(PAPER.epoch, PAPER.position, PAPER.velocity)
+    b = rp.OrbitState(PAPER.epoch, PAPER.position.copy(), PAPER.velocity.copy())
+    assert a == b and not a != b and len({a, b}) == 1
+    c = rp.OrbitState(PAPER.epoch, PAPER.position + np.array([1.0, 0.0, 0.0]), PAPER.velocity)
+    assert a != c and a != "state"
+
+
+def test_ensemble_weights_by_model_name():
+    models = {"low": rp.scenarios.benchmark_exponential(0.1), "high": MODEL}
+    kwargs = dict(duration=3600.0, method="ccsp")
+    by_name = rp.ensemble(PAPER, CRAFT, models, "low", weights={"high": 3.0, "low": 1.0}, **kwargs)
+    in_order = rp.ensemble(PAPER, CRAFT, models, "low", weights=[1.0, 3.0], **kwargs)
+    np.testing.assert_array_equal(by_name.weights, in_order.weights)
+    np.testing.assert_allclose(by_name.weights, [0.25, 0.75])
+    with pytest.raises(ValueError, match="must name exactly the models"):
+        rp.ensemble(PAPER, CRAFT, models, "low", weights={"low": 1.0}, **kwargs)
+
+
+# ------------------------------------------------------------------ properties
+
+PROPERTY = settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+numbers = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(10**20), 10**20),
+    st.complex_numbers(max_magnitude=1e7),
+    st.text(max_size=5),
+    st.none(),
+    st.booleans(),
+)
+
+
+@PROPERTY
+@given(st.lists(numbers, min_size=0, max_size=4), st.lists(numbers, min_size=3, max_size=3))
+def test_orbit_state_takes_a_state_or_names_the_argument(position, velocity):
+    try:
+        state = rp.OrbitState(PAPER.epoch, position, velocity)
+    except GOOD as err:
+        assert "position" in str(err) or "velocity" in str(err) or "orbit" in str(err)
+        return
+    assert np.isfinite(state.state).all() and state.position.dtype == float
+
+
+@PROPERTY
+@given(
+    st.one_of(
+        st.text(max_size=40),
+        st.from_regex(
+            r"\A-?\d{1,5}-\d{1,2}-\d{1,2}([T ]\d{1,2}:\d{2}(:\d{2}(\.\d{0,20})?)?)?"
+            r"(Z|[+-]\d{2}:?\d{2})?\Z"
+        ),
+        st.datetimes(timezones=st.one_of(st.none(), st.timezones())),
+        st.integers(),
+        st.floats(),
+    )
+)
+def test_epochs_parse_or_raise_value_or_type_error(value):
+    try:
+        epoch = rp.time.to_datetime64(value)
+    except GOOD:
+        return
+    assert epoch.dtype == np.dtype("datetime64[ns]") and not np.isnat(epoch)
+    assert np.datetime64("1678-01-01") <= epoch < np.datetime64("2262-01-01")
+
+
+@PROPERTY
+@given(
+    st.lists(
+        st.floats(-200, 200) | st.sampled_from([np.nan, np.inf, -np.inf]) | st.text(max_size=3),
+        min_size=3,
+        max_size=3,
+    ),
+)
+def test_density_inputs_give_finite_positive_densities_or_an_error(point):
+    lat, lon, alt_km = point
+    try:
+        mean, std = MODEL.mean_std("2002-09-07T01:00", lat, lon, alt_km * 1e3)
+    except GOOD:
+        return
+    assert np.isfinite(mean).all() and (mean > 0).all() and (std >= 0).all()
+
+
+@PROPERTY
+@given(st.binary(max_size=400), st.sampled_from(["x.tle", "x.json", "x.xml", "x.csv"]))
+def test_catalog_files_of_any_bytes_load_or_raise_value_error(tmp_path_factory, data, name):
+    path = tmp_path_factory.mktemp("cat") / name
+    path.write_bytes(data)
+    try:
+        cat = rp.catalog.load(path)
+    except ValueError:
+        return
+    assert all(np.isfinite(o.state.state).all() for o in cat.objects)
+
+
+@PROPERTY
+@given(
+    st.lists(st.sampled_from(["a.txt", "b/c.oem", "b/d.oem", "e.png", "f/g/h.csv"]), unique=True),
+    st.lists(st.sampled_from(["notes.txt", "b/mine.py", "x/y.dat", "a.txt.bak"]), unique=True),
+    st.booleans(),
+)
+def test_overwrite_only_ever_deletes_files_a_manifest_lists(
+    tmp_path_factory, written, foreign, finished
+):
+    out = tmp_path_factory.mktemp("out") / "run"
+    folder = OutputFolder(out, command="rhoprop test")
+    for name in written:
+        folder.write_text(name, name)
+    if finished:
+        folder.finish()
+    for name in foreign:
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        (out / name).write_text("the user's")
+    before = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
+    try:
+        OutputFolder(out, command="again", overwrite=True)
+    except FileExistsError:
+        after = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
+        assert after == before and foreign  # refused only for foreign files; nothing deleted
+        return
+    after = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
+    assert not foreign and after == {MANIFEST}
