@@ -70,8 +70,30 @@ def test_cli_reentry_prints_and_writes(tmp_path, capsys):
     text = (out / "reentry.csv").read_text().splitlines()
     assert text[0].startswith("norad_id,name,epoch_q025,epoch_median,epoch_q975")
     assert len(text) == 1 + len(catalog.load(SAMPLE))
-    assert "members each" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "members each" in printed and "fitted (" in printed  # fitted by default
     assert (out / "manifest.json").is_file()
+    assert ",True," in text[1]  # the fitted column
+
+
+def test_reentry_fits_element_sets_by_default(atmosphere):
+    """Issue 25 item 1: windows from B* missed most real decays; fitted ones held them
+    (benches/reentry.py). The default fits every object that carries an element set and
+    says so; an object without one keeps its values, with the reason."""
+    objs = catalog.load(SAMPLE).objects[:2]
+    fitted = catalog.reentry(objs + [_low(9, 200e3)], atmosphere, n=10, duration=86400.0)
+    assert list(fitted.fitted) == [True, True, False]
+    assert np.isfinite(fitted.fit_rms[:2]).all() and np.isnan(fitted.fit_rms[2])
+    assert fitted.fit_note[:2] == ["", ""] and "no element set" in fitted.fit_note[2]
+    # The windows use the fitted Cd*A/m (not B*'s).
+    assert fitted.drag_parameter[0] == fitted.objects[0].fit.drag_parameter
+    plain = catalog.reentry(objs, atmosphere, n=10, duration=86400.0, fit=False)
+    assert not plain.fitted.any() and plain.drag_parameter[0] == objs[0].drag_parameter
+    # An object fitted before (load(fit=True)) is used as it is.
+    again = catalog.reentry(fitted.objects[:1], atmosphere, n=10, duration=86400.0)
+    assert again.objects[0] is fitted.objects[0]
+    with pytest.raises(TypeError, match="fit must be True or False"):
+        catalog.reentry(objs, atmosphere, fit="yes")
 
 
 def test_horizon_is_the_deprecated_name_of_duration(atmosphere):

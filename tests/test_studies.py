@@ -42,8 +42,12 @@ def test_ccsp_vs_monte_carlo_on_analytic_models(tmp_path):
     # "CCSP filter").
     ratio = c.ccsp_std[keys[0]] / c.mc_along[keys[0]].std(ddof=1)
     assert 1.2 < ratio < 1.9, ratio
-    # The figure states the long-time ratio: sqrt(2 dt / (2 tau)), tau = 1080 s / ln 2.
-    assert c.expected_ratio() == pytest.approx(np.sqrt(3600.0 / (1080.0 / np.log(2))), rel=1e-12)
+    # The figure states the long-time ratio sqrt(D_ccsp / D_mc): D_ccsp = 2 dt for
+    # correlation 1/3, D_mc = d (1 + a) / (1 - a) for AR(1) nodes d = 180 s apart with
+    # a = exp(-ln 2 d / 1080 s) (-> 2 x 1080 s / ln 2 as d -> 0).
+    a = np.exp(-np.log(2) * 180.0 / 1080.0)
+    d_mc = 180.0 * (1 + a) / (1 - a)
+    assert c.expected_ratio() == pytest.approx(np.sqrt(7200.0 / d_mc), rel=1e-12)
     assert c.members == 200 and c.update_interval == 3600.0
     assert "| CCSP/MC std |" in c.table()
     assert c.figure(tmp_path / "fig6.png").stat().st_size > 10_000

@@ -333,7 +333,13 @@ def build_parser() -> argparse.ArgumentParser:
     reentry.add_argument("--horizon", type=float, default=30.0, help="days after each epoch")
     reentry.add_argument("--members", type=int, default=100, help="Monte Carlo members")
     reentry.add_argument("--model", default="2.1", choices=MODEL_NAMES)
-    reentry.add_argument("--fit", action="store_true", help="fit state and Cd*A/m first")
+    reentry.add_argument(
+        "--fit",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="fit each object's state and Cd*A/m to its element set with the model first "
+        "(default; --no-fit takes them from the element set and B* as published)",
+    )
     reentry.add_argument(
         "--drag-sigma",
         type=float,

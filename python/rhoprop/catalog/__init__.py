@@ -6,7 +6,14 @@ CCSDS OEM and a Parquet summary)."""
 
 from ..io import summary_table, write_oem, write_summary
 from .covariance import TleAccuracy, tle_accuracy, tle_covariance
-from .elements import SGP4_RHO0, Catalog, CatalogObject, drag_parameter_from_bstar, load
+from .elements import (
+    SGP4_RHO0,
+    Catalog,
+    CatalogObject,
+    drag_parameter_from_bstar,
+    fit_objects,
+    load,
+)
 from .fit import FitResult, fit_element_set
 from .reentry_windows import ReentryResult, reentry
 from .run import CatalogResult, common_epochs, propagate_catalog
@@ -22,6 +29,7 @@ __all__ = [
     "common_epochs",
     "drag_parameter_from_bstar",
     "fit_element_set",
+    "fit_objects",
     "load",
     "propagate_catalog",
     "reentry",

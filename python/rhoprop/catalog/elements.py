@@ -9,6 +9,7 @@ radius), i.e. 12.7416 B* m^2/kg, unless the caller gives a drag parameter per ob
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import csv
 import io
 import json
@@ -386,6 +387,60 @@ def load(
     return out
 
 
+def fit_objects(
+    objects: list[CatalogObject],
+    model: Any,
+    *,
+    span: tuple[float, float] | None = None,
+    threads: int | None = None,
+    zonal_degree: int = 2,
+) -> list[CatalogObject | Exception]:
+    """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
+    (:func:`~rhoprop.catalog.fit.fit_element_set`, ``span`` s around the epoch, default
+    one day either side; an orbit that comes down within the span's end is fitted to the
+    day before the epoch instead), on ``threads`` threads in epoch order (so that fits
+    running at once share their day tiles). Returns, in input order, the fitted object
+    (``fit`` set, covariance the TLE accuracy plus the fit's) or the exception of a fit
+    that failed."""
+    import dataclasses
+
+    from ..density import SampledModel
+    from .covariance import tle_accuracy, tle_covariance
+    from .fit import DEFAULT_SPAN, fit_element_set
+
+    first = DEFAULT_SPAN if span is None else span
+    atmosphere = model.atlas if isinstance(model, SampledModel) else model
+
+    def one(obj: CatalogObject) -> CatalogObject | Exception:
+        tried = [first] if span is not None else [first, (first[0], 0.0)]
+        for k, window in enumerate(tried):
+            try:
+                f = fit_element_set(obj, atmosphere, span=window, zonal_degree=zonal_degree)
+                break
+            except Exception as err:  # returned per object
+                if k == len(tried) - 1:
+                    return err
+        acc = tle_accuracy(f.state)
+        return dataclasses.replace(
+            obj,
+            state=f.state,
+            drag_parameter=f.drag_parameter,
+            covariance=tle_covariance(f.state, acc) + f.covariance[:6, :6],
+            covariance_note=(
+                f"{_tle_note(acc)} plus the covariance of the fit to SGP4 over "
+                f"{window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h (RMS residual "
+                f"{f.rms_total:.0f} m); Cd*A/m fitted, {f.drag_parameter:.4g} "
+                f"+- {f.drag_sigma:.2g} m^2/kg (its uncertainty is not propagated)"
+            ),
+            fit=f,
+        )
+
+    order = sorted(range(len(objects)), key=lambda i: objects[i].state.epoch)
+    with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
+        ran = list(pool.map(one, [objects[i] for i in order]))
+    return [ran[k] for k in np.argsort(order)]
+
+
 def _fit_all(
     cat: Catalog,
     model: Any,
@@ -395,41 +450,10 @@ def _fit_all(
     zonal_degree: int = 2,
 ) -> None:
     """Replaces the objects of ``cat`` by fitted ones (in place, order kept)."""
-    import concurrent.futures as cf
     import dataclasses
 
-    from ..density import SampledModel
-    from .covariance import tle_accuracy, tle_covariance
-    from .fit import fit_element_set
-
     objs = cat.objects
-    atmosphere = model.atlas if isinstance(model, SampledModel) else model
-
-    def one(obj: CatalogObject) -> CatalogObject | Exception:
-        try:
-            f = fit_element_set(obj, atmosphere, span=span, zonal_degree=zonal_degree)
-        except Exception as err:  # recorded per object below
-            return err
-        acc = tle_accuracy(f.state)
-        return dataclasses.replace(
-            obj,
-            state=f.state,
-            drag_parameter=f.drag_parameter,
-            covariance=tle_covariance(f.state, acc) + f.covariance[:6, :6],
-            covariance_note=(
-                f"{_tle_note(acc)} plus the covariance of the fit to SGP4 over "
-                f"{span[0] / 3600:+.0f}..{span[1] / 3600:+.0f} h (RMS residual "
-                f"{f.rms_total:.0f} m); Cd*A/m fitted, {f.drag_parameter:.4g} "
-                f"+- {f.drag_sigma:.2g} m^2/kg (its uncertainty is not propagated)"
-            ),
-            fit=f,
-        )
-
-    # In epoch order, so that the fits running at once share their day tiles.
-    order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
-    with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
-        ran = list(pool.map(one, [objs[i] for i in order]))
-    fitted = [ran[k] for k in np.argsort(order)]
+    fitted = fit_objects(objs, model, span=span, threads=threads, zonal_degree=zonal_degree)
     kept: list[CatalogObject] = []
     for obj, res in zip(objs, fitted, strict=True):
         if isinstance(res, CatalogObject):

@@ -281,7 +281,7 @@ def run_reentry_file(
     horizon_days: float = 30.0,
     members: int = 100,
     model: str = "2.1",
-    fit: bool = False,
+    fit: bool = True,
     drag_sigma: float | None = None,
     skip_bad: bool = False,
     overwrite: bool = False,
@@ -291,16 +291,16 @@ def run_reentry_file(
     ``file`` within ``horizon_days`` of its epoch: printed as a table and written to
     ``out/reentry.csv`` (one row per object: NORAD id, name, 2.5 %, median and 97.5 %
     decay epochs in UTC, empty beyond the horizon, decayed fraction, Cd*A/m and its
-    relative sigma) with ``out/manifest.json``. Returns the paths written."""
+    relative sigma, whether it was fitted and the fit's RMS residual) with
+    ``out/manifest.json``. ``fit`` (default True): states and Cd*A/m fitted to the element
+    sets first (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
     import csv
     import io
 
     from .reentry_windows import reentry
 
     atmosphere = model_by_name(model)
-    cat = load(
-        file, errors="record" if skip_bad else "raise", fit=fit, model=atmosphere if fit else None
-    )
+    cat = load(file, errors="record" if skip_bad else "raise")
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
     if not len(cat):
@@ -308,7 +308,7 @@ def run_reentry_file(
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     t0 = time.perf_counter()
     result = reentry(
-        cat, atmosphere, n=members, duration=horizon_days * 86400.0, drag_sigma=drag_sigma
+        cat, atmosphere, n=members, duration=horizon_days * 86400.0, drag_sigma=drag_sigma, fit=fit
     )
     wall = time.perf_counter() - t0
     rows = result.rows()
@@ -319,13 +319,16 @@ def run_reentry_file(
         writer.writerow({**row, "name": sanitise(row["name"])})
     path = folder.write_text("reentry.csv", buffer.getvalue())
     manifest = folder.finish()
-    print(f"{'NORAD':>6} {'name':24} {'2.5 %':20} {'median':20} {'97.5 %':20} decayed")
+    print(f"{'NORAD':>6} {'name':24} {'2.5 %':20} {'median':20} {'97.5 %':20} decayed  state")
     for row in rows:
+        how = f"fitted ({row['fit_rms_m']:.0f} m RMS)" if row["fitted"] else "B*"
         print(
             f"{row['norad_id']:>6} {sanitise(row['name'], 24):24} "
             f"{row['epoch_q025'] or '-':20} {row['epoch_median'] or '-':20} "
-            f"{row['epoch_q975'] or '-':20} {100 * row['decayed_fraction']:5.1f} %"
+            f"{row['epoch_q975'] or '-':20} {100 * row['decayed_fraction']:5.1f} %  {how}"
         )
+        if row["fit_note"]:
+            print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
     print(
         f"{len(cat)} objects, {result.members} members each, horizon {horizon_days:g} days: "
         f"{wall:.1f} s; wrote {path} and {manifest}"

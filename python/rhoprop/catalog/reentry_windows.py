@@ -33,7 +33,7 @@ from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, resolve
 from ..propagation.kappa import GaussMarkov, KappaProcess
 from ..time import DurationLike, add_seconds
-from .elements import CatalogObject
+from .elements import CatalogObject, fit_objects
 
 #: Default relative 1-sigma of Cd*A/m when the object carries no fit (assumed: the
 #: spread of fitted ballistic coefficients over successive element sets of one object is
@@ -56,6 +56,10 @@ class ReentryResult:
         drag_parameter: (objects,) median Cd*A/m used, m^2/kg; drag_sigma: (objects,) its
             relative (log) 1-sigma.
         members: members per object; groups: Cd*A/m values per object.
+        fitted: (objects,) whether the state and Cd*A/m were fitted to the element set
+            (by :func:`reentry` or before it); fit_rms: (objects,) the fit's RMS residual
+            against SGP4, m (NaN where not fitted); fit_note: (objects,) why an object was
+            not fitted ("" where fitted or not asked to).
     """
 
     objects: list[CatalogObject]
@@ -68,6 +72,9 @@ class ReentryResult:
     drag_sigma: np.ndarray
     members: int
     groups: int
+    fitted: np.ndarray
+    fit_rms: np.ndarray
+    fit_note: list[str]
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per object (NORAD id, name, the epochs as ISO strings or "", the
@@ -86,6 +93,9 @@ class ReentryResult:
                 "decayed_fraction": float(self.decayed_fraction[k]),
                 "drag_parameter_m2_kg": float(self.drag_parameter[k]),
                 "drag_relative_sigma": float(self.drag_sigma[k]),
+                "fitted": bool(self.fitted[k]),
+                "fit_rms_m": float(self.fit_rms[k]),
+                "fit_note": self.fit_note[k],
             }
             for k, o in enumerate(self.objects)
         ]
@@ -130,6 +140,7 @@ def reentry(
     threads: int | None = None,
     dynamics: Dynamics | None = None,
     horizon: DurationLike | None = None,
+    fit: bool = True,
 ) -> ReentryResult:
     """Reentry windows of ``objects`` within ``duration`` of their epochs.
 
@@ -153,6 +164,11 @@ def reentry(
             ``floor_altitude`` at its default).
         horizon: deprecated name of ``duration`` (a span after each object's own epoch is
             ``duration`` everywhere; an absolute end shared by all objects is ``end``).
+        fit: fit each object's state and Cd*A/m to its element set with ``model`` first
+            (:func:`~rhoprop.catalog.fit_objects`; default True). Objects already fitted
+            (``load(fit=True)``) are used as they are; an object whose fit fails keeps
+            its B*-derived state and Cd*A/m, and ``fit_note`` says why. On real decays
+            fitting is what makes the windows hold (benches/reentry.py).
 
     Returns:
         :class:`ReentryResult`.
@@ -160,6 +176,17 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
+    if not isinstance(fit, bool):
+        raise TypeError(f"fit must be True or False, got {type(fit).__name__}")
+    notes = ["" for _ in objs]
+    if fit:
+        todo = [k for k, o in enumerate(objs) if o.fit is None]
+        fits = fit_objects([objs[k] for k in todo], model, threads=threads)
+        for k, res in zip(todo, fits, strict=True):
+            if isinstance(res, CatalogObject):
+                objs[k] = res
+            else:
+                notes[k] = f"fit failed ({type(res).__name__}: {res}); B* used"
     dyn = resolve("reentry", dynamics, Dynamics(), floor_altitude=floor_altitude)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
@@ -234,4 +261,7 @@ def reentry(
         drag_sigma=np.array([d[2] for d in done]),
         members=total,
         groups=int(groups),
+        fitted=np.array([o.fit is not None for o in objs]),
+        fit_rms=np.array([o.fit.rms_total if o.fit is not None else np.nan for o in objs]),
+        fit_note=notes,
     )

@@ -1,0 +1,148 @@
+"""Reentry windows against real decays: the objects of the reference data's reentry/ set
+(65 objects of 2022-01/02 and 2023-11 with their SATCAT decay days), each predicted from
+its earliest element set 1 to 7 days before the decay day, through NRLMSIS 2.1 with the
+space-weather record observed over the span. Per object: the lead time, the predicted
+median and 95 % window against the decay day (day resolution: a window holds the decay if
+it overlaps that UTC day); overall, per setting: the fraction of windows holding the decay
+day, the median |error| of the median epoch relative to the remaining lifetime (to the
+middle of the decay day), the median window width relative to it, and the objects not
+predicted down within the horizon.
+
+Settings: "fitted" (the default of rp.catalog.reentry: state and Cd*A/m fitted to the
+element set) and "B*" (fit=False: the element set's state and B*-derived Cd*A/m).
+
+Run:  RHOPROP_TEST_DATA=../shared/data python benches/reentry.py [--members 200]
+          [--horizon-days 12] [--limit N] [--settings fitted,B*]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import rhoprop as rp
+from machine import describe, element_sets, peak_rss_mb
+
+DAY = np.timedelta64(1, "D")
+
+
+def choose(data: Path) -> tuple[list[tuple[str, str, str]], dict[int, np.datetime64]]:
+    """The earliest element set 1-7 days before the decay day per object, and the days."""
+    decay = {}
+    with open(data / "satcat_decay_2022_2023.csv") as f:
+        for row in csv.DictReader(f):
+            decay[int(row["NORAD_CAT_ID"])] = np.datetime64(row["DECAY_DATE"], "D")
+    best: dict[int, tuple[float, tuple[str, str, str]]] = {}
+    text = (data / "reentry_tles_2022_2023.txt").read_text()
+    for name, l1, l2, _sat in element_sets(text):
+        norad = int(l1[2:7])
+        yy, doy = int(l1[18:20]), float(l1[20:32])
+        epoch = np.datetime64(f"{2000 + yy}-01-01", "ns") + np.timedelta64(
+            round((doy - 1) * 86400e9), "ns"
+        )
+        lead = float((decay[norad].astype("datetime64[ns]") - epoch) / np.timedelta64(1, "s"))
+        lead /= 86400.0
+        if 1.0 <= lead <= 7.0 and (norad not in best or lead > best[norad][0]):
+            best[norad] = (lead, (name, l1, l2))
+    return [best[k][1] for k in sorted(best)], decay
+
+
+def score(result: rp.catalog.ReentryResult, decay: dict[int, np.datetime64]) -> dict:
+    held, errors, widths, missing = [], [], [], 0
+    for k, obj in enumerate(result.objects):
+        day = decay[obj.norad_id].astype("datetime64[ns]")
+        remaining = float((day + DAY / 2 - obj.state.epoch) / np.timedelta64(1, "s"))
+        lo, med, hi = result.epoch_q025[k], result.epoch_median[k], result.epoch_q975[k]
+        if np.isnat(med):
+            missing += 1
+            held.append(False)
+            continue
+        top = hi if not np.isnat(hi) else obj.state.epoch + np.timedelta64(10**18, "ns")
+        held.append(bool(lo < day + DAY and top >= day))
+        errors.append(abs(float((med - (day + DAY / 2)) / np.timedelta64(1, "s"))) / remaining)
+        if not np.isnat(hi):
+            widths.append(float((hi - lo) / np.timedelta64(1, "s")) / remaining)
+    return {
+        "held": float(np.mean(held)),
+        "error": float(np.median(errors)) if errors else float("nan"),
+        "width": float(np.median(widths)) if widths else float("nan"),
+        "missing": missing,
+        "fitted": int(result.fitted.sum()),
+        "per_object": held,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--members", type=int, default=200)
+    parser.add_argument("--horizon-days", type=float, default=12.0)
+    parser.add_argument("--limit", type=int, default=None, help="first N objects only")
+    parser.add_argument("--settings", default="fitted,B*")
+    args = parser.parse_args()
+    root = os.environ.get("RHOPROP_TEST_DATA")
+    if not root:
+        raise SystemExit("set RHOPROP_TEST_DATA to the reference data (../shared/data)")
+    data = Path(root) / "reentry"
+    print(describe())
+    chosen, decay = choose(data)
+    chosen = chosen[: args.limit] if args.limit else chosen
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "chosen.tle"
+        path.write_text("".join(f"{n}\n{a}\n{b}\n" for n, a, b in chosen))
+        objects = rp.catalog.load(path).objects
+    model = rp.density.Msis("2.1")
+    print(
+        f"{len(objects)} objects (of {len(decay)}) with an element set 1-7 days before the "
+        f"decay day; {args.members} members, horizon {args.horizon_days:g} days, NRLMSIS 2.1"
+    )
+    runs = {}
+    for setting in args.settings.split(","):
+        t0 = time.perf_counter()
+        result = rp.catalog.reentry(
+            objects,
+            model,
+            n=args.members,
+            duration=args.horizon_days * 86400.0,
+            fit=setting == "fitted",
+        )
+        runs[setting] = (result, score(result, decay), time.perf_counter() - t0)
+    first = next(iter(runs.values()))[0]
+    header = f"{'NORAD':>6} {'lead d':>6} {'decay day':10}"
+    for setting in runs:
+        header += f" | {setting:8} {'2.5 %':16} {'median':16} {'97.5 %':16} held"
+    print(header)
+    for k, obj in enumerate(first.objects):
+        day = decay[obj.norad_id]
+        lead = float((day.astype("datetime64[ns]") - obj.state.epoch) / np.timedelta64(1, "s"))
+        line = f"{obj.norad_id:>6} {lead / 86400:6.2f} {day!s:10}"
+        for setting, (res, sc, _) in runs.items():
+
+            def short(t: np.datetime64) -> str:
+                return "-" if np.isnat(t) else str(t.astype("datetime64[m]"))
+
+            line += (
+                f" | {'':8} {short(res.epoch_q025[k]):16} {short(res.epoch_median[k]):16} "
+                f"{short(res.epoch_q975[k]):16} {'yes' if sc['per_object'][k] else 'no'}"
+            )
+        print(line)
+    print()
+    print(
+        f"{'setting':8} {'held':>6} {'|error|/remaining':>18} {'width/remaining':>16} "
+        f"{'not down':>8} {'fitted':>7} {'time s':>7}"
+    )
+    for setting, (_, sc, wall) in runs.items():
+        print(
+            f"{setting:8} {100 * sc['held']:5.0f}% {100 * sc['error']:17.0f}% "
+            f"{100 * sc['width']:15.0f}% {sc['missing']:8d} {sc['fitted']:7d} {wall:7.1f}"
+        )
+    print(f"peak RSS {peak_rss_mb():.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
