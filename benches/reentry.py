@@ -121,7 +121,7 @@ def main() -> None:
         day = decay[obj.norad_id]
         lead = float((day.astype("datetime64[ns]") - obj.state.epoch) / np.timedelta64(1, "s"))
         line = f"{obj.norad_id:>6} {lead / 86400:6.2f} {day!s:10}"
-        for setting, (res, sc, _) in runs.items():
+        for res, sc, _ in runs.values():
 
             def short(t: np.datetime64) -> str:
                 return "-" if np.isnat(t) else str(t.astype("datetime64[m]"))

@@ -81,7 +81,7 @@ def test_reentry_fits_element_sets_by_default(atmosphere):
     (benches/reentry.py). The default fits every object that carries an element set and
     says so; an object without one keeps its values, with the reason."""
     objs = catalog.load(SAMPLE).objects[:2]
-    fitted = catalog.reentry(objs + [_low(9, 200e3)], atmosphere, n=10, duration=86400.0)
+    fitted = catalog.reentry([*objs, _low(9, 200e3)], atmosphere, n=10, duration=86400.0)
     assert list(fitted.fitted) == [True, True, False]
     assert np.isfinite(fitted.fit_rms[:2]).all() and np.isnan(fitted.fit_rms[2])
     assert fitted.fit_note[:2] == ["", ""] and "no element set" in fitted.fit_note[2]
