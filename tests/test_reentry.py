@@ -101,3 +101,24 @@ def test_horizon_is_the_deprecated_name_of_duration(atmosphere):
         old = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, horizon=3600.0, groups=2)
     new = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, duration=3600.0, groups=2)
     assert old.horizon == new.horizon == 3600.0
+
+
+def test_a_diverged_fit_is_no_fit(test_data):
+    """COSMOS 1408 DEB 49643, 1.3 days before its decay: the Gauss-Newton over +-1 day
+    diverged to Cd*A/m = 11.7 m^2/kg with a 10,765 km RMS residual and was used, so the
+    window said 'not down within 12 days'. Such a fit now counts as failed."""
+    lines = (test_data / "reentry" / "reentry_tles_2022_2023.txt").read_text().splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("1 49643"))
+    (obj,) = _load_text("\n".join(lines[k - 1 : k + 2]))
+    (fit,) = catalog.fit_objects([obj], rp.density.Msis("2.1"))
+    assert isinstance(fit, Exception)
+    assert fit.__class__ is ValueError
+
+
+def _load_text(text: str) -> list[CatalogObject]:
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "one.tle"
+        path.write_text(text + "\n")
+        return catalog.load(path).objects

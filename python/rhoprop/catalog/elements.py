@@ -387,6 +387,11 @@ def load(
     return out
 
 
+#: Largest RMS residual (m) of a fit to SGP4 that :func:`fit_objects` accepts: TLE
+#: positions agree with a good fit to a few km; tens of km mean the fit diverged.
+MAX_FIT_RMS = 20e3
+
+
 def fit_objects(
     objects: list[CatalogObject],
     model: Any,
@@ -399,9 +404,10 @@ def fit_objects(
     (:func:`~rhoprop.catalog.fit.fit_element_set`, ``span`` s around the epoch, default
     one day either side; an orbit that comes down within the span's end is fitted to the
     day before the epoch instead), on ``threads`` threads in epoch order (so that fits
-    running at once share their day tiles). Returns, in input order, the fitted object
-    (``fit`` set, covariance the TLE accuracy plus the fit's) or the exception of a fit
-    that failed."""
+    running at once share their day tiles). A fit that leaves an RMS residual above
+    :data:`MAX_FIT_RMS` (diverged) counts as failed. Returns, in input order, the
+    fitted object (``fit`` set, covariance the TLE accuracy plus the fit's) or the
+    exception of a fit that failed."""
     import dataclasses
 
     from ..density import SampledModel
@@ -416,6 +422,13 @@ def fit_objects(
         for k, window in enumerate(tried):
             try:
                 f = fit_element_set(obj, atmosphere, span=window, zonal_degree=zonal_degree)
+                if not f.rms_total <= MAX_FIT_RMS:
+                    # A diverged fit (e.g. over an arc running into the decay) is no fit.
+                    raise ValueError(
+                        f"the fit over {window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h "
+                        f"diverged (RMS residual {f.rms_total:.3g} m, at most "
+                        f"{MAX_FIT_RMS:g} m accepted)"
+                    )
                 break
             except Exception as err:  # returned per object
                 if k == len(tried) - 1:
