@@ -69,7 +69,7 @@ RUNS = {
         "from rhoprop import catalog\n"
         f"cat = catalog.load(Path({os.path.dirname(__file__)!r}) / 'data' / 'sample.tle')\n"
         "print('started', flush=True)\n"
-        "catalog.reentry(list(cat) * 10, model, n=5000, duration=30 * 86400.0)"
+        "catalog.reentry(list(cat) * 10, model, n=5000, duration=30 * 86400.0, history='each')"
     ),
     # ~80 s: two models of 100,000 members each.
     "ensemble": (

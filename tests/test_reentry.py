@@ -122,3 +122,25 @@ def _load_text(text: str) -> list[CatalogObject]:
         path = Path(tmp) / "one.tle"
         path.write_text(text + "\n")
         return catalog.load(path).objects
+
+
+def test_several_element_sets_of_one_object_are_one_history(atmosphere):
+    """Issue 25 item 2: a file holding an object's history gave one independent window
+    per element set, and nothing said the object appeared more than once."""
+    import dataclasses
+
+    obj = catalog.load(SAMPLE).objects[0]
+    later_state = rp.OrbitState(
+        rp.time.add_seconds(obj.state.epoch, 3600.0), obj.state.position, obj.state.velocity
+    )
+    later = dataclasses.replace(obj, state=later_state)
+    other = catalog.load(SAMPLE).objects[1]
+    one = catalog.reentry([obj, later, other], atmosphere, n=10, duration=86400.0, fit=False)
+    assert [o.norad_id for o in one.objects] == [obj.norad_id, other.norad_id]
+    assert one.objects[0] is later and list(one.element_sets) == [2, 1]
+    each = catalog.reentry(
+        [obj, later, other], atmosphere, n=10, duration=86400.0, fit=False, history="each"
+    )
+    assert len(each.objects) == 3 and list(each.element_sets) == [2, 2, 1]
+    with pytest.raises(ValueError, match="history must be 'newest' or 'each'"):
+        catalog.reentry([obj], atmosphere, history="all")

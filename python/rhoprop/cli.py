@@ -69,6 +69,7 @@ def _reentry(args: argparse.Namespace) -> int:
         members=args.members,
         model=args.model,
         fit=args.fit,
+        history=args.history,
         drag_sigma=args.drag_sigma,
         skip_bad=args.skip_bad,
         overwrite=args.overwrite,
@@ -339,6 +340,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=True,
         help="fit each object's state and Cd*A/m to its element set with the model first "
         "(default; --no-fit takes them from the element set and B* as published)",
+    )
+    reentry.add_argument(
+        "--history",
+        choices=("newest", "each"),
+        default="newest",
+        help="several element sets of one object: predict from the newest (default) or "
+        "from each on its own",
     )
     reentry.add_argument(
         "--drag-sigma",

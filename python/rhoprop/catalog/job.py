@@ -282,6 +282,7 @@ def run_reentry_file(
     members: int = 100,
     model: str = "2.1",
     fit: bool = True,
+    history: str = "newest",
     drag_sigma: float | None = None,
     skip_bad: bool = False,
     overwrite: bool = False,
@@ -293,7 +294,8 @@ def run_reentry_file(
     decay epochs in UTC, empty beyond the horizon, decayed fraction, Cd*A/m and its
     relative sigma, whether it was fitted and the fit's RMS residual) with
     ``out/manifest.json``. ``fit`` (default True): states and Cd*A/m fitted to the element
-    sets first (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
+    sets first; ``history``: "newest" or "each" element set of an object given several
+    times (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
     import csv
     import io
 
@@ -308,7 +310,13 @@ def run_reentry_file(
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     t0 = time.perf_counter()
     result = reentry(
-        cat, atmosphere, n=members, duration=horizon_days * 86400.0, drag_sigma=drag_sigma, fit=fit
+        cat,
+        atmosphere,
+        n=members,
+        duration=horizon_days * 86400.0,
+        drag_sigma=drag_sigma,
+        fit=fit,
+        history=history,
     )
     wall = time.perf_counter() - t0
     rows = result.rows()
@@ -329,6 +337,9 @@ def run_reentry_file(
         )
         if row["fit_note"]:
             print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
+        if row["element_sets"] > 1:
+            which = "the newest predicted" if history == "newest" else "each predicted"
+            print(f"       {row['element_sets']} element sets of this object: {which}")
     print(
         f"{len(cat)} objects, {result.members} members each, horizon {horizon_days:g} days: "
         f"{wall:.1f} s; wrote {path} and {manifest}"

@@ -19,6 +19,7 @@ from __future__ import annotations
 import datetime as _dt
 import threading
 import warnings
+from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
@@ -60,6 +61,8 @@ class ReentryResult:
             (by :func:`reentry` or before it); fit_rms: (objects,) the fit's RMS residual
             against SGP4, m (NaN where not fitted); fit_note: (objects,) why an object was
             not fitted ("" where fitted or not asked to).
+        element_sets: (objects,) how many element sets of the object's NORAD id the input
+            held (with ``history="newest"`` only the newest was predicted).
     """
 
     objects: list[CatalogObject]
@@ -75,6 +78,7 @@ class ReentryResult:
     fitted: np.ndarray
     fit_rms: np.ndarray
     fit_note: list[str]
+    element_sets: np.ndarray
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per object (NORAD id, name, the epochs as ISO strings or "", the
@@ -96,6 +100,7 @@ class ReentryResult:
                 "fitted": bool(self.fitted[k]),
                 "fit_rms_m": float(self.fit_rms[k]),
                 "fit_note": self.fit_note[k],
+                "element_sets": int(self.element_sets[k]),
             }
             for k, o in enumerate(self.objects)
         ]
@@ -141,6 +146,7 @@ def reentry(
     dynamics: Dynamics | None = None,
     horizon: DurationLike | None = None,
     fit: bool = True,
+    history: str = "newest",
 ) -> ReentryResult:
     """Reentry windows of ``objects`` within ``duration`` of their epochs.
 
@@ -169,6 +175,11 @@ def reentry(
             (``load(fit=True)``) are used as they are; an object whose fit fails keeps
             its B*-derived state and Cd*A/m, and ``fit_note`` says why. On real decays
             fitting is what makes the windows hold (benches/reentry.py).
+        history: what to do with several element sets of one NORAD id (a history, as
+            catalogs publish them): ``"newest"`` (default) predicts the object once, from
+            its newest element set, and ``element_sets`` counts them; ``"each"`` predicts
+            every element set on its own (one row each, ``element_sets`` still > 1).
+            They are never silently separate objects.
 
     Returns:
         :class:`ReentryResult`.
@@ -178,6 +189,15 @@ def reentry(
         raise ValueError("the catalog has no objects")
     if not isinstance(fit, bool):
         raise TypeError(f"fit must be True or False, got {type(fit).__name__}")
+    if history not in ("newest", "each"):
+        raise ValueError(f"history must be 'newest' or 'each', got {history!r}")
+    counts = Counter(o.norad_id for o in objs)
+    if history == "newest" and len(counts) < len(objs):
+        newest: dict[int, CatalogObject] = {}
+        for o in objs:
+            if o.norad_id not in newest or o.state.epoch > newest[o.norad_id].state.epoch:
+                newest[o.norad_id] = o
+        objs = [o for o in objs if newest[o.norad_id] is o]
     notes = ["" for _ in objs]
     if fit:
         todo = [k for k, o in enumerate(objs) if o.fit is None]
@@ -264,4 +284,5 @@ def reentry(
         fitted=np.array([o.fit is not None for o in objs]),
         fit_rms=np.array([o.fit.rms_total if o.fit is not None else np.nan for o in objs]),
         fit_note=notes,
+        element_sets=np.array([counts[o.norad_id] for o in objs]),
     )
