@@ -187,26 +187,6 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
-    if not isinstance(fit, bool):
-        raise TypeError(f"fit must be True or False, got {type(fit).__name__}")
-    if history not in ("newest", "each"):
-        raise ValueError(f"history must be 'newest' or 'each', got {history!r}")
-    counts = Counter(o.norad_id for o in objs)
-    if history == "newest" and len(counts) < len(objs):
-        newest: dict[int, CatalogObject] = {}
-        for o in objs:
-            if o.norad_id not in newest or o.state.epoch > newest[o.norad_id].state.epoch:
-                newest[o.norad_id] = o
-        objs = [o for o in objs if newest[o.norad_id] is o]
-    notes = ["" for _ in objs]
-    if fit:
-        todo = [k for k, o in enumerate(objs) if o.fit is None]
-        fits = fit_objects([objs[k] for k in todo], model, threads=threads)
-        for k, res in zip(todo, fits, strict=True):
-            if isinstance(res, CatalogObject):
-                objs[k] = res
-            else:
-                notes[k] = f"fit failed ({type(res).__name__}: {res}); B* used"
     dyn = resolve("reentry", dynamics, Dynamics(), floor_altitude=floor_altitude)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
@@ -222,6 +202,7 @@ def reentry(
         )
         duration = horizon
     span = _seconds(duration)
+    objs, notes, counts = _histories_and_fits(objs, model, fit, history, threads)
     process = kappa or GaussMarkov()
     probabilities = (np.arange(groups) + 0.5) / groups
 
@@ -259,17 +240,7 @@ def reentry(
     order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
     ran = map_in_threads(lambda i: one(i, objs[i]), order, worker_count(threads), stop)
     done = [ran[k] for k in np.argsort(order)]
-    nat = np.datetime64("NaT", "ns")
-    med, lo, hi = (np.full(len(objs), nat) for _ in range(3))
-    fraction = np.zeros(len(objs))
-    for k, (times, _b, _s) in enumerate(done):
-        within = np.where(times <= span, times, np.inf)
-        fraction[k] = float(np.mean(np.isfinite(within)))
-        ordered = np.sort(within)
-        for out, q in ((lo, 0.025), (med, 0.5), (hi, 0.975)):
-            t = float(np.quantile(ordered, q, method="inverted_cdf"))
-            if np.isfinite(t):
-                out[k] = add_seconds(objs[k].state.epoch, t)
+    lo, med, hi, fraction = _windows(objs, [d[0] for d in done], span)
     return ReentryResult(
         objects=objs,
         horizon=span,
@@ -286,3 +257,50 @@ def reentry(
         fit_note=notes,
         element_sets=np.array([counts[o.norad_id] for o in objs]),
     )
+
+
+def _histories_and_fits(
+    objs: list[CatalogObject], model: ModelLike, fit: bool, history: str, threads: int | None
+) -> tuple[list[CatalogObject], list[str], Counter[int]]:
+    """The objects to predict (one per NORAD id with ``history="newest"``), fitted when
+    ``fit``; a note per object where its fit failed; the element sets per NORAD id."""
+    if not isinstance(fit, bool):
+        raise TypeError(f"fit must be True or False, got {type(fit).__name__}")
+    if history not in ("newest", "each"):
+        raise ValueError(f"history must be 'newest' or 'each', got {history!r}")
+    counts = Counter(o.norad_id for o in objs)
+    if history == "newest" and len(counts) < len(objs):
+        newest: dict[int, CatalogObject] = {}
+        for o in objs:
+            if o.norad_id not in newest or o.state.epoch > newest[o.norad_id].state.epoch:
+                newest[o.norad_id] = o
+        objs = [o for o in objs if newest[o.norad_id] is o]
+    notes = ["" for _ in objs]
+    if fit:
+        todo = [k for k, o in enumerate(objs) if o.fit is None]
+        fits = fit_objects([objs[k] for k in todo], model, threads=threads)
+        for k, res in zip(todo, fits, strict=True):
+            if isinstance(res, CatalogObject):
+                objs[k] = res
+            else:
+                notes[k] = f"fit failed ({type(res).__name__}: {res}); B* used"
+    return objs, notes, counts
+
+
+def _windows(
+    objs: list[CatalogObject], decay_times: list[np.ndarray], span: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(2.5 %, median, 97.5 %) decay epochs (NaT beyond the horizon) and the decayed
+    fraction per object, from each object's members' decay times (s after its epoch)."""
+    nat = np.datetime64("NaT", "ns")
+    lo, med, hi = (np.full(len(objs), nat) for _ in range(3))
+    fraction = np.zeros(len(objs))
+    for k, times in enumerate(decay_times):
+        within = np.where(times <= span, times, np.inf)
+        fraction[k] = float(np.mean(np.isfinite(within)))
+        ordered = np.sort(within)
+        for out, q in ((lo, 0.025), (med, 0.5), (hi, 0.975)):
+            t = float(np.quantile(ordered, q, method="inverted_cdf"))
+            if np.isfinite(t):
+                out[k] = add_seconds(objs[k].state.epoch, t)
+    return lo, med, hi, fraction
