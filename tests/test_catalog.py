@@ -160,7 +160,10 @@ def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so():
     # At 1e-8 kg/m^3 object 90004's covariance stops being positive definite before its
     # mean orbit decays: outputs end there, status "shortened" with the epoch.
     dense = rp.density.Exponential(1e-8, 400e3, 58.515e3, rel_sigma=0.2)
-    d = catalog.propagate_catalog(catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False)
+    # The paper's near-zero initial covariance, so that the density alone breaks it.
+    d = catalog.propagate_catalog(
+        catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False, initial_covariance="paper"
+    )
     k = [o.norad_id for o in d.objects].index(90004)
     assert d.status[k] == "shortened" and np.isnat(d.decay_epoch[k])
     assert "lost positive definiteness at 2002-09-08T" in d.reason[k]
@@ -226,6 +229,8 @@ def test_monte_carlo_catalog_goes_through_the_public_wrapper():
         seed=5,
         progress=False,
         drag_sigma=0.15,  # drag_sigma="auto": 0.15 for an object without a fit
+        initial_covariance=obj.covariance,  # the catalog default, "object"
+        zonal_degree=4,  # the catalog default
     )
     np.testing.assert_array_equal(r.covariance[2], mc.moments().covariance)
     np.testing.assert_array_equal(r.drag_sigma, 0.15)

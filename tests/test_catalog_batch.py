@@ -131,9 +131,9 @@ def one_by_one(cat, model, end, **kw):
         update_interval=kw.get("update_interval", 3600.0),
         floor_altitude=DEFAULT_FLOOR_ALTITUDE,
         errors=kw.get("errors", "raise"),
-        zonal_degree=2,
+        zonal_degree=kw.get("zonal_degree", catalog_run.CATALOG_ZONAL_DEGREE),
     )
-    plans = catalog_run._plans(objs, kw.get("initial_covariance"), "auto")
+    plans = catalog_run._plans(objs, kw.get("initial_covariance", "object"), "auto")
     step = kw.get("output_step", 3600.0)
     epochs = catalog_run.common_epochs(objs, np.datetime64(end, "ns"), step)
     return [catalog_run._run_object(p, model, epochs, cfg) for p in plans]

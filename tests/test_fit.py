@@ -102,10 +102,12 @@ def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):
     cat = catalog.load(SAMPLE)
     end = "2002-09-08T00:00"
     kw = {"progress": False, "output_step": 21600.0}
-    paper = catalog.propagate_catalog(cat, atmosphere, end, **kw)
+    paper = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="paper", **kw)
+    default = catalog.propagate_catalog(cat, atmosphere, end, **kw)  # "object"
     tle = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="tle", **kw)
     own = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="object", **kw)
     np.testing.assert_array_equal(tle.covariance, own.covariance)
+    np.testing.assert_array_equal(default.covariance, own.covariance)
     ok = paper.valid[:, -1] & tle.valid[:, -1]
     # Position variance only grows; where density adds little it grows a hundredfold.
     var_tle = np.trace(tle.covariance[ok, -1, :3, :3], axis1=1, axis2=2)

@@ -314,11 +314,11 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument(
         "--zonal-degree",
         type=int,
-        default=2,
+        default=4,
         choices=range(2, 7),
         metavar="N",
-        help="highest zonal harmonic of the gravity field: 2 (default, J2 only, the paper's "
-        "model) to 6 (J2..J6, EGM2008)",
+        help="highest zonal harmonic of the gravity field: 4 (default, J2..J4 as SGP4 "
+        "carries), 2 (J2 only, the paper's model) to 6 (J2..J6, EGM2008)",
     )
     _overwrite(cat)
     cat.set_defaults(run=_catalog)

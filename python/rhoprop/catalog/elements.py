@@ -294,7 +294,7 @@ def load(
     model: ModelLike | None = None,
     span: tuple[float, float] | None = None,
     threads: int | None = None,
-    zonal_degree: int = 2,
+    zonal_degree: int = 4,
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content, plain or gzip-compressed.
@@ -324,8 +324,9 @@ def load(
         span: fit span, s from each epoch (default ``fit.DEFAULT_SPAN``, one day either
             side).
         threads: objects fitted at once (default: CPU count).
-        zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2, default) to 6;
-            fit with the degree the objects will be propagated with.
+        zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6 (default
+            4, the degree of catalog runs, ``propagate_catalog``); fit with the degree the
+            objects will be propagated with.
     """
     from .fit import DEFAULT_SPAN
 

@@ -156,7 +156,7 @@ def run_catalog_file(
     command: str | None = None,
     fit: bool = False,
     initial_covariance: str | None = None,
-    zonal_degree: int = 2,
+    zonal_degree: int = 4,
     seed: int = 0,
     update_interval: float = 3600.0,
     drag_file: str | Path | None = None,
@@ -175,7 +175,7 @@ def run_catalog_file(
     propagation) or get suffixed OEM names (``"suffix"``). ``fit``: fit state and Cd*A/m
     to each element set first (``load(fit=True)``). ``initial_covariance``: see
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
-    the fit's with ``fit``). ``zonal_degree``: 2 (J2 only, default) to 6 (J2..J6).
+    the fit's with ``fit``). ``zonal_degree``: 2 (J2 only) to 6 (J2..J6), default 4 (J2..J4).
     ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
     interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
     ``drag_sigma``: relative 1-sigma of Cd*A/m, "auto" or a number (text from the command

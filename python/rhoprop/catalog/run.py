@@ -54,6 +54,10 @@ if TYPE_CHECKING:
     import pandas
     import xarray
 
+#: Zonal degree of catalog runs from element sets: J2..J4, the zonal terms SGP4 (which
+#: produced the element sets) carries; J2 alone moves a LEO orbit by km a day from them.
+CATALOG_ZONAL_DEGREE = 4
+
 
 #: The ``frame`` attribute of catalog datasets: states come from SGP4.
 CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
@@ -230,8 +234,8 @@ def propagate_catalog(
     chunk_size: int = 50,
     progress: bool | Callable[[int], object] = True,
     errors: Errors = "raise",
-    initial_covariance: InitialCovariance = None,
-    zonal_degree: int = 2,
+    initial_covariance: InitialCovariance = "object",
+    zonal_degree: int = CATALOG_ZONAL_DEGREE,
     drag_sigma: DragSigma = "auto",
     dynamics: Dynamics | None = None,
 ) -> CatalogResult:
@@ -257,16 +261,17 @@ def propagate_catalog(
             type, the object named, chained to the cause); ``"record"``: it gets status
             "failed" with the error as reason and no valid output, and the run goes on.
         initial_covariance: each object's initial covariance at its epoch:
-            ``"object"`` (recommended; the ``rhoprop catalog`` default): the object's own
+            ``"object"`` (the default, as in ``rhoprop catalog``): the object's own
             ``covariance`` (``load`` sets the published TLE accuracy of its regime; fitted
             objects add the fit's); ``"tle"``: the TLE accuracy of the regime;
-            ``"paper"`` or ``None`` (the default, kept for compatibility): the paper's
-            near-zero diag(1 mm^2, 1 um^2/s^2), 100x too small for TLE-derived states
-            (docs/catalog-realism.md); a (6, 6) matrix (m^2, m^2/s, m^2/s^2, inertial) for
+            ``"paper"`` or ``None``: the paper's near-zero diag(1 mm^2, 1 um^2/s^2), 100x
+            too small for TLE-derived states (docs/catalog-realism.md; the default until
+            0.1); a (6, 6) matrix (m^2, m^2/s, m^2/s^2, inertial) for
             every object; or a callable object -> matrix. What it includes is in
             ``covariance_note`` (and the OEM and summary).
-        zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
-            only, the paper's model; up to 6 adds J3..J6 (EGM2008).
+        zonal_degree: highest zonal harmonic of the gravity field: 4 (default, J2..J4,
+            as SGP4 carries, from which the element sets come) up to 6 (J2..J6, EGM2008);
+            2 is the paper's J2-only model (the default until 0.1).
         drag_sigma: relative 1-sigma of each object's Cd*A/m (dimensionless, 0.15 =
             15 %), propagated as the CCSP's second consider parameter or sampled per Monte
             Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
@@ -311,7 +316,7 @@ def propagate_catalog(
     dyn = resolve(
         "propagate_catalog",
         dynamics,
-        Dynamics(),
+        Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
         floor_altitude=floor_altitude,
         zonal_degree=zonal_degree,
     )
