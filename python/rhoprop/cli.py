@@ -157,8 +157,9 @@ def _overwrite(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--overwrite",
         action="store_true",
-        help="clear the output folder first if it holds an earlier run's files "
-        "(without it such a folder is refused; a folder of other files always is)",
+        help="delete an earlier run's files from the output folder first: only the files "
+        "its rhoprop manifest lists (without it such a folder is refused; a folder that "
+        "also holds other files always is, naming them)",
     )
 
 
