@@ -107,8 +107,11 @@ class GaussMarkov(KappaProcess):
         # lag-one correlation a = exp(-beta d): variance T d (1 + a) / (1 - a), which tends
         # to 2 / beta = 2 half_life / ln 2 as d -> 0 (3119 s against 3116 s at 18 min/180 s).
         d = float(self.interval)  # type: ignore[arg-type]
-        a = math.exp(-math.log(2.0) / self.half_life * d)
-        return d * (1.0 + a) / (1.0 - a)
+        # 1 - a through expm1: it cancels to 0 for half-lives far beyond the interval.
+        one_minus_a = -math.expm1(-math.log(2.0) / self.half_life * d)
+        if one_minus_a == 0.0:
+            return math.inf
+        return d * (2.0 - one_minus_a) / one_minus_a
 
 
 @dataclass(frozen=True)
