@@ -144,3 +144,15 @@ def test_several_element_sets_of_one_object_are_one_history(atmosphere):
     assert len(each.objects) == 3 and list(each.element_sets) == [2, 2, 1]
     with pytest.raises(ValueError, match="history must be 'newest' or 'each'"):
         catalog.reentry([obj], atmosphere, history="all")
+
+
+def test_the_object_whose_time_nodes_aborted_runs(test_data):
+    """Issue 25 item 5: NORAD 50038 (COSMOS 1408 DEB) raised 'time node 4 =
+    8045.416800000001 is invalid: time nodes must not decrease (previous
+    8045.416800000002)' from the band field's float offsets. The atlas builds its tile
+    nodes from integer nanoseconds; the run completes and brings every member down."""
+    lines = (test_data / "reentry" / "reentry_tles_2022_2023.txt").read_text().splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("1 50038"))
+    objs = _load_text("\n".join(lines[k - 1 : k + 2]))
+    r = catalog.reentry(objs, rp.density.Msis("2.1"), n=10, duration=6 * 86400.0, groups=2)
+    assert r.decayed_fraction[0] == 1.0 and not np.isnat(r.epoch_q975[0])
