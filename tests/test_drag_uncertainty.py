@@ -213,6 +213,8 @@ def test_catalog_drag_sigma_per_object():
         model,
         update_times=auto_update_times(auto, obj),
         drag_sigma=0.15,
+        initial_covariance=obj.covariance,  # the catalog's default, "object"
+        zonal_degree=4,  # the catalog's default
     )
     np.testing.assert_array_equal(auto.covariance[1, -1], direct.covariance[-1])
     grow = [np.trace(r.covariance[:, -1, :3, :3], axis1=1, axis2=2) for r in (none, auto, fixed)]
