@@ -40,12 +40,9 @@ def choose(data: Path) -> tuple[list[tuple[str, str, str]], dict[int, np.datetim
             decay[int(row["NORAD_CAT_ID"])] = np.datetime64(row["DECAY_DATE"], "D")
     best: dict[int, tuple[float, tuple[str, str, str]]] = {}
     text = (data / "reentry_tles_2022_2023.txt").read_text()
-    for name, l1, l2, _sat in element_sets(text):
-        norad = int(l1[2:7])
-        yy, doy = int(l1[18:20]), float(l1[20:32])
-        epoch = np.datetime64(f"{2000 + yy}-01-01", "ns") + np.timedelta64(
-            round((doy - 1) * 86400e9), "ns"
-        )
+    for name, l1, l2, sat in element_sets(text):
+        norad = sat.satnum
+        epoch = rp.time.from_jd(sat.jdsatepoch, sat.jdsatepochF, scale="utc")
         lead = float((decay[norad].astype("datetime64[ns]") - epoch) / np.timedelta64(1, "s"))
         lead /= 86400.0
         if 1.0 <= lead <= 7.0 and (norad not in best or lead > best[norad][0]):
