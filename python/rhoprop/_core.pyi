@@ -40,6 +40,8 @@ __all__ = [
     "pc_pairs",
     "propagate",
     "rtn_basis",
+    "screen_approaches",
+    "screen_candidates",
     "simd_path",
 ]
 
@@ -260,6 +262,42 @@ def pc_2d(
     """Short-encounter 2-D Pc: inertial r (3,) m, v (3,) m/s, position covariances
     (3, 3) m^2 -> (pc, miss distance m, relative speed m/s, covariance integrated (2, 2)
     m^2, repaired, projected covariance (2, 2) m^2, encounter axes (3, 3) rows x, y, z)."""
+
+def screen_candidates(
+    times: _F64,
+    positions: _F64,
+    velocities: _F64,
+    samples: npt.NDArray[np.uint64],
+    fourth: _F64,
+    distance: float,
+    max_acceleration: float,
+    hermite_samples: int,
+    progress: Callable[[int], object] | None = None,
+) -> tuple[
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.uint32],
+    tuple[int, int, int],
+]:
+    """All-on-all sieve: times (nt,) s, positions/velocities (n, nt, 3) m, m/s, samples
+    (n,) valid per object, fourth (n,) -> candidate (i, j, k) sorted, and the pair-interval
+    counts (spatial, coarse, interpolated)."""
+
+def screen_approaches(
+    times: _F64,
+    positions: _F64,
+    velocities: _F64,
+    samples: npt.NDArray[np.uint64],
+    i: npt.NDArray[np.uint32],
+    j: npt.NDArray[np.uint32],
+    k: npt.NDArray[np.uint32],
+    zonal_degree: int,
+    distance: float,
+    progress: Callable[[int], object] | None = None,
+) -> tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32], _F64, _F64, _F64]:
+    """Minima of the distance within ``distance`` in candidate intervals (i, j, k), on the
+    quintic Hermite interpolant with the gravity acceleration -> (i, j, t s, states of i
+    (m, 6), states of j (m, 6))."""
 
 def pc_pairs(
     members1: _F64, members2: _F64, hard_body_radius: float

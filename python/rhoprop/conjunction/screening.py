@@ -161,11 +161,13 @@ class _Object:
     state: OrbitState
     craft: Spacecraft
     model: Any = None
+    item: Any = None  # what was given (a CatalogObject carries its covariance)
 
 
 def _as_object(item: Any, where: str, index: int) -> _Object:
     if isinstance(item, CatalogObject):
-        return _Object(item.name, item.norad_id, item.state, Spacecraft(1.0, item.drag_parameter))
+        craft = Spacecraft(1.0, item.drag_parameter)
+        return _Object(item.name, item.norad_id, item.state, craft, item=item)
     if isinstance(item, tuple) and len(item) in (2, 3):
         state, craft = item[0], item[1]
         if not isinstance(state, OrbitState) or not isinstance(craft, Spacecraft):
@@ -174,7 +176,7 @@ def _as_object(item: Any, where: str, index: int) -> _Object:
                 f"({', '.join(type(x).__name__ for x in item)})"
             )
         name = str(item[2]) if len(item) == 3 else f"{where}"
-        return _Object(name, None if len(item) == 3 else index, state, craft)
+        return _Object(name, None if len(item) == 3 else index, state, craft, item=item)
     raise TypeError(
         f"{where} must be a rhoprop.catalog.CatalogObject or an (OrbitState, Spacecraft"
         f"[, name]) tuple, got {type(item).__name__}"

@@ -16,6 +16,7 @@
 //! - [`progress`]: progress and cancellation of long calls;
 //! - [`propagate`], [`montecarlo`], [`ccsp`]: the three runs the binding exposes;
 //! - [`conjunction`]: probability of collision (2-D Gaussian Pc, Monte Carlo pair count);
+//! - [`sieve`]: all-on-all screening's candidate intervals (spatial grid, distance bounds);
 //! - [`error`]: what can go wrong, with messages fit for the user.
 
 // Structure-of-arrays lane loops index several arrays in lockstep; iterator rewrites of
@@ -37,6 +38,7 @@ pub mod problem;
 pub mod progress;
 pub mod propagate;
 pub mod rng;
+pub mod sieve;
 pub mod simd;
 pub mod time;
 

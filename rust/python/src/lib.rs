@@ -14,6 +14,7 @@ mod models;
 mod montecarlo;
 mod pool;
 mod propagation;
+mod sieve;
 
 use pyo3::prelude::*;
 
@@ -31,6 +32,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::rtn_basis, m)?)?;
+    m.add_function(wrap_pyfunction!(sieve::screen_candidates, m)?)?;
+    m.add_function(wrap_pyfunction!(sieve::screen_approaches, m)?)?;
     models::register(m)?;
     conjunction::register(m)?;
     constants::register(m)?;

@@ -1,0 +1,621 @@
+"""All-on-all screening of a catalog (:func:`screen_all`): every object propagated once
+on a common grid, a sieve in the core that keeps only the object pairs and grid
+intervals where two objects can come within the distance (spatial grid of the motion's
+bounding balls, then the coarse and interpolated distance bounds of one-primary
+screening), and the refinement of :mod:`.approach` on what is left; then each event's
+probability of collision per density model and for their mixture (:mod:`.event_pc`).
+docs/conjunction.md, "All-on-all screening"."""
+
+from __future__ import annotations
+
+import itertools
+import threading
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .. import _core, _validate
+from ..catalog.run import CATALOG_ZONAL_DEGREE
+from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, R_EARTH
+from ..density.model import ModelLike
+from ..options import Errors
+from ..parallel import map_in_threads, worker_count
+from ..progress import ProgressBar
+from ..propagation import OrbitState
+from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
+from ..propagation.propagate import check_model
+from ..time import EpochLike, add_seconds, seconds_between, to_datetime64
+from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics
+from .approach import _models_for as models_for
+from .screening import (
+    DEFAULT_GRID_STEP,
+    HERMITE_SAMPLES,
+    MAX_ACCELERATION,
+    RADIAL_MARGIN,
+    ZONAL_PAD,
+    ScreenObject,
+    _as_object,
+    _coarse_track,
+    _Object,
+    _radial_ranges,
+    _secondaries_list,
+)
+
+__all__ = ["ALL_ON_ALL_STAGES", "DEFAULT_MAX_MEMORY", "AllOnAllResult", "screen_all"]
+
+#: Memory the tracks of one time chunk may take, bytes (48 B per object and sample).
+DEFAULT_MAX_MEMORY = 1e9
+#: Names of :attr:`AllOnAllResult.counts`, in the order of the stages.
+ALL_ON_ALL_STAGES = (
+    "objects",
+    "screened",
+    "pairs",
+    "radial_pairs",
+    "spatial",
+    "coarse_grid",
+    "interpolated",
+    "refined_pairs",
+    "events",
+)
+#: Events of one pair closer in time than this are one event (found from two chunks), s.
+SAME_EVENT = 1e-3
+
+
+@dataclass(frozen=True)
+class AllOnAllResult:
+    """What :func:`screen_all` found.
+
+    Attributes:
+        events: close approaches within ``distance`` (object 1 the one listed first in
+            the input), sorted by mixture Pc (largest first), then TCA; without Pc by
+            TCA.
+        models: the density models' names (reference first); weights: their mixture
+            weights.
+        pc_models: per event and model, the 2-D Pc (events, models); NaN where a model's
+            covariance is not available at TCA (see ``pc_notes``).
+        pc: per event the mixture's Pc, sum_k w_k Pc_k over the models with a value
+            (weights renormalised).
+        hard_body_radius: per event, m.
+        pc_notes: per event, what was approximated or missing ("" when nothing).
+        counts: objects and pairs after each stage, in the order of
+            :data:`ALL_ON_ALL_STAGES`: ``objects`` given, ``screened`` (propagated over
+            some of the window), ``pairs`` (all pairs of screened objects),
+            ``radial_pairs`` (pairs whose padded perigee-apogee ranges overlap, the
+            classical first filter: reported, not needed by the grid), ``spatial``,
+            ``coarse_grid`` and ``interpolated`` (pair-intervals passing the sieve's
+            tests), ``refined_pairs`` (pairs re-propagated) and ``events``.
+        skipped: (name, reason) of objects not screened (decayed before ``start``, the
+            same element set twice, failed with ``errors="skip"``).
+        notes: (name, note) of objects screened in part (decayed inside the window).
+        timings: seconds per stage (wall clock): ``field``, ``propagation``, ``sieve``,
+            ``refinement``, ``pc_drag`` (Cd debiasing per model), ``pc_covariance``
+            (CCSP per model of the objects in events) and ``pc``.
+        wall: whole run, s; threads: worker threads; chunks: time chunks the window was
+            cut into (memory).
+        start, end: the window (UTC); distance: m; grid_step: s.
+        objects: the screened objects' names and ids, index-aligned with the sieve.
+    """
+
+    events: list[CloseApproach]
+    models: list[str]
+    weights: np.ndarray
+    pc_models: np.ndarray
+    pc: np.ndarray
+    hard_body_radius: np.ndarray
+    pc_notes: list[str]
+    counts: dict[str, int]
+    skipped: list[tuple[str, str]]
+    notes: list[tuple[str, str]]
+    timings: dict[str, float]
+    wall: float
+    threads: int
+    chunks: int
+    start: np.datetime64
+    end: np.datetime64
+    distance: float
+    grid_step: float
+    objects: list[tuple[str, int | None]] = field(default_factory=list)
+
+    def table(self) -> dict[str, np.ndarray]:
+        """The events as columns (one row per event, in order): names and ids, TCA
+        (datetime64[ns] UTC), miss distance m, relative speed m/s, hard-body radius m,
+        mixture Pc, Pc per model (``pc_<model name>``) and the Pc note."""
+        ev = self.events
+        cols: dict[str, np.ndarray] = {
+            "name1": np.array([e.name1 for e in ev], dtype=object),
+            "id1": np.array([-1 if e.id1 is None else e.id1 for e in ev], dtype=np.int64),
+            "name2": np.array([e.name2 for e in ev], dtype=object),
+            "id2": np.array([-1 if e.id2 is None else e.id2 for e in ev], dtype=np.int64),
+            "tca": np.array([e.tca for e in ev], dtype="datetime64[ns]"),
+            "miss_distance": np.array([e.miss_distance for e in ev], dtype=float),
+            "relative_speed": np.array([e.relative_speed for e in ev], dtype=float),
+            "hard_body_radius": np.asarray(self.hard_body_radius, dtype=float),
+            "pc": np.asarray(self.pc, dtype=float),
+        }
+        for k, name in enumerate(self.models):
+            cols[f"pc_{name}"] = np.asarray(self.pc_models[:, k], dtype=float)
+        cols["pc_note"] = np.array(self.pc_notes, dtype=object)
+        return cols
+
+
+@dataclass
+class _Chunk:
+    """The screened objects on grid samples ``times`` (s from start) of one time chunk."""
+
+    times: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+    samples: np.ndarray
+
+
+def screen_all(
+    objects: Iterable[ScreenObject],
+    model: ModelLike | Mapping[str, ModelLike],
+    *,
+    start: EpochLike,
+    end: EpochLike,
+    distance: float,
+    reference: str | None = None,
+    weights: Mapping[str, float] | None = None,
+    pc: bool = True,
+    hard_body_radius: float | None = None,
+    radii: Mapping[int, float] | None = None,
+    grid_step: float = DEFAULT_GRID_STEP,
+    fine_step: float = DEFAULT_FINE_STEP,
+    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    zonal_degree: int = CATALOG_ZONAL_DEGREE,
+    dynamics: Dynamics | None = None,
+    max_memory: float = DEFAULT_MAX_MEMORY,
+    threads: int | None = None,
+    errors: Errors = "raise",
+    progress: bool | Callable[[str, int, int], object] = True,
+) -> AllOnAllResult:
+    """Screens every object of a catalog against every other for close approaches within
+    ``distance`` over [start, end] (UTC), each with its probability of collision per
+    density model and for their mixture.
+
+    Objects as for :func:`~rhoprop.conjunction.screen` (catalog objects or
+    ``(OrbitState, Spacecraft[, name])``); an element set given twice (same epoch and
+    state) is screened once.
+
+    Stages (``counts``, ``timings``):
+
+    1. **Propagation**: every object once, through the reference model's density atlas,
+       from its epoch to ``start`` (backwards when later) and over the window with
+       outputs every ``grid_step`` s, in time chunks whose tracks fit ``max_memory``.
+    2. **Sieve** (in the core, per grid interval): the spatial grid of the balls that
+       hold each object's motion over the interval, then the coarse and the interpolated
+       distance bounds of :func:`~rhoprop.conjunction.screen`: all necessary conditions for
+       an approach within ``distance``, so none is lost (``rhoprop_core::sieve``).
+    3. **Refinement**: each surviving pair's intervals are re-propagated for both
+       objects at ``fine_step`` and every minimum within ``distance`` is an event, as in
+       :func:`~rhoprop.conjunction.closest_approach`.
+    4. **Pc** (``pc=True``): per model, the CCSP (the catalog's defaults: each object's
+       own covariance, Cd*A/m uncertainty, J2..J4) of the objects in events, Cd debiased
+       against the reference over the 8 h before each epoch; at TCA each object's
+       Gaussian is its screened state plus the model's mean offset from the reference
+       model's, with the model's covariance; the 2-D Pc per model and their mixture
+       ``sum_k w_k Pc_k`` (both objects fly through the same atmosphere, as in
+       :func:`~rhoprop.conjunction.density_pc`). Hard-body radius: ``hard_body_radius``
+       for every event, else the sum of both objects' radii from ``radii`` {NORAD id: m}
+       or the rule of :data:`~rhoprop.conjunction.event_pc.RADII` by object kind.
+
+    Args:
+        objects: the catalog (a :class:`~rhoprop.catalog.Catalog` or a list).
+        model: a density model, or {name: model} for several (``reference`` names the one
+            the screening propagates with; default the first); e.g.
+            ``rp.studies.default_models()``.
+        start, end: the window, UTC; distance: screening distance, m.
+        weights: mixture weights {model name: weight} (default equal).
+        pc: compute the Pc of every event (default True).
+        grid_step, fine_step: coarse grid and refinement output steps, s.
+        floor_altitude, zonal_degree, dynamics: as for ``rp.propagate`` (default J2..J4,
+            the catalog's).
+        max_memory: bytes the tracks of one time chunk may take (default 1 GB).
+        threads: worker threads (default CPU count); errors: ``"raise"`` (default: the
+            first object whose propagation fails raises, named) or ``"record"`` (it is
+            listed in ``skipped`` and the screen goes on).
+        progress: show progress bars on a terminal, or a callable given (stage, done,
+            total).
+
+    Returns:
+        :class:`AllOnAllResult`. Ctrl-C stops the run with KeyboardInterrupt.
+
+    Raises:
+        TypeError, ValueError: bad objects or arguments (named).
+    """
+    wall0 = time.perf_counter()
+    models, ref_name = _model_set(model, reference)
+    cfg = _settings(
+        start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree, dynamics
+    )
+    errors = _validate.errors_argument("screen_all", errors)
+    workers = worker_count(threads)
+    budget = _validate.positive("max_memory", max_memory)
+    objs, skipped = _unique_objects(objects)
+    timings = dict.fromkeys(("field", "propagation", "sieve", "refinement"), 0.0)
+    t0 = time.perf_counter()
+    earliest = min([cfg.start, *(o.state.epoch for o in objs)])
+    latest = max([cfg.end, *(o.state.epoch for o in objs)])
+    atlases = models_for(models[ref_name], [o.state for o in objs], earliest, latest, cfg.floor)
+    for obj, own in zip(objs, atlases, strict=True):
+        obj.model = own
+    timings["field"] = time.perf_counter() - t0
+    run = _Run(objs, cfg, workers, errors, _reporter(progress))
+    try:
+        events, pairs, counts, notes, gone, chunks = run.screen(budget, timings)
+    finally:
+        run.close()
+    skipped += gone
+    counts["objects"] = len(objs) + sum(1 for _n, why in skipped if why.startswith("same"))
+    from .event_pc import event_probabilities
+
+    pcs = event_probabilities(
+        events, pairs, objs, models, ref_name, weights, cfg, pc, hard_body_radius, radii, timings
+    )
+    order = sorted(
+        range(len(events)),
+        key=lambda i: (-np.nan_to_num(pcs.pc[i], nan=-1.0), events[i].tca, events[i].name1),
+    )
+    return AllOnAllResult(
+        events=[events[i] for i in order],
+        models=list(models),
+        weights=pcs.weights,
+        pc_models=pcs.pc_models[order] if len(order) else pcs.pc_models,
+        pc=pcs.pc[order] if len(order) else pcs.pc,
+        hard_body_radius=pcs.hard_body_radius[order] if len(order) else pcs.hard_body_radius,
+        pc_notes=[pcs.notes[i] for i in order],
+        counts={key: counts.get(key, 0) for key in ALL_ON_ALL_STAGES},
+        skipped=skipped,
+        notes=notes,
+        timings=timings,
+        wall=time.perf_counter() - wall0,
+        threads=workers,
+        chunks=chunks,
+        start=cfg.start,
+        end=cfg.end,
+        distance=cfg.limit,
+        grid_step=cfg.step,
+        objects=[(o.name, o.object_id) for o in objs],
+    )
+
+
+@dataclass(frozen=True)
+class _Settings:
+    """The checked window and settings of an all-on-all screen."""
+
+    start: np.datetime64
+    end: np.datetime64
+    span: float
+    limit: float
+    step: float
+    fine: float
+    floor: float
+    degree: int
+
+
+def _settings(
+    start: EpochLike,
+    end: EpochLike,
+    distance: float,
+    grid_step: float,
+    fine_step: float,
+    floor_altitude: float,
+    zonal_degree: int,
+    dynamics: Dynamics | None,
+) -> _Settings:
+    t_start = to_datetime64(start, "start")
+    t_end = to_datetime64(end, "end")
+    span = seconds_between(t_start, t_end)
+    if not span > 0:
+        raise ValueError(f"end ({t_end}) must be after start ({t_start})")
+    step = _validate.positive("grid_step", grid_step)
+    if step > 300.0:
+        raise ValueError(
+            f"grid_step = {step:g} s is too coarse: at most 300 s (1/18 of a low orbit) keeps "
+            "the cubic Hermite interpolant of the relative motion meaningful"
+        )
+    dyn = resolve(
+        "screen_all",
+        dynamics,
+        Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+    )
+    return _Settings(
+        t_start,
+        t_end,
+        span,
+        _validate.positive("distance", distance),
+        step,
+        _validate.positive("fine_step", fine_step),
+        dyn.floor_altitude,
+        zonal_degree_argument(dyn.zonal_degree),
+    )
+
+
+def _model_set(model: Any, reference: str | None) -> tuple[dict[str, Any], str]:
+    """{name: model} and the reference's name, checked."""
+    if isinstance(model, Mapping):
+        models = dict(model)
+        if not models:
+            raise ValueError("model must name at least one density model")
+    else:
+        models = {getattr(model, "name", type(model).__name__): model}
+    for name, m in models.items():
+        try:
+            check_model(m)
+        except TypeError as err:
+            raise TypeError(f"model {name!r}: {err}") from err
+    ref = reference if reference is not None else next(iter(models))
+    if ref not in models:
+        raise ValueError(f"reference {ref!r} is not one of the models {list(models)}")
+    return {ref: models[ref], **{k: v for k, v in models.items() if k != ref}}, ref
+
+
+def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]]]:
+    """The objects, each element set once (same epoch and state: the later copy is
+    skipped, named)."""
+    items = _secondaries_list(objects)
+    objs = [_as_object(item, f"objects[{i}]", i) for i, item in enumerate(items)]
+    if len(objs) < 2:
+        raise ValueError(f"screen_all needs at least two objects, got {len(objs)}")
+    seen: dict[tuple[Any, bytes], _Object] = {}
+    kept: list[_Object] = []
+    skipped: list[tuple[str, str]] = []
+    for o in objs:
+        key = (o.state.epoch, np.asarray(o.state.state, dtype=float).tobytes())
+        if key in seen:
+            skipped.append((o.name, f"same element set as {seen[key].name}: screened once"))
+            continue
+        seen[key] = o
+        kept.append(o)
+    return kept, skipped
+
+
+def _reporter(progress: Any) -> Callable[[str, int, int], object] | None:
+    if callable(progress):
+        return progress  # type: ignore[no-any-return]
+    if not progress:
+        return None
+    bars: dict[str, ProgressBar] = {}
+
+    def report(stage: str, done: int, total: int) -> None:
+        if stage not in bars:
+            for bar in bars.values():
+                bar.close()
+            bars.clear()
+            bars[stage] = ProgressBar(total, f"screen_all: {stage}", unit="steps")
+        bars[stage](done)
+
+    report.bars = bars  # type: ignore[attr-defined]
+    return report
+
+
+def radial_pair_count(objs: list[_Object], distance: float, degree: int) -> int:
+    """Pairs whose perigee-apogee ranges, padded as one-primary screening pads them
+    (zonal oscillation and margin, no drag), overlap within ``distance``."""
+    perigee, apogee, _a, p = _radial_ranges(objs)
+    pad = ZONAL_PAD[2 if degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
+    low, high = np.sort(perigee - pad), apogee + pad + distance
+    n = len(objs)
+    # Pairs (i, j) with low_j > high_i cannot overlap; each disjoint pair counts once.
+    disjoint = int(np.sum(n - np.searchsorted(low, high, side="right")))
+    return n * (n - 1) // 2 - disjoint
+
+
+class _Run:
+    """One all-on-all screen: time chunks of tracks, the sieve and the refinement."""
+
+    def __init__(
+        self,
+        objs: list[_Object],
+        cfg: _Settings,
+        workers: int,
+        errors: str,
+        report: Callable[[str, int, int], object] | None,
+    ) -> None:
+        self.objs, self.cfg, self.workers, self.errors = objs, cfg, workers, errors
+        self.report = report
+        self.stop = threading.Event()
+        self.dyn = _Dynamics(cfg.start, True, cfg.floor, cfg.degree, cfg.fine)
+        self.skipped: list[tuple[str, str]] = []
+        self.notes: list[tuple[str, str]] = []
+
+    def close(self) -> None:
+        for bar in getattr(self.report, "bars", {}).values():
+            bar.close()
+
+    def _tell(self, stage: str, done: int, total: int) -> None:
+        if self.report is not None:
+            self.report(stage, done, total)
+
+    def screen(
+        self, budget: float, timings: dict[str, float]
+    ) -> tuple[
+        list[CloseApproach], list[tuple[int, int]], dict[str, int], list[Any], list[Any], int
+    ]:
+        """Events, their object pairs, counts, notes, skipped objects and the number of
+        chunks."""
+        cfg = self.cfg
+        grid = np.arange(0.0, cfg.span, cfg.step)
+        grid = np.append(grid, cfg.span) if cfg.span - grid[-1] > 1e-6 else grid
+        per = max(2, min(len(grid), int(budget // (48 * len(self.objs)))))
+        bounds = [*range(0, len(grid) - 1, per - 1), len(grid) - 1]
+        state: list[Any] = [None] * len(self.objs)  # each object's state at the chunk start
+        counts: dict[str, int] = defaultdict(int)
+        found: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
+        refined: set[tuple[int, int]] = set()
+        screened = np.zeros(len(self.objs), dtype=bool)
+        for c, (a, b) in enumerate(itertools.pairwise(bounds)):
+            t0 = time.perf_counter()
+            chunk = self._propagate(grid[a : b + 1], state, first=c == 0)
+            timings["propagation"] += time.perf_counter() - t0
+            screened |= chunk.samples >= 2
+            t0 = time.perf_counter()
+            cand = self._sieve(chunk, counts)
+            timings["sieve"] += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            refined.update(zip(cand[:, 0].tolist(), cand[:, 1].tolist(), strict=True))
+            for pair, events in self._refine(chunk, cand).items():
+                found[pair] += events
+            timings["refinement"] += time.perf_counter() - t0
+        kept = [o for o, s in zip(self.objs, screened, strict=True) if s]
+        counts["screened"] = len(kept)
+        counts["pairs"] = len(kept) * (len(kept) - 1) // 2
+        counts["radial_pairs"] = radial_pair_count(kept, cfg.limit, cfg.degree) if kept else 0
+        counts["refined_pairs"] = len(refined)
+        per_pair = [(pair, e) for pair in sorted(found) for e in _one_per_minimum(found[pair])]
+        counts["events"] = len(per_pair)
+        events = [e for _p, e in per_pair]
+        pairs = [p for p, _e in per_pair]
+        return events, pairs, counts, self.notes, self.skipped, len(bounds) - 1
+
+    def _propagate(self, times: np.ndarray, state: list[Any], first: bool) -> _Chunk:
+        """Every object on the chunk's samples; ``state`` is updated to the chunk's end."""
+        n, m = len(self.objs), len(times)
+        pos, vel = np.zeros((n, m, 3)), np.zeros((n, m, 3))
+        samples = np.zeros(n, dtype=np.uint64)
+        todo = [i for i in range(n) if first or state[i] is not None]
+
+        def one(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+            if self.stop.is_set():
+                raise KeyboardInterrupt("screening interrupted")
+            return self._track(self.objs[i], state[i], times, first)
+
+        done = 0
+        total = len(todo)
+
+        def tick(_k: int, _r: Any) -> None:
+            nonlocal done
+            done += 1
+            self._tell("propagation", done, total)
+
+        results = map_in_threads(one, todo, self.workers, self.stop, tick)
+        for i, (t, p, v, decay) in zip(todo, results, strict=True):
+            obj = self.objs[i]
+            k = min(len(t), m)
+            if k and not np.allclose(t[:k], times[:k], rtol=0, atol=1e-6):
+                raise AssertionError("track off the common grid")  # guarded by _track
+            pos[i, :k], vel[i, :k], samples[i] = p[:k], v[:k], k
+            state[i] = None if decay is not None or k < m else (p[-1], v[-1])
+            if decay is not None:
+                when = add_seconds(self.cfg.start, decay)
+                if k < 2 and first:
+                    self.skipped.append((obj.name, f"decayed at {when} UTC, before {times[1]:g} s"))
+                else:
+                    self.notes.append((obj.name, f"decayed at {when} UTC: screened up to then"))
+        return _Chunk(times, pos, vel, samples)
+
+    def _track(
+        self, obj: _Object, start_state: Any, times: np.ndarray, first: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+        """Times (s from start), positions, velocities and decay time (or None) of
+        ``obj`` over ``times``; with ``errors="record"`` a failure skips the object."""
+        span = float(times[-1] - times[0])
+        try:
+            if first:
+                tr, decay = _coarse_track(obj, self.dyn, self.cfg.start, span, self.cfg.step)
+                return tr.t, tr.pos, tr.vel, decay
+            p0, v0 = start_state
+            s0 = OrbitState(add_seconds(self.cfg.start, float(times[0])), p0, v0)
+            out = self.dyn.forward(s0, obj.craft, obj.model, span, self.cfg.step)
+            decay = None if out.decayed_at is None else float(times[0]) + out.decayed_at
+            return times[0] + out.times, out.positions, out.velocities, decay
+        except Exception as err:
+            if self.errors != "record":
+                raise type(err)(f"object {obj.name} (id {obj.object_id}): {err}") from err
+            self.skipped.append((obj.name, f"{type(err).__name__}: {err}"))
+            empty = np.empty((0, 3))
+            return np.empty(0), empty, empty, None
+
+    def _sieve(self, chunk: _Chunk, counts: dict[str, int]) -> np.ndarray:
+        """Candidate (i, j, k) rows of the chunk, sorted."""
+        rn = np.linalg.norm(chunk.pos, axis=2)
+        vn = np.linalg.norm(chunk.vel, axis=2)
+        valid = np.arange(len(chunk.times))[None, :] < chunk.samples[:, None].astype(np.int64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.where(valid, (vn / np.where(rn > 0, rn, 1.0)) ** 4 * rn, 0.0)
+        fourth = f.max(axis=1) if f.size else np.zeros(len(chunk.samples))
+        total = len(chunk.times) - 1
+
+        def tick(done: int) -> None:
+            self._tell("sieve", int(done), total)
+
+        i, j, k, (spatial, coarse, interp) = _core.screen_candidates(
+            chunk.times,
+            chunk.pos,
+            chunk.vel,
+            chunk.samples,
+            np.ascontiguousarray(fourth),
+            self.cfg.limit,
+            MAX_ACCELERATION,
+            HERMITE_SAMPLES,
+            tick if self.report is not None else None,
+        )
+        counts["spatial"] += int(spatial)
+        counts["coarse_grid"] += int(coarse)
+        counts["interpolated"] += int(interp)
+        return np.column_stack([i, j, k]).astype(np.int64)
+
+    def _refine(
+        self, chunk: _Chunk, cand: np.ndarray
+    ) -> dict[tuple[int, int], list[CloseApproach]]:
+        """Events within the distance per candidate pair of the chunk: the minima on the
+        quintic Hermite interpolant of both objects' samples (the core's
+        ``screen_approaches``)."""
+        if not len(cand):
+            return {}
+        total = len(cand)
+
+        def tick(done: int) -> None:
+            self._tell("refinement", int(done), total)
+
+        c = cand.astype(np.uint32)
+        i, j, t, s1, s2 = _core.screen_approaches(
+            chunk.times,
+            chunk.pos,
+            chunk.vel,
+            chunk.samples,
+            np.ascontiguousarray(c[:, 0]),
+            np.ascontiguousarray(c[:, 1]),
+            np.ascontiguousarray(c[:, 2]),
+            self.cfg.degree,
+            self.cfg.limit,
+            tick if self.report is not None else None,
+        )
+        out: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
+        for m in range(len(t)):
+            a, b = self.objs[int(i[m])], self.objs[int(j[m])]
+            x1, x2 = s1[m].copy(), s2[m].copy()
+            x1.flags.writeable = x2.flags.writeable = False
+            rel = x2 - x1
+            out[int(i[m]), int(j[m])].append(
+                CloseApproach(
+                    tca=add_seconds(self.cfg.start, float(t[m])),
+                    miss_distance=float(np.linalg.norm(rel[:3])),
+                    relative_speed=float(np.linalg.norm(rel[3:])),
+                    state1=x1,
+                    state2=x2,
+                    name1=a.name,
+                    name2=b.name,
+                    id1=a.object_id,
+                    id2=b.object_id,
+                )
+            )
+        return out
+
+
+def _one_per_minimum(events: list[CloseApproach]) -> list[CloseApproach]:
+    """A pair's events in TCA order, those within :data:`SAME_EVENT` of the previous one
+    dropped (the same minimum found from two brackets or chunks)."""
+    out: list[CloseApproach] = []
+    for e in sorted(events, key=lambda e: e.tca):
+        if out and abs(seconds_between(out[-1].tca, e.tca)) < SAME_EVENT:
+            continue
+        out.append(e)
+    return out

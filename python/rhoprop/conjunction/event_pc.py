@@ -1,0 +1,321 @@
+"""Pc of every event an all-on-all screen finds, per density model and for their
+mixture, from each object's propagated covariance.
+
+Per model k, the objects in events are propagated with the catalog's CCSP
+(:func:`rhoprop.catalog.propagate_catalog` defaults: each object's own covariance,
+Cd*A/m uncertainty) with their Cd debiased against the reference model (the mean density
+ratio over the 8 h before the epoch along the reference orbit, as
+:func:`rhoprop.debias_drag_coefficient`, sampled every :data:`DEBIAS_CADENCE` s). At an
+event's TCA each object's model-k Gaussian is centred on its screened state plus the
+model's mean offset from the reference model's mean, with the model's covariance: offset
+and covariance are taken in the RTN frame of the mean at the CCSP outputs
+(:data:`PC_OUTPUT_STEP` apart), interpolated linearly to TCA and turned into inertial
+axes with the RTN frame of the screened state. Both objects fly through the same
+atmosphere, so the mixture's Pc is ``sum_k w_k Pc_k`` (as
+:func:`~rhoprop.conjunction.density_pc`). An event before an object's epoch uses the
+object's covariance at its epoch and no offset.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections import defaultdict
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import frames
+from ..catalog.covariance import tle_covariance
+from ..catalog.elements import CatalogObject
+from ..catalog.run import propagate_catalog
+from ..ensemble.debias import backward_orbit
+from ..propagation import Spacecraft
+from ..time import seconds_between, to_seconds
+from .approach import CloseApproach
+from .probability import pc_2d
+
+__all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "PC_OUTPUT_STEP", "RADII", "object_radius"]
+
+#: Radius of an object's circumscribing sphere by kind, m, when no table gives it: the
+#: hard-body radius of an event is the sum of both. Payloads 5 m (a Starlink with its
+#: array spans ~9-10 m end to end), rocket bodies 5 m (upper stages are ~3-12 m long),
+#: debris 1 m (most tracked fragments are 10 cm to 1 m). Kind from the catalog name:
+#: "R/B" a rocket body, "DEB" debris, else a payload.
+RADII = {"payload": 5.0, "rocket body": 5.0, "debris": 1.0}
+#: Spacing of the CCSP outputs the Pc interpolates between, s.
+PC_OUTPUT_STEP = 300.0
+#: Cd debiasing: window before each epoch and sample spacing along the reference orbit, s.
+DEBIAS_WINDOW = 8 * 3600.0
+DEBIAS_CADENCE = 600.0
+#: Objects whose epochs lie within this of each other share one CCSP run (its common
+#: output epochs start at the earliest epoch), s.
+BATCH_EPOCH_SPREAD = 2 * 86400.0
+BATCH_SIZE = 100
+
+
+def object_radius(name: str) -> float:
+    """Circumscribing radius of an object from its catalog name (:data:`RADII`), m."""
+    upper = name.upper()
+    if "R/B" in upper:
+        return RADII["rocket body"]
+    if "DEB" in upper:
+        return RADII["debris"]
+    return RADII["payload"]
+
+
+@dataclass(frozen=True)
+class EventPcs:
+    """Per event: Pc per model (events, models), mixture Pc, hard-body radius m, note."""
+
+    weights: np.ndarray
+    pc_models: np.ndarray
+    pc: np.ndarray
+    hard_body_radius: np.ndarray
+    notes: list[str]
+
+
+def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
+    names = list(models)
+    if weights is None:
+        w = np.ones(len(names))
+    else:
+        if set(weights) != set(names):
+            raise ValueError(f"weights must name exactly the models {names}, got {list(weights)}")
+        w = np.array([float(weights[n]) for n in names])
+    if not np.isfinite(w).all() or (w < 0).any() or w.sum() <= 0:
+        raise ValueError(f"weights must be finite, non-negative and not all 0, got {w}")
+    return np.asarray(w / w.sum())
+
+
+def _radii(events: list[Any], hbr: float | None, radii: Any) -> np.ndarray:
+    if hbr is not None:
+        if not (np.isfinite(hbr) and hbr > 0):
+            raise ValueError(f"hard_body_radius must be > 0 m, got {hbr!r}")
+        return np.full(len(events), float(hbr))
+    table = dict(radii or {})
+    for key, r in table.items():
+        if not (isinstance(r, (int, float)) and np.isfinite(r) and r > 0):
+            raise ValueError(f"radii[{key!r}] must be > 0 m, got {r!r}")
+
+    def one(name: str, oid: int | None) -> float:
+        return float(table[oid]) if oid in table else object_radius(name)
+
+    return np.array([one(e.name1, e.id1) + one(e.name2, e.id2) for e in events])
+
+
+def _catalog_object(obj: Any) -> CatalogObject:
+    """The object as a CatalogObject (a tuple gets the TLE accuracy of its regime)."""
+    item = obj.item
+    if isinstance(item, CatalogObject):
+        return item
+    return CatalogObject(
+        name=obj.name,
+        norad_id=-1 if obj.object_id is None else int(obj.object_id),
+        state=obj.state,
+        drag_parameter=obj.craft.drag_parameter,
+        bstar=0.0,
+        source="(OrbitState, Spacecraft)",
+        covariance=tle_covariance(obj.state),
+        covariance_note="TLE accuracy of its regime (no covariance given)",
+    )
+
+
+def debiased_drag(objs: list[Any], models: dict[str, Any], ref: str) -> dict[str, np.ndarray]:
+    """Per model, each object's Cd*A/m debiased against the reference (m^2/kg)."""
+    base = np.array([o.craft.drag_parameter for o in objs])
+    out = {ref: base}
+    others = [k for k in models if k != ref]
+    if not others or not objs:
+        return out
+    epochs, pts, owner = [], [], []
+    for m, o in enumerate(objs):
+        ep, pos = backward_orbit(
+            o.state,
+            Spacecraft(1.0, o.craft.drag_parameter),
+            o.model,
+            DEBIAS_WINDOW,
+            DEBIAS_CADENCE,
+        )
+        epochs.append(ep)
+        pts.append(pos)
+        owner.append(np.full(len(ep), m))
+    ep_all, pos_all = np.concatenate(epochs), np.concatenate(pts)
+    who = np.concatenate(owner)
+    lla = frames.geodetic(frames.inertial_to_fixed(ep_all, pos_all))
+    where = (ep_all, lla[:, 0], lla[:, 1], lla[:, 2])
+    rho_ref = np.asarray(models[ref].mean_std(*where)[0], dtype=float)
+    for k in others:
+        ratio = rho_ref / np.asarray(models[k].mean_std(*where)[0], dtype=float)
+        mean_ratio = np.bincount(who, ratio, len(objs)) / np.bincount(who, None, len(objs))
+        out[k] = base * mean_ratio
+    return out
+
+
+def _batches(cats: list[CatalogObject]) -> list[list[int]]:
+    """Indices grouped by epoch (sorted), each group within :data:`BATCH_EPOCH_SPREAD`."""
+    order = sorted(range(len(cats)), key=lambda m: cats[m].state.epoch)
+    groups: list[list[int]] = []
+    for m in order:
+        if (
+            groups
+            and len(groups[-1]) < BATCH_SIZE
+            and seconds_between(cats[groups[-1][0]].state.epoch, cats[m].state.epoch)
+            <= BATCH_EPOCH_SPREAD
+        ):
+            groups[-1].append(m)
+        else:
+            groups.append([m])
+    return groups
+
+
+def _rtn_moments(mean: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> tuple[Any, Any]:
+    """Position offsets of ``mean`` from ``ref`` and ``mean``'s position covariances, in
+    the RTN frame of ``ref`` (nt, 3) and (nt, 3, 3)."""
+    basis = frames.rtn_basis(ref[:, :3], ref[:, 3:])
+    off = np.einsum("tij,tj->ti", basis, mean[:, :3] - ref[:, :3])
+    c = np.einsum("tij,tjk,tlk->til", basis, cov[:, :3, :3], basis)
+    return off, c
+
+
+def event_probabilities(
+    events: list[CloseApproach],
+    pairs: list[tuple[int, int]],
+    objs: list[Any],
+    models: dict[str, Any],
+    ref: str,
+    weights: Any,
+    cfg: Any,
+    enabled: bool,
+    hbr: float | None,
+    radii: Any,
+    timings: dict[str, float],
+) -> EventPcs:
+    """Pc per event and model and the mixture's (see the module docs)."""
+    w = _weights(models, weights)
+    radius = _radii(events, hbr, radii)
+    n_ev, n_mod = len(events), len(models)
+    pcm = np.full((n_ev, n_mod), np.nan)
+    notes = [""] * n_ev
+    if not enabled or not n_ev:
+        return EventPcs(w, pcm, np.full(n_ev, np.nan), radius, notes)
+    involved = sorted({i for p in pairs for i in p})
+    local = {g: m for m, g in enumerate(involved)}
+    sub = [objs[g] for g in involved]
+    t0 = time.perf_counter()
+    drag = debiased_drag(sub, models, ref)
+    timings["pc_drag"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    # Where each object is needed: (event, side) at each TCA.
+    needs: dict[int, list[tuple[int, int]]] = defaultdict(list)
+    for e, (i, j) in enumerate(pairs):
+        needs[local[i]].append((e, 0))
+        needs[local[j]].append((e, 1))
+    moments = _model_moments(events, sub, models, ref, drag, needs, cfg)
+    timings["pc_covariance"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for e, ev in enumerate(events):
+        for k, name in enumerate(models):
+            pcm[e, k], why = _pc_one(ev, moments, name, e, float(radius[e]))
+            if why and why not in notes[e]:
+                notes[e] = f"{notes[e]}; {why}" if notes[e] else why
+    have = np.isfinite(pcm)
+    wk = np.where(have, w[None, :], 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        pc = np.where(have.any(axis=1), np.nansum(pcm * wk, axis=1) / wk.sum(axis=1), np.nan)
+    timings["pc"] = time.perf_counter() - t0
+    return EventPcs(w, pcm, pc, radius, notes)
+
+
+#: Per (model, event, side): (RTN offset (3,), RTN covariance (3, 3), note) at TCA.
+_Moments = dict[tuple[str, int, int], tuple[np.ndarray, np.ndarray, str]]
+
+
+def _model_moments(
+    events: list[CloseApproach],
+    sub: list[Any],
+    models: dict[str, Any],
+    ref: str,
+    drag: dict[str, np.ndarray],
+    needs: dict[int, list[tuple[int, int]]],
+    cfg: Any,
+) -> _Moments:
+    """CCSP per model (in epoch batches) and each needed (event, side)'s moments."""
+    cats = [_catalog_object(o) for o in sub]
+    out: _Moments = {}
+    for batch in _batches(cats):
+        means: dict[str, Any] = {}
+        for name, model in models.items():
+            objs = [
+                dataclasses.replace(cats[m], drag_parameter=float(drag[name][m])) for m in batch
+            ]
+            res = propagate_catalog(
+                objs,
+                model,
+                cfg.end,
+                output_step=PC_OUTPUT_STEP,
+                floor_altitude=cfg.floor,
+                zonal_degree=cfg.degree,
+                errors="record",
+                progress=False,
+            )
+            means[name] = res
+        for b, m in enumerate(batch):
+            _object_moments(events, cats[m], means, ref, b, needs[m], out)
+    return out
+
+
+def _object_moments(
+    events: list[CloseApproach],
+    cat: CatalogObject,
+    results: dict[str, Any],
+    ref: str,
+    b: int,
+    needs: list[tuple[int, int]],
+    out: _Moments,
+) -> None:
+    """One object's moments at the TCAs it is needed at, per model (in ``out``)."""
+    base = results[ref]
+    t = to_seconds(base.epochs, cat.state.epoch)
+    for name, res in results.items():
+        valid = res.valid[b] & base.valid[b]
+        off, cov = _rtn_moments(res.mean[b], res.covariance[b], base.mean[b])
+        for e, side in needs:
+            tca = seconds_between(cat.state.epoch, events[e].tca)
+            if tca < 0:
+                c0 = cat.covariance if cat.covariance is not None else tle_covariance(cat.state)
+                basis = frames.rtn_basis(cat.state.position, cat.state.velocity)
+                note = "an object's epoch is after TCA: its covariance at epoch"
+                out[name, e, side] = (np.zeros(3), basis @ c0[:3, :3] @ basis.T, note)
+                continue
+            hi = int(np.searchsorted(t, tca))
+            lo = max(hi - 1, 0)
+            hi = min(hi, len(t) - 1)
+            if not valid[lo] and valid[hi]:  # TCA within one output after the epoch
+                lo = hi
+            if not (valid[lo] and valid[hi]):
+                out[name, e, side] = (np.full(3, np.nan), np.full((3, 3), np.nan), "")
+                continue
+            f = 0.0 if hi == lo else (tca - t[lo]) / (t[hi] - t[lo])
+            out[name, e, side] = (
+                (1 - f) * off[lo] + f * off[hi],
+                (1 - f) * cov[lo] + f * cov[hi],
+                "",
+            )
+
+
+def _pc_one(
+    ev: CloseApproach, moments: _Moments, name: str, e: int, hbr: float
+) -> tuple[float, str]:
+    """The event's 2-D Pc under one model, and a note."""
+    parts = []
+    for side, state in ((0, ev.state1), (1, ev.state2)):
+        off, cov, note = moments[name, e, side]
+        if not np.isfinite(off).all():
+            return float("nan"), f"{name}: no valid covariance at TCA (decayed or shortened)"
+        basis = frames.rtn_basis(state[:3], state[3:])
+        parts.append((state[:3] + basis.T @ off, state[3:], basis.T @ cov @ basis, note))
+    (r1, v1, c1, n1), (r2, v2, c2, n2) = parts
+    res = pc_2d(r1, v1, c1, r2, v2, c2, hbr)
+    return float(res.pc), n1 or n2
