@@ -8,6 +8,18 @@ interleaved, object by object, on the worker threads) and objects per second per
 
 Run:  RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py
       [--norad 25544] [--days 3] [--distance 5000] [--model exponential|msis]
+
+``--all`` screens the whole snapshot against itself instead
+(``rp.conjunction.screen_all``; B* <= 0 objects load with the assumed Cd*A/m,
+``nonpositive_bstar="prior"``) through the default model families
+(``rhoprop.studies.scenarios.default_models``: NRLMSIS 2.1, Jacchia-Roberts 1971 and
+NRLMSISE-00 unless JB2008 index files covering 2023 are found), with the
+per-model and mixture Pc of every event. It prints the time per stage (wall clock),
+the pairs and pair-intervals after each filter, the events and the peak memory (RSS),
+and writes ``benches/results/screening_all.json``:
+
+      RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py --all
+      [--days 3] [--distance 5000] [--limit N] [--no-pc]
 """
 
 from __future__ import annotations
@@ -51,7 +63,13 @@ def main() -> None:
         default=os.environ.get("RHOPROP_TEST_DATA", str(Path(__file__).parents[2] / "shared/data")),
         help="reference data directory (default $RHOPROP_TEST_DATA or ../shared/data)",
     )
+    parser.add_argument("--all", action="store_true", help="all-on-all (screen_all)")
+    parser.add_argument("--limit", type=int, default=None, help="--all: first N objects only")
+    parser.add_argument("--no-pc", action="store_true", help="--all: skip the Pc stage")
     args = parser.parse_args()
+    if args.all:
+        all_on_all(args)
+        return
     snapshot = Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz"
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "active.tle"
@@ -125,6 +143,82 @@ def main() -> None:
         )
     out = Path(__file__).parent / "results" / "screening.json"
     out.write_text(json.dumps({"machine": info(), "runs": runs}, indent=2, default=str) + "\n")
+
+
+def all_on_all(args: argparse.Namespace) -> None:
+    """The whole snapshot screened against itself (see the module docs)."""
+    import resource
+
+    from rhoprop.conjunction import screen_all
+    from rhoprop.conjunction.all_on_all import ALL_ON_ALL_STAGES
+
+    snapshot = Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz"
+    t0 = time.perf_counter()
+    cat = catalog.load(snapshot, errors="record", nonpositive_bstar="prior")
+    load = time.perf_counter() - t0
+    objs = cat.objects[: args.limit] if args.limit else cat.objects
+    print(f"{len(objs)} objects loaded in {load:.1f} s ({len(cat.skipped)} skipped)")
+    start = max(o.state.epoch for o in objs)
+    end = start + np.timedelta64(int(args.days * 86400), "s")
+    from rhoprop.studies.scenarios import default_models
+
+    models = default_models()
+    res = screen_all(
+        objs,
+        models,
+        start=start,
+        end=end,
+        distance=args.distance,
+        pc=not args.no_pc,
+        threads=args.threads,
+        errors="record",
+        progress=False,
+    )
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(
+        f"\n{start} + {args.days:g} days, distance {args.distance:g} m, models "
+        f"{', '.join(res.models)}, grid {res.grid_step:g} s, {res.threads} threads, "
+        f"{res.chunks} time chunk(s)"
+    )
+    print("| stage | seconds |\n| --- | ---: |")
+    print(f"| load | {load:.1f} |")
+    for key, seconds in res.timings.items():
+        print(f"| {key} | {seconds:.1f} |")
+    print(f"| **screen_all wall** | **{res.wall:.1f}** |")
+    print("\n| filter | count |\n| --- | ---: |")
+    for key in ALL_ON_ALL_STAGES:
+        print(f"| {key} | {res.counts[key]:,} |")
+    finite = np.isfinite(res.pc)
+    print(
+        f"\n{len(res.events)} events, {int(finite.sum())} with a mixture Pc; "
+        f"{int((res.pc > 1e-4).sum())} above 1e-4, {int((res.pc > 1e-6).sum())} above 1e-6; "
+        f"peak RSS {peak:,.0f} MB; skipped {len(res.skipped)}, partly screened {len(res.notes)}"
+    )
+    for name, why in res.skipped[:8]:
+        print(f"  skipped {name}: {why[:110]}")
+    for e, pc, pcm in list(zip(res.events, res.pc, res.pc_models, strict=True))[:10]:
+        per = ", ".join(f"{p:.2g}" for p in pcm)
+        print(
+            f"  {e.tca} {e.name1[:20]:<20} {e.name2[:20]:<20} miss {e.miss_distance:7.0f} m "
+            f"Pc {pc:.2g} ({per})"
+        )
+    out = Path(__file__).parent / "results" / "screening_all.json"
+    out.parent.mkdir(exist_ok=True)
+    record = {
+        "machine": info(),
+        "objects": len(objs),
+        "days": args.days,
+        "distance": args.distance,
+        "models": res.models,
+        "timings": {"load": load, **res.timings},
+        "wall": res.wall,
+        "counts": res.counts,
+        "events": len(res.events),
+        "peak_rss_mb": peak,
+        "threads": res.threads,
+        "chunks": res.chunks,
+    }
+    out.write_text(json.dumps(record, indent=2, default=str) + "\n")
 
 
 if __name__ == "__main__":

@@ -78,6 +78,34 @@ def _reentry(args: argparse.Namespace) -> int:
     return 0
 
 
+def _screen(args: argparse.Namespace) -> int:
+    from .catalog.job import model_by_name
+    from .conjunction.screen_job import run_screen_file
+
+    if args.model == "families":
+        from .spaceweather import SpaceWeather
+        from .studies.scenarios import default_models
+
+        models = default_models(SpaceWeather.cached().with_forecast())
+    else:
+        models = {args.model: model_by_name(args.model)}
+    run_screen_file(
+        args.file,
+        args.out,
+        end=args.end,
+        start=args.start,
+        distance=args.distance,
+        models=models,
+        pc=args.pc,
+        hard_body_radius=args.hbr,
+        radii_file=args.radii,
+        skip_bad=args.skip_bad,
+        overwrite=args.overwrite,
+        command=args.command_line,
+    )
+    return 0
+
+
 def _data_refresh(args: argparse.Namespace) -> int:
     from .catalog.job import refresh_data
 
@@ -392,6 +420,49 @@ def build_parser() -> argparse.ArgumentParser:
     )
     conj.add_argument("--json", default=None, help="also write the figures to this JSON file")
     conj.set_defaults(run=_conjunction)
+    scr = sub.add_parser(
+        "screen",
+        help="screen a whole TLE/OMM catalog against itself, with Pc per density model",
+        description="Propagate every element set of FILE once from --start to --end, find "
+        "every pair coming within --distance (spatial grid and distance bounds, then the "
+        "minima), and give each event its probability of collision per density model and "
+        "for their mixture (CCSP of the objects in events, each object's own covariance). "
+        "Writes OUT/events.parquet, one CCSDS CDM per event in OUT/cdm (with the [cdm] "
+        "extra) and prints the most probable. B* <= 0 objects load with an assumed "
+        "Cd*A/m of 0.022 m^2/kg and 100 % drag uncertainty.",
+    )
+    scr.add_argument("file", help="TLE or OMM file")
+    scr.add_argument("--end", required=True, help="end of the window, UTC ISO")
+    scr.add_argument(
+        "--start", default=None, help="start of the window, UTC ISO (default: the newest epoch)"
+    )
+    scr.add_argument("--distance", type=float, default=5e3, help="screening distance, m (5000)")
+    scr.add_argument(
+        "--model",
+        default="families",
+        choices=("families", *MODEL_NAMES),
+        help="'families' (default: NRLMSIS 2.1, JB2008 or NRLMSISE-00, Jacchia-Roberts "
+        "1971, Cd debiased per model) or one model",
+    )
+    scr.add_argument(
+        "--hbr", type=float, default=None, help="combined hard-body radius for every event, m"
+    )
+    scr.add_argument(
+        "--radii",
+        default=None,
+        metavar="CSV",
+        help="per-object radii (columns norad_id, radius_m); others by kind: payload and "
+        "rocket body 5 m, debris 1 m; an event's hard-body radius is the sum",
+    )
+    scr.add_argument("--pc", action=argparse.BooleanOptionalAction, default=True, help="compute Pc")
+    scr.add_argument("--out", default="rhoprop-screen", help="output directory")
+    scr.add_argument(
+        "--skip-bad",
+        action="store_true",
+        help="skip malformed element sets and objects that cannot be propagated (listed)",
+    )
+    _overwrite(scr)
+    scr.set_defaults(run=_screen)
     data = sub.add_parser("data", help="manage data files (space weather, JB2008 indices)")
     data_sub = data.add_subparsers(dest="data_command", metavar="ACTION")
     refresh = data_sub.add_parser(

@@ -130,6 +130,9 @@ def _object_from_satrec(
             )
     state = OrbitState(epoch, np.array(r) * 1e3, np.array(v) * 1e3)
     acc = tle_accuracy(state)
+    note = _tle_note(acc)
+    if bstar <= 0 and drag == DEFAULT_DRAG_PARAMETER:
+        note += f"; B* = {bstar:g} <= 0: Cd*A/m = {drag:g} m^2/kg assumed (unless fitted)"
     return CatalogObject(
         name or str(sat.satnum),
         int(sat.satnum),
@@ -138,7 +141,7 @@ def _object_from_satrec(
         bstar,
         where,
         covariance=tle_covariance(state, acc),
-        covariance_note=_tle_note(acc),
+        covariance_note=note,
         elements=elements,
     )
 
@@ -295,6 +298,7 @@ def load(
     span: tuple[float, float] | None = None,
     threads: int | None = None,
     zonal_degree: int = 4,
+    nonpositive_bstar: Literal["error", "prior"] = "error",
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content, plain or gzip-compressed.
@@ -327,8 +331,18 @@ def load(
         zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6 (default
             4, the degree of catalog runs, ``propagate_catalog``); fit with the degree the
             objects will be propagated with.
+        nonpositive_bstar: an element set with B* <= 0 (no drag parameter follows from it)
+            without ``fit``: ``"error"`` (default; an error, or skipped with
+            ``errors="record"``) or ``"prior"``: it loads with the fit's starting value
+            Cd*A/m = ``fit.DEFAULT_DRAG_PARAMETER`` (0.022 m^2/kg), its note says so, and
+            ``drag_sigma="auto"`` gives it 100 % (the drag is a guess). For screening a
+            whole catalog, where such objects (often manoeuvring or high) must not drop
+            out.
     """
     from .fit import DEFAULT_SPAN
+
+    if nonpositive_bstar not in ("error", "prior"):
+        raise ValueError(f"nonpositive_bstar must be 'error' or 'prior', got {nonpositive_bstar!r}")
 
     errors = _validate.errors_argument("load", errors)
     if fit and model is None:
@@ -375,11 +389,19 @@ def load(
             sat, name, elements = item
             drag = (drag_parameters or {}).get(int(sat.satnum))
             out.objects.append(
-                _object_from_satrec(sat, name, where, drag, elements, allow_nonpositive=fit)
+                _object_from_satrec(
+                    sat,
+                    name,
+                    where,
+                    drag,
+                    elements,
+                    allow_nonpositive=fit or nonpositive_bstar == "prior",
+                )
             )
         except ValueError as err:
+            message = str(err) if str(err).startswith(where) else f"{where}: {err}"
             if errors == "raise":
-                raise
+                raise ValueError(message) from err
             out.skipped.append((where, str(err)))
     if not out.objects and not out.skipped:
         raise ValueError(f"{p} holds no TLE or OMM element sets")

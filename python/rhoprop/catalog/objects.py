@@ -35,6 +35,7 @@ from ..time import (
 )
 from .covariance import paper_covariance
 from .elements import CatalogObject
+from .fit import DEFAULT_DRAG_PARAMETER
 from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA
 
 #: Status of an object in a :class:`CatalogResult`.
@@ -75,10 +76,13 @@ AUTO_FITTED_DRAG_SIGMA_MIN = 0.08
 def _auto_drag_sigma(obj: CatalogObject) -> float:
     """``drag_sigma="auto"`` before the cap: a fitted object's formal relative sigma but
     at least :data:`AUTO_FITTED_DRAG_SIGMA_MIN`; without a fit (Cd*A/m from B*, which
-    absorbs SGP4's own density model) ``DEFAULT_DRAG_RELATIVE_SIGMA`` (0.15)."""
+    absorbs SGP4's own density model) ``DEFAULT_DRAG_RELATIVE_SIGMA`` (0.15); a B* <= 0
+    object loaded with an assumed Cd*A/m (``load(nonpositive_bstar="prior")``): 100 %."""
     fit = obj.fit
     if fit is not None and obj.drag_parameter > 0:
         return max(float(fit.drag_sigma) / obj.drag_parameter, AUTO_FITTED_DRAG_SIGMA_MIN)
+    if obj.bstar <= 0 and obj.drag_parameter == DEFAULT_DRAG_PARAMETER:
+        return AUTO_DRAG_SIGMA_MAX
     return DEFAULT_DRAG_RELATIVE_SIGMA
 
 

@@ -1,10 +1,12 @@
 """Conjunction assessment under density uncertainty: close approaches between propagated
-objects (``approach``) and catalog screening (``screening``), the probability of
-collision for Gaussian states, Gaussian mixtures and Monte Carlo members
+objects (``approach``), catalog screening (``screening``: one primary against many;
+``all_on_all``: every pair, with each event's Pc per density model, ``event_pc``), the
+probability of collision for Gaussian states, Gaussian mixtures and Monte Carlo members
 (``probability``), CCSDS conjunction data messages (``cdm``) and a message's Pc with the
 density models' disagreement added (``with_density``). Positions m, velocities m/s,
 covariances m^2, hard-body radius m."""
 
+from .all_on_all import AllOnAllResult, screen_all
 from .approach import CloseApproach, closest_approach
 from .cdm import CdmObject, ConjunctionMessage, read_cdm, write_cdm
 from .probability import (
@@ -19,6 +21,7 @@ from .screening import ScreeningResult, screen
 from .with_density import DensityPc, density_pc
 
 __all__: list[str] = [
+    "AllOnAllResult",
     "CdmObject",
     "CloseApproach",
     "ConjunctionMessage",
@@ -34,5 +37,6 @@ __all__: list[str] = [
     "pc_monte_carlo",
     "read_cdm",
     "screen",
+    "screen_all",
     "write_cdm",
 ]

@@ -31,6 +31,7 @@ from ..propagation.propagate import check_model
 from ..time import EpochLike, add_seconds, seconds_between, to_datetime64
 from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics
 from .approach import _models_for as models_for
+from .event_pc import check_coverage, check_options, event_probabilities
 from .screening import (
     DEFAULT_GRID_STEP,
     HERMITE_SAMPLES,
@@ -48,7 +49,7 @@ from .screening import (
 __all__ = ["ALL_ON_ALL_STAGES", "DEFAULT_MAX_MEMORY", "AllOnAllResult", "screen_all"]
 
 #: Memory the tracks of one time chunk may take, bytes (48 B per object and sample).
-DEFAULT_MAX_MEMORY = 1e9
+DEFAULT_MAX_MEMORY = 5e8
 #: Names of :attr:`AllOnAllResult.counts`, in the order of the stages.
 ALL_ON_ALL_STAGES = (
     "objects",
@@ -81,6 +82,9 @@ class AllOnAllResult:
             (weights renormalised).
         hard_body_radius: per event, m.
         pc_notes: per event, what was approximated or missing ("" when nothing).
+        covariance1, covariance2: per event, each object's reference-model state
+            covariance at TCA in the RTN axes of its state (events, 6, 6), m^2, m^2/s,
+            m^2/s^2 (NaN without Pc), as the CDMs carry them.
         counts: objects and pairs after each stage, in the order of
             :data:`ALL_ON_ALL_STAGES`: ``objects`` given, ``screened`` (propagated over
             some of the window), ``pairs`` (all pairs of screened objects),
@@ -107,6 +111,8 @@ class AllOnAllResult:
     pc: np.ndarray
     hard_body_radius: np.ndarray
     pc_notes: list[str]
+    covariance1: np.ndarray
+    covariance2: np.ndarray
     counts: dict[str, int]
     skipped: list[tuple[str, str]]
     notes: list[tuple[str, str]]
@@ -208,14 +214,15 @@ def screen_all(
         objects: the catalog (a :class:`~rhoprop.catalog.Catalog` or a list).
         model: a density model, or {name: model} for several (``reference`` names the one
             the screening propagates with; default the first); e.g.
-            ``rp.studies.default_models()``.
+            ``rhoprop.studies.scenarios.default_models()``.
         start, end: the window, UTC; distance: screening distance, m.
         weights: mixture weights {model name: weight} (default equal).
         pc: compute the Pc of every event (default True).
         grid_step, fine_step: coarse grid and refinement output steps, s.
         floor_altitude, zonal_degree, dynamics: as for ``rp.propagate`` (default J2..J4,
             the catalog's).
-        max_memory: bytes the tracks of one time chunk may take (default 1 GB).
+        max_memory: bytes the tracks of one time chunk may take (default 0.5 GB; the
+            window is cut into time chunks that fit).
         threads: worker threads (default CPU count); errors: ``"raise"`` (default: the
             first object whose propagation fails raises, named) or ``"record"`` (it is
             listed in ``skipped`` and the screen goes on).
@@ -237,10 +244,13 @@ def screen_all(
     workers = worker_count(threads)
     budget = _validate.positive("max_memory", max_memory)
     objs, skipped = _unique_objects(objects)
-    timings = dict.fromkeys(("field", "propagation", "sieve", "refinement"), 0.0)
-    t0 = time.perf_counter()
     earliest = min([cfg.start, *(o.state.epoch for o in objs)])
     latest = max([cfg.end, *(o.state.epoch for o in objs)])
+    check_options(models, weights, hard_body_radius, radii)
+    if pc:
+        check_coverage(models, earliest, latest)
+    timings = dict.fromkeys(("field", "propagation", "sieve", "refinement"), 0.0)
+    t0 = time.perf_counter()
     atlases = models_for(models[ref_name], [o.state for o in objs], earliest, latest, cfg.floor)
     for obj, own in zip(objs, atlases, strict=True):
         obj.model = own
@@ -252,8 +262,6 @@ def screen_all(
         run.close()
     skipped += gone
     counts["objects"] = len(objs) + sum(1 for _n, why in skipped if why.startswith("same"))
-    from .event_pc import event_probabilities
-
     pcs = event_probabilities(
         events, pairs, objs, models, ref_name, weights, cfg, pc, hard_body_radius, radii, timings
     )
@@ -269,6 +277,8 @@ def screen_all(
         pc=pcs.pc[order] if len(order) else pcs.pc,
         hard_body_radius=pcs.hard_body_radius[order] if len(order) else pcs.hard_body_radius,
         pc_notes=[pcs.notes[i] for i in order],
+        covariance1=pcs.covariance1[order] if len(order) else pcs.covariance1,
+        covariance2=pcs.covariance2[order] if len(order) else pcs.covariance2,
         counts={key: counts.get(key, 0) for key in ALL_ON_ALL_STAGES},
         skipped=skipped,
         notes=notes,
@@ -476,16 +486,24 @@ class _Run:
         return events, pairs, counts, self.notes, self.skipped, len(bounds) - 1
 
     def _propagate(self, times: np.ndarray, state: list[Any], first: bool) -> _Chunk:
-        """Every object on the chunk's samples; ``state`` is updated to the chunk's end."""
+        """Every object on the chunk's samples; ``state`` is updated to the chunk's end.
+        Each worker writes its object's samples straight into the chunk's arrays (the
+        tracks are the run's memory: they are never held twice)."""
         n, m = len(self.objs), len(times)
         pos, vel = np.zeros((n, m, 3)), np.zeros((n, m, 3))
         samples = np.zeros(n, dtype=np.uint64)
         todo = [i for i in range(n) if first or state[i] is not None]
 
-        def one(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+        def one(i: int) -> float | None:
             if self.stop.is_set():
                 raise KeyboardInterrupt("screening interrupted")
-            return self._track(self.objs[i], state[i], times, first)
+            t, p, v, decay = self._track(self.objs[i], state[i], times, first)
+            k = min(len(t), m)
+            if k and not np.allclose(t[:k], times[:k], rtol=0, atol=1e-6):
+                raise AssertionError("track off the common grid")  # guarded by _track
+            pos[i, :k], vel[i, :k], samples[i] = p[:k], v[:k], k
+            state[i] = None if decay is not None or k < m else (p[-1].copy(), v[-1].copy())
+            return decay
 
         done = 0
         total = len(todo)
@@ -495,20 +513,15 @@ class _Run:
             done += 1
             self._tell("propagation", done, total)
 
-        results = map_in_threads(one, todo, self.workers, self.stop, tick)
-        for i, (t, p, v, decay) in zip(todo, results, strict=True):
-            obj = self.objs[i]
-            k = min(len(t), m)
-            if k and not np.allclose(t[:k], times[:k], rtol=0, atol=1e-6):
-                raise AssertionError("track off the common grid")  # guarded by _track
-            pos[i, :k], vel[i, :k], samples[i] = p[:k], v[:k], k
-            state[i] = None if decay is not None or k < m else (p[-1], v[-1])
-            if decay is not None:
-                when = add_seconds(self.cfg.start, decay)
-                if k < 2 and first:
-                    self.skipped.append((obj.name, f"decayed at {when} UTC, before {times[1]:g} s"))
-                else:
-                    self.notes.append((obj.name, f"decayed at {when} UTC: screened up to then"))
+        decays = map_in_threads(one, todo, self.workers, self.stop, tick)
+        for i, decay in zip(todo, decays, strict=True):
+            if decay is None:
+                continue
+            name, when = self.objs[i].name, add_seconds(self.cfg.start, decay)
+            if samples[i] < 2 and first:
+                self.skipped.append((name, f"decayed at {when} UTC, before {times[1]:g} s"))
+            else:
+                self.notes.append((name, f"decayed at {when} UTC: screened up to then"))
         return _Chunk(times, pos, vel, samples)
 
     def _track(
@@ -535,12 +548,15 @@ class _Run:
 
     def _sieve(self, chunk: _Chunk, counts: dict[str, int]) -> np.ndarray:
         """Candidate (i, j, k) rows of the chunk, sorted."""
-        rn = np.linalg.norm(chunk.pos, axis=2)
-        vn = np.linalg.norm(chunk.vel, axis=2)
-        valid = np.arange(len(chunk.times))[None, :] < chunk.samples[:, None].astype(np.int64)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            f = np.where(valid, (vn / np.where(rn > 0, rn, 1.0)) ** 4 * rn, 0.0)
-        fourth = f.max(axis=1) if f.size else np.zeros(len(chunk.samples))
+        fourth = np.zeros(len(chunk.samples))
+        steps = np.arange(len(chunk.times))[None, :]
+        for lo in range(0, len(fourth), 512):  # blocks: no (objects, samples) temporaries
+            rn = np.linalg.norm(chunk.pos[lo : lo + 512], axis=2)
+            vn = np.linalg.norm(chunk.vel[lo : lo + 512], axis=2)
+            valid = steps < chunk.samples[lo : lo + 512, None].astype(np.int64)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                f = np.where(valid, (vn / np.where(rn > 0, rn, 1.0)) ** 4 * rn, 0.0)
+            fourth[lo : lo + 512] = f.max(axis=1)
         total = len(chunk.times) - 1
 
         def tick(done: int) -> None:
@@ -551,7 +567,7 @@ class _Run:
             chunk.pos,
             chunk.vel,
             chunk.samples,
-            np.ascontiguousarray(fourth),
+            fourth,
             self.cfg.limit,
             MAX_ACCELERATION,
             HERMITE_SAMPLES,

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections import defaultdict
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -67,13 +68,17 @@ def object_radius(name: str) -> float:
 
 @dataclass(frozen=True)
 class EventPcs:
-    """Per event: Pc per model (events, models), mixture Pc, hard-body radius m, note."""
+    """Per event: Pc per model (events, models), mixture Pc, hard-body radius m, note,
+    and both objects' reference-model covariances at TCA in their RTN axes (events, 6, 6)
+    (NaN where not available, or without Pc)."""
 
     weights: np.ndarray
     pc_models: np.ndarray
     pc: np.ndarray
     hard_body_radius: np.ndarray
     notes: list[str]
+    covariance1: np.ndarray
+    covariance2: np.ndarray
 
 
 def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
@@ -89,15 +94,24 @@ def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
     return np.asarray(w / w.sum())
 
 
-def _radii(events: list[Any], hbr: float | None, radii: Any) -> np.ndarray:
-    if hbr is not None:
-        if not (np.isfinite(hbr) and hbr > 0):
-            raise ValueError(f"hard_body_radius must be > 0 m, got {hbr!r}")
-        return np.full(len(events), float(hbr))
-    table = dict(radii or {})
-    for key, r in table.items():
+def check_options(models: dict[str, Any], weights: Any, hbr: Any, radii: Any) -> None:
+    """The Pc options checked before any work (ValueError/TypeError naming them)."""
+    _weights(models, weights)
+    if hbr is not None and not (
+        isinstance(hbr, (int, float)) and not isinstance(hbr, bool) and np.isfinite(hbr) and hbr > 0
+    ):
+        raise ValueError(f"hard_body_radius must be a number > 0 m, got {hbr!r}")
+    if radii is not None and not isinstance(radii, Mapping):
+        raise TypeError(f"radii must be a mapping {{NORAD id: m}}, got {type(radii).__name__}")
+    for key, r in (radii or {}).items():
         if not (isinstance(r, (int, float)) and np.isfinite(r) and r > 0):
             raise ValueError(f"radii[{key!r}] must be > 0 m, got {r!r}")
+
+
+def _radii(events: list[Any], hbr: float | None, radii: Any) -> np.ndarray:
+    if hbr is not None:
+        return np.full(len(events), float(hbr))
+    table = dict(radii or {})
 
     def one(name: str, oid: int | None) -> float:
         return float(table[oid]) if oid in table else object_radius(name)
@@ -153,6 +167,21 @@ def debiased_drag(objs: list[Any], models: dict[str, Any], ref: str) -> dict[str
     return out
 
 
+def check_coverage(models: dict[str, Any], first: np.datetime64, last: np.datetime64) -> None:
+    """Fails before any work if a model cannot give densities from the debiasing window
+    before ``first`` to ``last`` (its drivers' or index files' span): ValueError naming
+    the model and why."""
+    span = np.array([first - np.timedelta64(int(DEBIAS_WINDOW), "s"), last], dtype="datetime64[ns]")
+    for name, model in models.items():
+        try:
+            model.mean_std(span, np.zeros(2), np.zeros(2), np.full(2, 400e3))
+        except (ValueError, OSError) as err:
+            raise ValueError(
+                f"density model {name!r} cannot cover the screening and its Pc, {span[0]} "
+                f"to {span[1]} UTC: {err}"
+            ) from err
+
+
 def _batches(cats: list[CatalogObject]) -> list[list[int]]:
     """Indices grouped by epoch (sorted), each group within :data:`BATCH_EPOCH_SPREAD`."""
     order = sorted(range(len(cats)), key=lambda m: cats[m].state.epoch)
@@ -171,12 +200,14 @@ def _batches(cats: list[CatalogObject]) -> list[list[int]]:
 
 
 def _rtn_moments(mean: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> tuple[Any, Any]:
-    """Position offsets of ``mean`` from ``ref`` and ``mean``'s position covariances, in
-    the RTN frame of ``ref`` (nt, 3) and (nt, 3, 3)."""
+    """Position offsets of ``mean`` from ``ref`` (nt, 3) and ``mean``'s state covariances
+    (nt, 6, 6), in the RTN axes of ``ref`` (position and velocity blocks rotated alike,
+    as a CDM gives them)."""
     basis = frames.rtn_basis(ref[:, :3], ref[:, 3:])
     off = np.einsum("tij,tj->ti", basis, mean[:, :3] - ref[:, :3])
-    c = np.einsum("tij,tjk,tlk->til", basis, cov[:, :3, :3], basis)
-    return off, c
+    b6 = np.zeros((len(basis), 6, 6))
+    b6[:, :3, :3] = b6[:, 3:, 3:] = basis
+    return off, np.einsum("tij,tjk,tlk->til", b6, cov, b6)
 
 
 def event_probabilities(
@@ -198,8 +229,9 @@ def event_probabilities(
     n_ev, n_mod = len(events), len(models)
     pcm = np.full((n_ev, n_mod), np.nan)
     notes = [""] * n_ev
+    cov = np.full((2, n_ev, 6, 6), np.nan)
     if not enabled or not n_ev:
-        return EventPcs(w, pcm, np.full(n_ev, np.nan), radius, notes)
+        return EventPcs(w, pcm, np.full(n_ev, np.nan), radius, notes, cov[0], cov[1])
     involved = sorted({i for p in pairs for i in p})
     local = {g: m for m, g in enumerate(involved)}
     sub = [objs[g] for g in involved]
@@ -224,11 +256,14 @@ def event_probabilities(
     wk = np.where(have, w[None, :], 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         pc = np.where(have.any(axis=1), np.nansum(pcm * wk, axis=1) / wk.sum(axis=1), np.nan)
+    for (name, e, side), (_off, c6, _note) in moments.items():
+        if name == ref:
+            cov[side, e] = c6
     timings["pc"] = time.perf_counter() - t0
-    return EventPcs(w, pcm, pc, radius, notes)
+    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1])
 
 
-#: Per (model, event, side): (RTN offset (3,), RTN covariance (3, 3), note) at TCA.
+#: Per (model, event, side): (RTN offset (3,), RTN covariance (6, 6), note) at TCA.
 _Moments = dict[tuple[str, int, int], tuple[np.ndarray, np.ndarray, str]]
 
 
@@ -286,8 +321,10 @@ def _object_moments(
             if tca < 0:
                 c0 = cat.covariance if cat.covariance is not None else tle_covariance(cat.state)
                 basis = frames.rtn_basis(cat.state.position, cat.state.velocity)
+                b6 = np.zeros((6, 6))
+                b6[:3, :3] = b6[3:, 3:] = basis
                 note = "an object's epoch is after TCA: its covariance at epoch"
-                out[name, e, side] = (np.zeros(3), basis @ c0[:3, :3] @ basis.T, note)
+                out[name, e, side] = (np.zeros(3), b6 @ c0 @ b6.T, note)
                 continue
             hi = int(np.searchsorted(t, tca))
             lo = max(hi - 1, 0)
@@ -295,7 +332,7 @@ def _object_moments(
             if not valid[lo] and valid[hi]:  # TCA within one output after the epoch
                 lo = hi
             if not (valid[lo] and valid[hi]):
-                out[name, e, side] = (np.full(3, np.nan), np.full((3, 3), np.nan), "")
+                out[name, e, side] = (np.full(3, np.nan), np.full((6, 6), np.nan), "")
                 continue
             f = 0.0 if hi == lo else (tca - t[lo]) / (t[hi] - t[lo])
             out[name, e, side] = (
@@ -315,7 +352,7 @@ def _pc_one(
         if not np.isfinite(off).all():
             return float("nan"), f"{name}: no valid covariance at TCA (decayed or shortened)"
         basis = frames.rtn_basis(state[:3], state[3:])
-        parts.append((state[:3] + basis.T @ off, state[3:], basis.T @ cov @ basis, note))
+        parts.append((state[:3] + basis.T @ off, state[3:], basis.T @ cov[:3, :3] @ basis, note))
     (r1, v1, c1, n1), (r2, v2, c2, n2) = parts
     res = pc_2d(r1, v1, c1, r2, v2, c2, hbr)
     return float(res.pc), n1 or n2

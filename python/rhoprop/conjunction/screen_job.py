@@ -1,0 +1,174 @@
+"""``rhoprop screen``: a catalog file screened all-on-all (:func:`screen_all`), the
+events written as a Parquet table and as CCSDS CDMs, the most probable printed."""
+
+from __future__ import annotations
+
+import csv
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..catalog.elements import Catalog, load
+from ..io.files import OutputFolder, command_line, sanitise
+from ..time import to_datetime64
+from .all_on_all import AllOnAllResult, screen_all
+from .cdm import CdmObject, ConjunctionMessage
+
+__all__ = ["read_radii", "run_screen_file", "write_events"]
+
+#: Events printed by ``rhoprop screen`` (all are written).
+PRINTED = 15
+
+
+def read_radii(path: str | Path) -> dict[int, float]:
+    """{NORAD id: radius m} from a CSV with ``norad_id`` and ``radius_m`` columns (the
+    hard-body radius of an event is the sum of both objects' radii)."""
+    out: dict[int, float] = {}
+    with open(path, newline="") as fh:
+        rows = csv.DictReader(fh)
+        if not rows.fieldnames or not {"norad_id", "radius_m"} <= set(rows.fieldnames):
+            raise ValueError(f"{path}: needs columns norad_id and radius_m")
+        for line, row in enumerate(rows, start=2):
+            try:
+                key, radius = int(row["norad_id"]), float(row["radius_m"])
+            except (TypeError, ValueError) as err:
+                raise ValueError(f"{path} line {line}: {err}") from err
+            if not (np.isfinite(radius) and radius > 0):
+                raise ValueError(f"{path} line {line}: radius_m must be > 0, got {radius}")
+            out[key] = radius
+    return out
+
+
+def _message(res: AllOnAllResult, n: int, created: np.datetime64) -> ConjunctionMessage:
+    """Event ``n`` as a CDM: the screened states at TCA (TEME taken as inertial, written
+    as EME2000 like the catalog's OEM files), the reference model's covariances in RTN
+    and the mixture's Pc."""
+    e = res.events[n]
+    covs = (res.covariance1[n], res.covariance2[n])
+    objs = []
+    sides = ((e.state1, e.name1, e.id1, covs[0]), (e.state2, e.name2, e.id2, covs[1]))
+    for state, name, oid, cov in sides:
+        objs.append(
+            CdmObject(
+                name=name,
+                designator="" if oid is None else str(oid),
+                position=state[:3],
+                velocity=state[3:],
+                covariance=cov if np.isfinite(cov).all() else np.zeros((6, 6)),
+            )
+        )
+    pcs = zip(res.models, res.pc_models[n], strict=True)
+    per_model = ", ".join(f"{m} {p:.3g}" for m, p in pcs)
+    return ConjunctionMessage(
+        tca=e.tca,
+        object1=objs[0],
+        object2=objs[1],
+        creation_date=created,
+        miss_distance=e.miss_distance,
+        relative_speed=e.relative_speed,
+        collision_probability=float(res.pc[n]) if np.isfinite(res.pc[n]) else None,
+        collision_probability_method=f"rhoprop mixture of density models ({per_model})"[:200],
+        hard_body_radius=float(res.hard_body_radius[n]),
+        message_id=f"rhoprop-{n + 1}",
+    )
+
+
+def write_events(res: AllOnAllResult, folder: OutputFolder) -> list[Path]:
+    """``events.parquet`` (one row per event, :meth:`AllOnAllResult.table`) and one KVN
+    CDM per event in ``cdm/`` (``<rank>_<id1>_<id2>.cdm``, rank by mixture Pc; needs
+    ``ccsds-ndm``, the ``[cdm]`` extra: without it the CDMs are left out, said on
+    stderr). Returns the paths written."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    cols = res.table()
+    cols["name1"] = np.array([sanitise(x) for x in cols["name1"]], dtype=object)
+    cols["name2"] = np.array([sanitise(x) for x in cols["name2"]], dtype=object)
+    table = pa.table({k: pa.array(list(v) if v.dtype == object else v) for k, v in cols.items()})
+    written = []
+    with folder.path("events.parquet") as tmp:
+        pq.write_table(table, tmp)
+    written.append(folder.directory / "events.parquet")
+    try:
+        from .cdm import cdm_text
+
+        created = np.datetime64("now", "ns")
+        if res.events:
+            (folder.directory / "cdm").mkdir(exist_ok=True)
+        for n, e in enumerate(res.events):
+            name = f"cdm/{n + 1:05d}_{e.id1}_{e.id2}.cdm"
+            written.append(folder.write_text(name, cdm_text(_message(res, n, created))))
+    except ImportError as err:
+        print(f"CDMs not written: {err}", file=sys.stderr)
+    return written
+
+
+def _catalog(file: str | Path, skip_bad: bool) -> Catalog:
+    cat = load(file, errors="record" if skip_bad else "raise", nonpositive_bstar="prior")
+    for where, message in cat.skipped:
+        print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
+    if len(cat) < 2:
+        raise ValueError(f"{file}: fewer than two element sets could be read")
+    return cat
+
+
+def run_screen_file(
+    file: str | Path,
+    out: str | Path,
+    *,
+    end: str,
+    start: str | None = None,
+    distance: float = 5e3,
+    models: dict[str, Any],
+    pc: bool = True,
+    hard_body_radius: float | None = None,
+    radii_file: str | Path | None = None,
+    skip_bad: bool = False,
+    overwrite: bool = False,
+    command: str | None = None,
+) -> list[Path]:
+    """Every element set of ``file`` screened against every other from ``start`` (default
+    the newest epoch of the file) to ``end`` (UTC ISO) within ``distance`` m through
+    ``models`` (reference first); B* <= 0 objects load with an assumed Cd*A/m
+    (``load(nonpositive_bstar="prior")``). Writes ``out/events.parquet``, ``out/cdm/`` and
+    ``out/manifest.json``; prints the events with the largest mixture Pc, the filter
+    counts and the time per stage. Returns the paths written."""
+    cat = _catalog(file, skip_bad)
+    radii = read_radii(radii_file) if radii_file else None
+    t0 = to_datetime64(start, "start") if start else max(o.state.epoch for o in cat)
+    folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
+    res = screen_all(
+        cat,
+        models,
+        start=t0,
+        end=to_datetime64(end, "end"),
+        distance=distance,
+        pc=pc,
+        hard_body_radius=hard_body_radius,
+        radii=radii,
+        errors="record" if skip_bad else "raise",
+    )
+    written = write_events(res, folder)
+    manifest = folder.finish()
+    _report(res)
+    print(f"wrote {written[0]}, {len(written) - 1} CDM file(s) and {manifest}")
+    return [*written, manifest]
+
+
+def _report(res: AllOnAllResult) -> None:
+    for name, why in res.skipped:
+        print(f"skipped {sanitise(name)}: {sanitise(why, 200)}", file=sys.stderr)
+    print(f"{'TCA (UTC)':29} {'object 1':24} {'object 2':24} {'miss m':>8} {'Pc':>9}")
+    for n, e in enumerate(res.events[:PRINTED]):
+        print(
+            f"{str(e.tca)[:29]:29} {sanitise(e.name1, 24):24} {sanitise(e.name2, 24):24} "
+            f"{e.miss_distance:8.0f} {res.pc[n]:9.2g}"
+        )
+    counts = ", ".join(f"{k} {v:,}" for k, v in res.counts.items())
+    stages = ", ".join(f"{k} {v:.1f} s" for k, v in res.timings.items())
+    print(f"{len(res.events)} events within {res.distance:g} m, {res.start} to {res.end}")
+    print(f"models: {', '.join(res.models)} (weights {np.round(res.weights, 3).tolist()})")
+    print(f"counts: {counts}")
+    print(f"stages: {stages}; {res.wall:.1f} s on {res.threads} threads")

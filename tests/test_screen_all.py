@@ -1,0 +1,240 @@
+"""All-on-all screening (rp.conjunction.screen_all): the events equal an all-pairs 1-s
+brute-force search on a real catalog subset; the Pc per model and for the mixture
+against direct pc_2d calls on independently propagated CCSP moments; memory chunks,
+thread count and bad input."""
+
+from __future__ import annotations
+
+import gzip
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rhoprop as rp
+from rhoprop import catalog
+from rhoprop.conjunction import pc_2d, screen_all
+from rhoprop.conjunction.all_on_all import ALL_ON_ALL_STAGES, radial_pair_count
+from rhoprop.conjunction.event_pc import RADII, object_radius
+from rhoprop.conjunction.screening import _as_object
+from rhoprop.constants import MU
+from rhoprop.time import add_seconds, seconds_between
+
+MODEL = rp.density.Exponential.benchmark()
+
+
+@pytest.fixture(scope="module")
+def snapshot(test_data: Path, tmp_path_factory: pytest.TempPathFactory) -> catalog.Catalog:
+    src = test_data / "catalogs" / "celestrak_active_20231113.txt.gz"
+    path = tmp_path_factory.mktemp("screen_all") / "active.tle"
+    path.write_text(gzip.open(src, "rt").read())
+    return catalog.load(path, errors="record")
+
+
+def _perigee_apogee(state: rp.OrbitState) -> tuple[float, float]:
+    r, v = state.position, state.velocity
+    rn = np.linalg.norm(r)
+    a = 1.0 / (2.0 / rn - v @ v / MU)
+    e = np.linalg.norm(np.cross(v, np.cross(r, v)) / MU - r / rn)
+    return a * (1 - e) - 6378e3, a * (1 + e) - 6378e3
+
+
+@pytest.fixture(scope="module")
+def shell(snapshot: catalog.Catalog) -> tuple[list[catalog.CatalogObject], np.datetime64]:
+    """300 objects of the real snapshot crowded in one shell (perigee and apogee 480 to
+    620 km) with epochs within a day of the start (so both searches start from the same
+    short propagation), every k-th by NORAD id; the start is the latest epoch."""
+    start = max(o.state.epoch for o in snapshot)
+    crowd = sorted(
+        (
+            o
+            for o in snapshot
+            if seconds_between(o.state.epoch, start) < 86400.0
+            and all(480e3 < h < 620e3 for h in _perigee_apogee(o.state))
+        ),
+        key=lambda o: o.norad_id,
+    )
+    step = max(1, len(crowd) // 300)
+    return crowd[::step][:300], start
+
+
+def _brute_force(objs, start, end, distance):
+    """All pairs on a 1-s grid, no filter: each object by DOP853 at rtol 1e-12 from its
+    epoch to ``start``, then with 1-s outputs; every sign change of r_rel . v_rel from -
+    to + with a distance within ``distance`` + 10 km, TCA from a cubic through
+    r_rel . v_rel at the 4 samples around it, the miss from quintics through the relative
+    position at the 6 samples around it (exact to ~1 us and ~1 mm)."""
+    span = seconds_between(start, end)
+    pos, vel = [], []
+    for o in objs:
+        craft = rp.Spacecraft(1.0, o.drag_parameter)
+        lead = seconds_between(o.state.epoch, start)
+        s0 = rp.propagate(o.state, craft, MODEL, lead, rtol=1e-12, zonal_degree=4).state_at(-1)
+        tr = rp.propagate(s0, craft, MODEL, span, output_step=1.0, rtol=1e-12, zonal_degree=4)
+        assert tr.decayed_at is None
+        pos.append(tr.positions)
+        vel.append(tr.velocities)
+    pos, vel = np.array(pos), np.array(vel)
+    found = []
+    for i in range(len(objs) - 1):
+        r = pos[i + 1 :] - pos[i]
+        f = np.einsum("jtc,jtc->jt", r, vel[i + 1 :] - vel[i])
+        d = np.linalg.norm(r, axis=2)
+        jj, kk = np.nonzero((f[:, :-1] < 0) & (f[:, 1:] >= 0))
+        for j, k in zip(jj, kk, strict=True):
+            if k < 3 or k >= len(f[j]) - 4 or min(d[j, k], d[j, k + 1]) > distance + 10e3:
+                continue
+            x = np.arange(-1.0, 3.0)
+            roots = np.roots(np.polyfit(x, f[j, k - 1 : k + 3], 3))
+            x0 = min(z.real for z in roots if abs(z.imag) < 1e-9 and 0 <= z.real <= 1)
+            xs = np.arange(-2.0, 4.0)
+            rel = [np.polyval(np.polyfit(xs, r[j, k - 2 : k + 4, c], 5), x0) for c in range(3)]
+            tca = add_seconds(start, float(k) + x0)
+            found.append((i, i + 1 + int(j), tca, float(np.linalg.norm(rel))))
+    return found
+
+
+def test_screen_all_equals_an_all_pairs_brute_force_search(shell):
+    objs, start = shell
+    assert len(objs) == 300
+    end = add_seconds(start, 3 * 3600.0)
+    distance = 20e3
+    res = screen_all(objs, MODEL, start=start, end=end, distance=distance, pc=False, progress=False)
+    brute = [b for b in _brute_force(objs, start, end, distance) if b[3] <= distance]
+    assert len(brute) >= 20  # the subset holds real approaches
+    # The filters do their work: far fewer pair-intervals reach the bounds than exist.
+    intervals = res.counts["pairs"] * 180
+    assert res.counts["spatial"] < intervals / 20
+    assert res.counts["interpolated"] < res.counts["coarse_grid"] < res.counts["spatial"]
+    index = {(o.norad_id): n for n, o in enumerate(objs)}
+
+    # TCA within 1 ms and the miss within 1 m; for slow pairs TCA is ill-conditioned (a
+    # 1 cm difference of the propagations moves it by 1 cm / v_rel).
+    def close(e, tca):
+        tol = max(1e-3, 0.01 / e.relative_speed)
+        return abs((e.tca - tca) / np.timedelta64(1, "ns")) * 1e-9 < tol
+
+    for i, j, tca, miss in brute:
+        match = [e for e in res.events if (index[e.id1], index[e.id2]) == (i, j) and close(e, tca)]
+        assert len(match) == 1, (objs[i].name, objs[j].name, tca, miss)
+        assert abs(match[0].miss_distance - miss) < 1.0
+    assert len(res.events) == len(brute)
+    assert sum(e.relative_speed > 1000.0 for e in res.events) >= 10
+    assert all(e.miss_distance <= distance for e in res.events)
+
+
+def test_memory_chunks_and_threads_do_not_change_the_events(shell):
+    objs, start = shell
+    objs = objs[:120]
+    end = add_seconds(start, 6 * 3600.0)
+    kwargs = dict(start=start, end=end, distance=30e3, pc=False, progress=False)
+    one = screen_all(objs, MODEL, threads=1, **kwargs)
+    # 120 objects x 48 B x 50 samples: chunks of 50 samples (7 chunks over 6 h).
+    cut = screen_all(objs, MODEL, threads=2, max_memory=120 * 48 * 50, **kwargs)
+    assert one.chunks == 1 and cut.chunks == 8
+    assert len(one.events) == len(cut.events) >= 5
+    for a, b in zip(one.events, cut.events, strict=True):
+        assert (a.id1, a.id2) == (b.id1, b.id2)
+        assert abs(seconds_between(a.tca, b.tca)) < 1e-3
+        assert abs(a.miss_distance - b.miss_distance) < 0.1
+    counts = [one.counts[k] for k in ALL_ON_ALL_STAGES]
+    assert counts[0] == counts[1] == 120 and one.counts["pairs"] == 120 * 119 // 2
+
+
+def test_pc_per_model_and_mixture_follow_from_the_ccsp_moments(shell):
+    # Two models of different mean density; the mixture is the weighted mean of the
+    # per-model Pc; each per-model Pc equals pc_2d on moments rebuilt here from
+    # propagate_catalog (same CCSP), within the interpolation to TCA.
+    objs, start = shell
+    objs = objs[:150]
+    end = add_seconds(start, 6 * 3600.0)
+    models = {
+        "low": MODEL,
+        "high": rp.density.Exponential(1.6 * MODEL.rho0, MODEL.h0, MODEL.scale_height),
+    }
+    res = screen_all(
+        objs,
+        models,
+        start=start,
+        end=end,
+        distance=30e3,
+        weights={"low": 3.0, "high": 1.0},
+        progress=False,
+    )
+    assert res.models == ["low", "high"] and np.allclose(res.weights, [0.75, 0.25])
+    assert len(res.events) >= 3
+    assert np.isfinite(res.pc_models).all()
+    assert np.allclose(res.pc, res.pc_models @ res.weights, rtol=1e-12, atol=0)
+    assert list(res.pc) == sorted(res.pc, reverse=True)
+    e = res.events[0]
+    hbr = object_radius(e.name1) + object_radius(e.name2)
+    assert res.hard_body_radius[0] == hbr
+    # The reference model's Gaussian is centred on the screened states: rebuild it.
+    by_id = {o.norad_id: o for o in objs}
+    cat = rp.catalog.propagate_catalog(
+        [by_id[e.id1], by_id[e.id2]], MODEL, end, output_step=60.0, progress=False
+    )
+    k = int(np.argmin(np.abs((cat.epochs - e.tca) / np.timedelta64(1, "s"))))
+    assert abs(seconds_between(cat.epochs[k], e.tca)) <= 30.0
+    c1 = cat.covariance[0, k, :3, :3]
+    c2 = cat.covariance[1, k, :3, :3]
+    direct = pc_2d(e.state1[:3], e.state1[3:], c1, e.state2[:3], e.state2[3:], c2, hbr).pc
+    # Covariances 30 s from TCA and 300-s interpolation: a few per cent on Pc.
+    assert res.pc_models[0, 0] == pytest.approx(direct, rel=0.1)
+
+
+def test_radii_table_and_hard_body_radius(shell):
+    objs, start = shell
+    objs = objs[:80]
+    end = add_seconds(start, 6 * 3600.0)
+    kw = dict(start=start, end=end, distance=30e3, progress=False)
+    res = screen_all(objs, MODEL, hard_body_radius=20.0, **kw)
+    assert len(res.events) >= 1 and (res.hard_body_radius == 20.0).all()
+    e = res.events[0]
+    table = screen_all(objs, MODEL, radii={e.id1: 7.0, e.id2: 3.0}, **kw)
+    same = [n for n, x in enumerate(table.events) if (x.id1, x.id2, x.tca) == (e.id1, e.id2, e.tca)]
+    assert table.hard_body_radius[same[0]] == 10.0
+    assert object_radius("FENGYUN 1C DEB") == RADII["debris"]
+    assert object_radius("CZ-4C R/B") == RADII["rocket body"]
+    assert object_radius("STARLINK-1007") == RADII["payload"]
+
+
+def test_radial_pair_count_matches_a_direct_count(shell):
+    objs, _ = shell
+    few = [_as_object(o, "o", i) for i, o in enumerate(objs[:60])]
+    got = radial_pair_count(few, 5e3, 4)
+    from rhoprop.conjunction.all_on_all import J2, R_EARTH, RADIAL_MARGIN, ZONAL_PAD, _radial_ranges
+
+    perigee, apogee, _a, p = _radial_ranges(few)
+    pad = ZONAL_PAD[6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
+    lo, hi = perigee - pad, apogee + pad
+    direct = sum(
+        1
+        for i in range(60)
+        for j in range(i + 1, 60)
+        if lo[j] <= hi[i] + 5e3 and lo[i] <= hi[j] + 5e3
+    )
+    assert got == direct
+
+
+def test_bad_input_is_refused_naming_what(shell):
+    objs, start = shell
+    end = add_seconds(start, 3600.0)
+    with pytest.raises(ValueError, match="distance"):
+        screen_all(objs[:5], MODEL, start=start, end=end, distance=-1.0, progress=False)
+    with pytest.raises(ValueError, match="end"):
+        screen_all(objs[:5], MODEL, start=end, end=start, distance=1e3, progress=False)
+    with pytest.raises(ValueError, match="at least two"):
+        screen_all(objs[:1], MODEL, start=start, end=end, distance=1e3, progress=False)
+    with pytest.raises(ValueError, match="grid_step"):
+        screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, grid_step=900.0)
+    with pytest.raises(ValueError, match="reference"):
+        screen_all(objs[:5], {"m": MODEL}, reference="x", start=start, end=end, distance=1e3)
+    with pytest.raises(ValueError, match="weights"):
+        screen_all(objs[:5], {"m": MODEL}, weights={"y": 1.0}, start=start, end=end, distance=1e3)
+    with pytest.raises(TypeError, match="objects"):
+        screen_all([1, 2], MODEL, start=start, end=end, distance=1e3)
+    with pytest.raises(ValueError, match="hard_body_radius"):
+        screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, hard_body_radius=-1)
+    with pytest.raises(ValueError, match="radii"):
+        screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, radii={5: 0.0})
