@@ -6,6 +6,11 @@ thread count and bad input."""
 from __future__ import annotations
 
 import gzip
+import signal
+import subprocess
+import sys
+import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -238,3 +243,69 @@ def test_bad_input_is_refused_naming_what(shell):
         screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, hard_body_radius=-1)
     with pytest.raises(ValueError, match="radii"):
         screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, radii={5: 0.0})
+
+
+SYNTHETIC = """
+import numpy as np, rhoprop as rp
+epoch = np.datetime64("2023-11-14T00:00:00", "ns")
+rng = np.random.default_rng(1)
+def circ(alt, inc, raan, u):
+    r = 6378137.0 + alt; vc = np.sqrt(3.986004418e14 / r)
+    inc, raan, u = np.radians([inc, raan, u])
+    p = r * np.array([np.cos(u), np.sin(u) * np.cos(inc), np.sin(u) * np.sin(inc)])
+    v = vc * np.array([-np.sin(u), np.cos(u) * np.cos(inc), np.cos(u) * np.sin(inc)])
+    c, s = np.cos(raan), np.sin(raan)
+    rot = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+    return rp.OrbitState(epoch, rot @ p, rot @ v)
+craft = rp.Spacecraft(2.2, 0.005)
+def objects(n):
+    return [(circ(rng.uniform(395e3, 405e3), rng.uniform(40, 100), rng.uniform(0, 360),
+                  rng.uniform(0, 360)), craft, f"obj {i}") for i in range(n)]
+"""
+
+
+def test_progress_reports_every_stage():
+    namespace: dict[str, object] = {}
+    exec(SYNTHETIC, namespace)
+    objs = namespace["objects"](150)  # type: ignore[operator]
+    epoch = np.datetime64("2023-11-14T00:00:00", "ns")
+    seen: dict[str, tuple[int, int]] = {}
+    res = screen_all(
+        objs,
+        MODEL,
+        start=epoch,
+        end=epoch + np.timedelta64(6, "h"),
+        distance=20e3,
+        progress=lambda stage, done, total: seen.__setitem__(stage, (done, total)),
+    )
+    assert len(res.events) >= 1
+    assert seen["propagation"] == (150, 150)
+    assert seen["sieve"][1] == 360 and seen["Pc (CCSP per model)"][0] >= 2
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_screen_all_stops_on_ctrl_c():
+    # ~30 s of screening (6,000 objects x 3 days); SIGINT after it started ends it with
+    # KeyboardInterrupt within seconds.
+    code = textwrap.dedent(SYNTHETIC) + textwrap.dedent(
+        """
+        from rhoprop.conjunction import screen_all
+        objs = objects(6000)
+        print("started", flush=True)
+        screen_all(objs, rp.density.Exponential.benchmark(), start=epoch,
+                   end=epoch + np.timedelta64(3, "D"), distance=5e3, progress=False)
+        print("finished", flush=True)
+        """
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert proc.stdout is not None
+    assert proc.stdout.readline().strip() == "started"
+    time.sleep(2.0)
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert "finished" not in out
+    assert "KeyboardInterrupt" in err
+    assert time.perf_counter() - sent < 10.0

@@ -62,6 +62,13 @@ ALL_ON_ALL_STAGES = (
     "refined_pairs",
     "events",
 )
+#: What the progress of each stage counts.
+STAGE_UNITS = {
+    "propagation": "objects",
+    "sieve": "grid intervals",
+    "refinement": "candidates",
+    "Pc (CCSP per model)": "objects",
+}
 #: Events of one pair closer in time than this are one event (found from two chunks), s.
 SAME_EVENT = 1e-3
 
@@ -177,6 +184,7 @@ def screen_all(
     dynamics: Dynamics | None = None,
     max_memory: float = DEFAULT_MAX_MEMORY,
     threads: int | None = None,
+    client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     errors: Errors = "raise",
     progress: bool | Callable[[str, int, int], object] = True,
 ) -> AllOnAllResult:
@@ -226,6 +234,9 @@ def screen_all(
         threads: worker threads (default CPU count); errors: ``"raise"`` (default: the
             first object whose propagation fails raises, named) or ``"record"`` (it is
             listed in ``skipped`` and the screen goes on).
+        client: a ``dask.distributed.Client``: the Pc stage's CCSP runs there
+            (``propagate_catalog(client=...)``, results equal the local run); the screening
+            itself runs on this machine's threads.
         progress: show progress bars on a terminal, or a callable given (stage, done,
             total).
 
@@ -258,13 +269,25 @@ def screen_all(
     run = _Run(objs, cfg, workers, errors, _reporter(progress))
     try:
         events, pairs, counts, notes, gone, chunks = run.screen(budget, timings)
+        pcs = event_probabilities(
+            events,
+            pairs,
+            objs,
+            models,
+            ref_name,
+            weights,
+            cfg,
+            pc,
+            hard_body_radius,
+            radii,
+            timings,
+            client=client,
+            report=run.report,
+        )
     finally:
         run.close()
     skipped += gone
     counts["objects"] = len(objs) + sum(1 for _n, why in skipped if why.startswith("same"))
-    pcs = event_probabilities(
-        events, pairs, objs, models, ref_name, weights, cfg, pc, hard_body_radius, radii, timings
-    )
     order = sorted(
         range(len(events)),
         key=lambda i: (-np.nan_to_num(pcs.pc[i], nan=-1.0), events[i].tca, events[i].name1),
@@ -399,7 +422,8 @@ def _reporter(progress: Any) -> Callable[[str, int, int], object] | None:
             for bar in bars.values():
                 bar.close()
             bars.clear()
-            bars[stage] = ProgressBar(total, f"screen_all: {stage}", unit="steps")
+            unit = STAGE_UNITS.get(stage, "steps")
+            bars[stage] = ProgressBar(total, f"screen_all: {stage}", unit=unit)
         bars[stage](done)
 
     report.bars = bars  # type: ignore[attr-defined]

@@ -222,8 +222,13 @@ def event_probabilities(
     hbr: float | None,
     radii: Any,
     timings: dict[str, float],
+    *,
+    client: Any = None,
+    report: Any = None,
 ) -> EventPcs:
-    """Pc per event and model and the mixture's (see the module docs)."""
+    """Pc per event and model and the mixture's (see the module docs); ``client`` (a
+    ``distributed.Client``) runs the CCSP on Dask, ``report(stage, done, total)`` is told
+    the objects done."""
     w = _weights(models, weights)
     radius = _radii(events, hbr, radii)
     n_ev, n_mod = len(events), len(models)
@@ -244,7 +249,7 @@ def event_probabilities(
     for e, (i, j) in enumerate(pairs):
         needs[local[i]].append((e, 0))
         needs[local[j]].append((e, 1))
-    moments = _model_moments(events, sub, models, ref, drag, needs, cfg)
+    moments = _model_moments(events, sub, models, ref, drag, needs, cfg, client, report)
     timings["pc_covariance"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     for e, ev in enumerate(events):
@@ -275,12 +280,15 @@ def _model_moments(
     drag: dict[str, np.ndarray],
     needs: dict[int, list[tuple[int, int]]],
     cfg: Any,
+    client: Any,
+    report: Any,
 ) -> _Moments:
     """CCSP per model (in epoch batches) and each needed (event, side)'s moments."""
     cats = [_catalog_object(o) for o in sub]
     out: _Moments = {}
+    done = 0
     for batch in _batches(cats):
-        means: dict[str, Any] = {}
+        base: Any = None  # the reference model's run (models hold it first)
         for name, model in models.items():
             objs = [
                 dataclasses.replace(cats[m], drag_parameter=float(drag[name][m])) for m in batch
@@ -294,52 +302,57 @@ def _model_moments(
                 zonal_degree=cfg.degree,
                 errors="record",
                 progress=False,
+                client=client,
             )
-            means[name] = res
-        for b, m in enumerate(batch):
-            _object_moments(events, cats[m], means, ref, b, needs[m], out)
+            base = res if name == ref else base
+            # One model's run at a time is held (with the reference's): bounded memory.
+            for b, m in enumerate(batch):
+                _object_moments(events, cats[m], name, res, base, b, needs[m], out)
+        done += len(batch)
+        if report is not None:
+            report("Pc (CCSP per model)", done, len(cats))
     return out
 
 
 def _object_moments(
     events: list[CloseApproach],
     cat: CatalogObject,
-    results: dict[str, Any],
-    ref: str,
+    name: str,
+    res: Any,
+    base: Any,
     b: int,
     needs: list[tuple[int, int]],
     out: _Moments,
 ) -> None:
-    """One object's moments at the TCAs it is needed at, per model (in ``out``)."""
-    base = results[ref]
+    """One object's moments under model ``name`` (run ``res``; ``base`` the reference
+    model's) at the TCAs it is needed at (in ``out``)."""
     t = to_seconds(base.epochs, cat.state.epoch)
-    for name, res in results.items():
-        valid = res.valid[b] & base.valid[b]
-        off, cov = _rtn_moments(res.mean[b], res.covariance[b], base.mean[b])
-        for e, side in needs:
-            tca = seconds_between(cat.state.epoch, events[e].tca)
-            if tca < 0:
-                c0 = cat.covariance if cat.covariance is not None else tle_covariance(cat.state)
-                basis = frames.rtn_basis(cat.state.position, cat.state.velocity)
-                b6 = np.zeros((6, 6))
-                b6[:3, :3] = b6[3:, 3:] = basis
-                note = "an object's epoch is after TCA: its covariance at epoch"
-                out[name, e, side] = (np.zeros(3), b6 @ c0 @ b6.T, note)
-                continue
-            hi = int(np.searchsorted(t, tca))
-            lo = max(hi - 1, 0)
-            hi = min(hi, len(t) - 1)
-            if not valid[lo] and valid[hi]:  # TCA within one output after the epoch
-                lo = hi
-            if not (valid[lo] and valid[hi]):
-                out[name, e, side] = (np.full(3, np.nan), np.full((6, 6), np.nan), "")
-                continue
-            f = 0.0 if hi == lo else (tca - t[lo]) / (t[hi] - t[lo])
-            out[name, e, side] = (
-                (1 - f) * off[lo] + f * off[hi],
-                (1 - f) * cov[lo] + f * cov[hi],
-                "",
-            )
+    valid = res.valid[b] & base.valid[b]
+    off, cov = _rtn_moments(res.mean[b], res.covariance[b], base.mean[b])
+    for e, side in needs:
+        tca = seconds_between(cat.state.epoch, events[e].tca)
+        if tca < 0:
+            c0 = cat.covariance if cat.covariance is not None else tle_covariance(cat.state)
+            basis = frames.rtn_basis(cat.state.position, cat.state.velocity)
+            b6 = np.zeros((6, 6))
+            b6[:3, :3] = b6[3:, 3:] = basis
+            note = "an object's epoch is after TCA: its covariance at epoch"
+            out[name, e, side] = (np.zeros(3), b6 @ c0 @ b6.T, note)
+            continue
+        hi = int(np.searchsorted(t, tca))
+        lo = max(hi - 1, 0)
+        hi = min(hi, len(t) - 1)
+        if not valid[lo] and valid[hi]:  # TCA within one output after the epoch
+            lo = hi
+        if not (valid[lo] and valid[hi]):
+            out[name, e, side] = (np.full(3, np.nan), np.full((6, 6), np.nan), "")
+            continue
+        f = 0.0 if hi == lo else (tca - t[lo]) / (t[hi] - t[lo])
+        out[name, e, side] = (
+            (1 - f) * off[lo] + f * off[hi],
+            (1 - f) * cov[lo] + f * cov[hi],
+            "",
+        )
 
 
 def _pc_one(
