@@ -309,3 +309,24 @@ def test_screen_all_stops_on_ctrl_c():
     assert "finished" not in out
     assert "KeyboardInterrupt" in err
     assert time.perf_counter() - sent < 10.0
+
+
+def test_dask_pc_stage_equals_local(shell):
+    # The Pc stage's CCSP on a 2-worker LocalCluster gives the local run's numbers.
+    distributed = pytest.importorskip("distributed")
+    objs, start = shell
+    objs = objs[:80]
+    kw = dict(start=start, end=add_seconds(start, 6 * 3600.0), distance=30e3, progress=False)
+    local = screen_all(objs, MODEL, **kw)
+    assert len(local.events) >= 1
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        remote = screen_all(objs, MODEL, client=client, **kw)
+    assert [(e.id1, e.id2, e.tca) for e in remote.events] == [
+        (e.id1, e.id2, e.tca) for e in local.events
+    ]
+    np.testing.assert_array_equal(remote.pc_models, local.pc_models)

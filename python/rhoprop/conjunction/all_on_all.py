@@ -597,6 +597,7 @@ class _Run:
             HERMITE_SAMPLES,
             tick if self.report is not None else None,
         )
+        self._tell("sieve", total, total)  # the core reports only while it runs long
         counts["spatial"] += int(spatial)
         counts["coarse_grid"] += int(coarse)
         counts["interpolated"] += int(interp)
@@ -628,6 +629,7 @@ class _Run:
             self.cfg.limit,
             tick if self.report is not None else None,
         )
+        self._tell("refinement", total, total)
         out: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
         for m in range(len(t)):
             a, b = self.objs[int(i[m])], self.objs[int(j[m])]
