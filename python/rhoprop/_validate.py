@@ -41,6 +41,16 @@ def seed(value: object, name: str = "seed", limit: int = 2**64) -> int:
     return int(value)
 
 
+def count(name: str, value: object, minimum: int = 0) -> int:
+    """``value`` as a whole number >= ``minimum``: TypeError for a non-integer (bool
+    included), ValueError below the minimum, naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    if value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    return int(value)
+
+
 def seconds(name: str, value: object) -> float:
     """A finite duration in seconds from a number, ``datetime.timedelta`` or
     ``timedelta64`` (NaT is a ValueError naming ``name``)."""

@@ -99,6 +99,8 @@ def _screen(args: argparse.Namespace) -> int:
         pc=args.pc,
         hard_body_radius=args.hbr,
         radii_file=args.radii,
+        monte_carlo_events=args.monte_carlo,
+        members=args.members,
         skip_bad=args.skip_bad,
         overwrite=args.overwrite,
         command=args.command_line,

@@ -29,8 +29,9 @@ from ..propagation import OrbitState
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import check_model
 from ..time import EpochLike, add_seconds, seconds_between, to_datetime64
-from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics
+from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
 from .approach import _models_for as models_for
+from .event_mc import event_monte_carlo
 from .event_pc import check_coverage, check_options, event_probabilities
 from .screening import (
     DEFAULT_GRID_STEP,
@@ -44,6 +45,7 @@ from .screening import (
     _Object,
     _radial_ranges,
     _secondaries_list,
+    _Window,
 )
 
 __all__ = ["ALL_ON_ALL_STAGES", "DEFAULT_MAX_MEMORY", "AllOnAllResult", "screen_all"]
@@ -89,6 +91,9 @@ class AllOnAllResult:
             (weights renormalised).
         hard_body_radius: per event, m.
         pc_notes: per event, what was approximated or missing ("" when nothing).
+        pc_monte_carlo_models, pc_monte_carlo: the member Monte Carlo's Pc per event and
+            model (events, models) and mixed (events,), for the ``monte_carlo_events``
+            most probable events; NaN for the others.
         covariance1, covariance2: per event, each object's reference-model state
             covariance at TCA in the RTN axes of its state (events, 6, 6), m^2, m^2/s,
             m^2/s^2 (NaN without Pc), as the CDMs carry them.
@@ -120,6 +125,8 @@ class AllOnAllResult:
     pc_notes: list[str]
     covariance1: np.ndarray
     covariance2: np.ndarray
+    pc_monte_carlo_models: np.ndarray
+    pc_monte_carlo: np.ndarray
     counts: dict[str, int]
     skipped: list[tuple[str, str]]
     notes: list[tuple[str, str]]
@@ -136,7 +143,8 @@ class AllOnAllResult:
     def table(self) -> dict[str, np.ndarray]:
         """The events as columns (one row per event, in order): names and ids, TCA
         (datetime64[ns] UTC), miss distance m, relative speed m/s, hard-body radius m,
-        mixture Pc, Pc per model (``pc_<model name>``) and the Pc note."""
+        mixture Pc, Pc per model (``pc_<model name>``), the member Monte Carlo's mixed Pc
+        (NaN where not run) and the Pc note."""
         ev = self.events
         cols: dict[str, np.ndarray] = {
             "name1": np.array([e.name1 for e in ev], dtype=object),
@@ -151,6 +159,7 @@ class AllOnAllResult:
         }
         for k, name in enumerate(self.models):
             cols[f"pc_{name}"] = np.asarray(self.pc_models[:, k], dtype=float)
+        cols["pc_monte_carlo"] = np.asarray(self.pc_monte_carlo, dtype=float)
         cols["pc_note"] = np.array(self.pc_notes, dtype=object)
         return cols
 
@@ -185,6 +194,9 @@ def screen_all(
     max_memory: float = DEFAULT_MAX_MEMORY,
     threads: int | None = None,
     client: Any = None,  # a distributed.Client (Any: distributed stays optional)
+    monte_carlo_events: int = 0,
+    members: int = 200,
+    seed: int = 0,
     errors: Errors = "raise",
     progress: bool | Callable[[str, int, int], object] = True,
 ) -> AllOnAllResult:
@@ -234,6 +246,10 @@ def screen_all(
         threads: worker threads (default CPU count); errors: ``"raise"`` (default: the
             first object whose propagation fails raises, named) or ``"record"`` (it is
             listed in ``skipped`` and the screen goes on).
+        monte_carlo_events: also give the ``monte_carlo_events`` events of largest
+            mixture Pc the member Monte Carlo's Pc, per model and mixed
+            (:mod:`.event_mc`: ``members`` members per object and model, object i seeded
+            with ``seed + i``); default 0 (none).
         client: a ``dask.distributed.Client``: the Pc stage's CCSP runs there
             (``propagate_catalog(client=...)``, results equal the local run); the screening
             itself runs on this machine's threads.
@@ -254,6 +270,9 @@ def screen_all(
     errors = _validate.errors_argument("screen_all", errors)
     workers = worker_count(threads)
     budget = _validate.positive("max_memory", max_memory)
+    n_mc = _validate.count("monte_carlo_events", monte_carlo_events, minimum=0)
+    _validate.count("members", members, minimum=2)
+    _validate.seed(seed, limit=2**63)
     objs, skipped = _unique_objects(objects)
     earliest = min([cfg.start, *(o.state.epoch for o in objs)])
     latest = max([cfg.end, *(o.state.epoch for o in objs)])
@@ -288,6 +307,10 @@ def screen_all(
         run.close()
     skipped += gone
     counts["objects"] = len(objs) + sum(1 for _n, why in skipped if why.startswith("same"))
+    t0 = time.perf_counter()
+    chosen = n_mc if pc else 0
+    mc_models, mc = _monte_carlo(events, pairs, objs, models, pcs, chosen, members, seed, cfg)
+    timings["pc_monte_carlo"] = time.perf_counter() - t0
     order = sorted(
         range(len(events)),
         key=lambda i: (-np.nan_to_num(pcs.pc[i], nan=-1.0), events[i].tca, events[i].name1),
@@ -302,6 +325,8 @@ def screen_all(
         pc_notes=[pcs.notes[i] for i in order],
         covariance1=pcs.covariance1[order] if len(order) else pcs.covariance1,
         covariance2=pcs.covariance2[order] if len(order) else pcs.covariance2,
+        pc_monte_carlo_models=mc_models[order] if len(order) else mc_models,
+        pc_monte_carlo=mc[order] if len(order) else mc,
         counts={key: counts.get(key, 0) for key in ALL_ON_ALL_STAGES},
         skipped=skipped,
         notes=notes,
@@ -317,18 +342,35 @@ def screen_all(
     )
 
 
-@dataclass(frozen=True)
-class _Settings:
-    """The checked window and settings of an all-on-all screen."""
-
-    start: np.datetime64
-    end: np.datetime64
-    span: float
-    limit: float
-    step: float
-    fine: float
-    floor: float
-    degree: int
+def _monte_carlo(
+    events: list[CloseApproach],
+    pairs: list[tuple[int, int]],
+    objs: list[_Object],
+    models: dict[str, Any],
+    pcs: Any,
+    chosen: int,
+    members: int,
+    seed: int,
+    cfg: _Window,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The member Monte Carlo's Pc (per model, mixed) of the ``chosen`` events of
+    largest mixture Pc (:mod:`.event_mc`)."""
+    top = sorted(range(len(events)), key=lambda i: -np.nan_to_num(pcs.pc[i], nan=-1.0))
+    return event_monte_carlo(
+        events,
+        pairs,
+        objs,
+        models,
+        pcs.drag,
+        pcs.index,
+        pcs.weights,
+        pcs.hard_body_radius,
+        top[:chosen],
+        members,
+        _validate.seed(seed, limit=2**63),
+        cfg.degree,
+        cfg.floor,
+    )
 
 
 def _settings(
@@ -340,7 +382,7 @@ def _settings(
     floor_altitude: float,
     zonal_degree: int,
     dynamics: Dynamics | None,
-) -> _Settings:
+) -> _Window:
     t_start = to_datetime64(start, "start")
     t_end = to_datetime64(end, "end")
     span = seconds_between(t_start, t_end)
@@ -359,7 +401,7 @@ def _settings(
         floor_altitude=floor_altitude,
         zonal_degree=zonal_degree,
     )
-    return _Settings(
+    return _Window(
         t_start,
         t_end,
         span,
@@ -448,7 +490,7 @@ class _Run:
     def __init__(
         self,
         objs: list[_Object],
-        cfg: _Settings,
+        cfg: _Window,
         workers: int,
         errors: str,
         report: Callable[[str, int, int], object] | None,
@@ -633,22 +675,8 @@ class _Run:
         out: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
         for m in range(len(t)):
             a, b = self.objs[int(i[m])], self.objs[int(j[m])]
-            x1, x2 = s1[m].copy(), s2[m].copy()
-            x1.flags.writeable = x2.flags.writeable = False
-            rel = x2 - x1
-            out[int(i[m]), int(j[m])].append(
-                CloseApproach(
-                    tca=add_seconds(self.cfg.start, float(t[m])),
-                    miss_distance=float(np.linalg.norm(rel[:3])),
-                    relative_speed=float(np.linalg.norm(rel[3:])),
-                    state1=x1,
-                    state2=x2,
-                    name1=a.name,
-                    name2=b.name,
-                    id1=a.object_id,
-                    id2=b.object_id,
-                )
-            )
+            event = _event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy())
+            out[int(i[m]), int(j[m])].append(event)
         return out
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -259,8 +259,15 @@ def _refine(
     return found
 
 
+class _Named(Protocol):
+    """What an event takes from each object: its name and id."""
+
+    name: str
+    object_id: int | None
+
+
 def _event(
-    dyn: _Dynamics, a: _Track, b: _Track, tca: float, s1: np.ndarray, s2: np.ndarray
+    dyn: _Dynamics, a: _Named, b: _Named, tca: float, s1: np.ndarray, s2: np.ndarray
 ) -> CloseApproach:
     rel = s2 - s1
     s1.flags.writeable = False

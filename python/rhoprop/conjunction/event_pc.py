@@ -79,6 +79,8 @@ class EventPcs:
     notes: list[str]
     covariance1: np.ndarray
     covariance2: np.ndarray
+    drag: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    index: dict[int, int] = dataclasses.field(default_factory=dict)
 
 
 def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
@@ -265,7 +267,7 @@ def event_probabilities(
         if name == ref:
             cov[side, e] = c6
     timings["pc"] = time.perf_counter() - t0
-    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1])
+    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1], drag, local)
 
 
 #: Per (model, event, side): (RTN offset (3,), RTN covariance (6, 6), note) at TCA.

@@ -125,6 +125,8 @@ def run_screen_file(
     pc: bool = True,
     hard_body_radius: float | None = None,
     radii_file: str | Path | None = None,
+    monte_carlo_events: int = 0,
+    members: int = 200,
     skip_bad: bool = False,
     overwrite: bool = False,
     command: str | None = None,
@@ -148,6 +150,8 @@ def run_screen_file(
         pc=pc,
         hard_body_radius=hard_body_radius,
         radii=radii,
+        monte_carlo_events=monte_carlo_events,
+        members=members,
         errors="record" if skip_bad else "raise",
     )
     written = write_events(res, folder)
@@ -162,9 +166,11 @@ def _report(res: AllOnAllResult) -> None:
         print(f"skipped {sanitise(name)}: {sanitise(why, 200)}", file=sys.stderr)
     print(f"{'TCA (UTC)':29} {'object 1':24} {'object 2':24} {'miss m':>8} {'Pc':>9}")
     for n, e in enumerate(res.events[:PRINTED]):
+        mc = res.pc_monte_carlo[n]
         print(
             f"{str(e.tca)[:29]:29} {sanitise(e.name1, 24):24} {sanitise(e.name2, 24):24} "
             f"{e.miss_distance:8.0f} {res.pc[n]:9.2g}"
+            + (f"  (Monte Carlo {mc:.2g})" if np.isfinite(mc) else "")
         )
     counts = ", ".join(f"{k} {v:,}" for k, v in res.counts.items())
     stages = ", ".join(f"{k} {v:.1f} s" for k, v in res.timings.items())

@@ -1,0 +1,76 @@
+"""The member Monte Carlo's Pc of the most probable events of an all-on-all screen (on
+request: ``screen_all(monte_carlo_events=N)``).
+
+Per model k, both objects are run as Monte Carlos from their epochs to TCA
+(:func:`rhoprop.monte_carlo`: ``members`` members each, the Gauss-Markov kappa process,
+the object's own initial covariance, its Cd*A/m debiased for model k with the
+relative sigma of ``drag_sigma="auto"``); the Pc per model is the fraction of member
+pairs passing within the hard-body radius (:func:`~rhoprop.conjunction.pc_monte_carlo`)
+and the mixture's is sum_k w_k Pc_k, as for the Gaussian Pc. Object i of the screen is
+seeded with ``seed + i`` for every model (common random numbers across models)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..catalog.objects import _drag_sigma
+from ..propagation import Spacecraft
+from ..propagation.montecarlo import monte_carlo
+from ..time import seconds_between
+from .approach import CloseApproach
+from .event_pc import _catalog_object
+from .probability import pc_monte_carlo
+
+__all__ = ["event_monte_carlo"]
+
+
+def event_monte_carlo(
+    events: list[CloseApproach],
+    pairs: list[tuple[int, int]],
+    objs: list[Any],
+    models: dict[str, Any],
+    drag: dict[str, np.ndarray],
+    index: dict[int, int],
+    weights: np.ndarray,
+    hbr: np.ndarray,
+    chosen: list[int],
+    members: int,
+    seed: int,
+    degree: int,
+    floor: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Monte Carlo Pc per model (events, models) and the mixture's (events,) for the
+    events ``chosen`` (NaN elsewhere, and where an object's epoch is after TCA).
+    ``drag[k][index[i]]`` is object i's Cd*A/m for model k."""
+    per_model = np.full((len(events), len(models)), np.nan)
+    for e in chosen:
+        ev, (i, j) = events[e], pairs[e]
+        for k, (name, model) in enumerate(models.items()):
+            runs = []
+            for obj in (i, j):
+                cat = _catalog_object(objs[obj])
+                lead = seconds_between(cat.state.epoch, ev.tca)
+                if lead <= 0:
+                    break
+                beta = float(drag[name][index[obj]])
+                runs.append(
+                    monte_carlo(
+                        cat.state,
+                        Spacecraft(1.0, beta),
+                        model,
+                        output_times=np.array([lead]),
+                        n=members,
+                        seed=seed + obj,
+                        initial_covariance=cat.covariance,
+                        drag_sigma=_drag_sigma(cat, "auto"),
+                        zonal_degree=degree,
+                        floor_altitude=floor,
+                        progress=False,
+                    )
+                )
+            if len(runs) == 2:
+                per_model[e, k] = pc_monte_carlo(runs[0], runs[1], float(hbr[e])).pc
+    mixture = np.where(np.isfinite(per_model).all(axis=1), per_model @ weights, np.nan)
+    return per_model, mixture
