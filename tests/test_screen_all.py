@@ -391,3 +391,40 @@ def test_member_monte_carlo_pc_of_the_most_probable_events(shell):
             distance=1e3,
             monte_carlo_events=1.5,
         )
+
+
+def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, tmp_path, capsys):
+    pytest.importorskip("ccsds_ndm")
+    import pyarrow.parquet as pq
+
+    from rhoprop.cli import main
+    from rhoprop.conjunction import read_cdm
+
+    objs, start = shell
+    objs = objs[:120]
+    tle = tmp_path / "crowd.tle"
+    tle.write_text("".join(f"{o.name}\n{o.elements[0]}\n{o.elements[1]}\n" for o in objs))
+    end = add_seconds(start, 6 * 3600.0)
+    out = tmp_path / "out"
+    args = ["screen", str(tle), "--start", str(start), "--end", str(end), "--distance", "30000"]
+    assert main([*args, "--model", "exponential", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    table = pq.read_table(out / "events.parquet").to_pydict()
+    cdms = sorted((out / "cdm").glob("*.cdm"))
+    assert len(table["tca"]) == len(cdms) >= 3
+    assert f"{len(cdms)} events within 30000 m" in printed
+    first = read_cdm(cdms[0])
+    assert first.miss_distance == pytest.approx(table["miss_distance"][0], abs=1e-3)
+    assert first.collision_probability == pytest.approx(table["pc"][0], rel=1e-9)
+    assert table["pc"] == sorted(table["pc"], reverse=True)
+    assert str(first.object1.designator) == str(table["id1"][0])
+    # The same run from Python gives the same events.
+    res = screen_all(
+        objs,
+        rp.catalog.job.model_by_name("exponential"),
+        start=start,
+        end=end,
+        distance=30e3,
+        progress=False,
+    )
+    assert len(res.events) == len(cdms)

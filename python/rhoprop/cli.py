@@ -457,6 +457,16 @@ def build_parser() -> argparse.ArgumentParser:
         "rocket body 5 m, debris 1 m; an event's hard-body radius is the sum",
     )
     scr.add_argument("--pc", action=argparse.BooleanOptionalAction, default=True, help="compute Pc")
+    scr.add_argument(
+        "--monte-carlo",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also the member Monte Carlo's Pc of the N most probable events (default 0)",
+    )
+    scr.add_argument(
+        "--members", type=int, default=200, help="Monte Carlo members per object and model"
+    )
     scr.add_argument("--out", default="rhoprop-screen", help="output directory")
     scr.add_argument(
         "--skip-bad",
