@@ -378,10 +378,10 @@ def test_member_monte_carlo_pc_of_the_most_probable_events(shell):
     mixed = res.pc_monte_carlo_models[:2] @ res.weights
     assert np.allclose(res.pc_monte_carlo[:2], mixed, equal_nan=True)
     # Members and Gaussians describe the same spread: for the twin they agree within the
-    # Monte Carlo's noise (160,000 member pairs, hundreds of hits: a factor 2 bounds the
-    # sampling error and the non-Gaussian tails after 30-90 min).
+    # Monte Carlo's noise (160,000 member pairs, ~450 hits from 400 + 400 members: the
+    # U-statistic's relative sigma is ~10 %; measured 2.78e-3 against 2.84e-3).
     assert res.pc[0] > 1e-3
-    assert res.pc[0] / 2 < res.pc_monte_carlo[0] < 2 * res.pc[0]
+    assert res.pc[0] / 1.4 < res.pc_monte_carlo[0] < 1.4 * res.pc[0]
     with pytest.raises(TypeError, match="monte_carlo_events"):
         screen_all(
             objs[:5],
