@@ -193,7 +193,7 @@ def screen_all(
     dynamics: Dynamics | None = None,
     max_memory: float = DEFAULT_MAX_MEMORY,
     threads: int | None = None,
-    client: Any = None,  # a distributed.Client (Any: distributed stays optional)
+    client: object = None,  # a distributed.Client (distributed stays optional)
     monte_carlo_events: int = 0,
     members: int = 200,
     seed: int = 0,
@@ -574,7 +574,7 @@ class _Run:
         done = 0
         total = len(todo)
 
-        def tick(_k: int, _r: Any) -> None:
+        def tick(_k: int, _r: object) -> None:
             nonlocal done
             done += 1
             self._tell("propagation", done, total)

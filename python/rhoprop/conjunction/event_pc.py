@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections import defaultdict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +36,7 @@ from ..propagation import Spacecraft
 from ..time import seconds_between, to_seconds
 from .approach import CloseApproach
 from .probability import pc_2d
+from .screening import _Window
 
 __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "PC_OUTPUT_STEP", "RADII", "object_radius"]
 
@@ -96,7 +97,12 @@ def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
     return np.asarray(w / w.sum())
 
 
-def check_options(models: dict[str, Any], weights: Any, hbr: Any, radii: Any) -> None:
+def check_options(
+    models: dict[str, Any],
+    weights: Mapping[str, float] | None,
+    hbr: float | None,
+    radii: Mapping[int, float] | None,
+) -> None:
     """The Pc options checked before any work (ValueError/TypeError naming them)."""
     _weights(models, weights)
     if hbr is not None and not (
@@ -218,15 +224,15 @@ def event_probabilities(
     objs: list[Any],
     models: dict[str, Any],
     ref: str,
-    weights: Any,
-    cfg: Any,
+    weights: Mapping[str, float] | None,
+    cfg: _Window,
     enabled: bool,
     hbr: float | None,
-    radii: Any,
+    radii: Mapping[int, float] | None,
     timings: dict[str, float],
     *,
-    client: Any = None,
-    report: Any = None,
+    client: object = None,
+    report: Callable[[str, int, int], object] | None = None,
 ) -> EventPcs:
     """Pc per event and model and the mixture's (see the module docs); ``client`` (a
     ``distributed.Client``) runs the CCSP on Dask, ``report(stage, done, total)`` is told

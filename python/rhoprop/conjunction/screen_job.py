@@ -11,12 +11,13 @@ from typing import Any
 import numpy as np
 
 from ..catalog.elements import Catalog, load
+from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
 from ..time import to_datetime64
 from .all_on_all import AllOnAllResult, screen_all
 from .cdm import CdmObject, ConjunctionMessage
 
-__all__ = ["read_radii", "run_screen_file", "write_events"]
+__all__ = ["output_events", "read_radii", "run_screen_file"]
 
 #: Events printed by ``rhoprop screen`` (all are written).
 PRINTED = 15
@@ -75,22 +76,12 @@ def _message(res: AllOnAllResult, n: int, created: np.datetime64) -> Conjunction
     )
 
 
-def write_events(res: AllOnAllResult, folder: OutputFolder) -> list[Path]:
+def output_events(res: AllOnAllResult, folder: OutputFolder) -> list[Path]:
     """``events.parquet`` (one row per event, :meth:`AllOnAllResult.table`) and one KVN
     CDM per event in ``cdm/`` (``<rank>_<id1>_<id2>.cdm``, rank by mixture Pc; needs
     ``ccsds-ndm``, the ``[cdm]`` extra: without it the CDMs are left out, said on
     stderr). Returns the paths written."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    cols = res.table()
-    cols["name1"] = np.array([sanitise(x) for x in cols["name1"]], dtype=object)
-    cols["name2"] = np.array([sanitise(x) for x in cols["name2"]], dtype=object)
-    table = pa.table({k: pa.array(list(v) if v.dtype == object else v) for k, v in cols.items()})
-    written = []
-    with folder.path("events.parquet") as tmp:
-        pq.write_table(table, tmp)
-    written.append(folder.directory / "events.parquet")
+    written = [write_event_table(res.table(), folder, "events.parquet")]
     try:
         from .cdm import cdm_text
 
@@ -154,7 +145,7 @@ def run_screen_file(
         members=members,
         errors="record" if skip_bad else "raise",
     )
-    written = write_events(res, folder)
+    written = output_events(res, folder)
     manifest = folder.finish()
     _report(res)
     print(f"wrote {written[0]}, {len(written) - 1} CDM file(s) and {manifest}")

@@ -1,5 +1,6 @@
 """Files in and out, below the catalog and the studies: CCSDS OEM (``oem``), the Parquet
-summary of a catalog run (``summary``) and the output folder of a run with its manifest
+summary of a catalog run (``summary``), the event table of an all-on-all screen
+(``events``) and the output folder of a run with its manifest
 and atomic writes (``files``). A new output format is a module here. Two formats stay with
 what they describe: CCSDS conjunction data messages in :mod:`rhoprop.conjunction.cdm` (a
 message computes its own Pc, which belongs to the conjunction stage above this one) and
@@ -7,6 +8,7 @@ the xarray datasets in the results'
 ``to_xarray`` (:mod:`rhoprop.propagation`, the catalog).
 """
 
+from .events import write_event_table
 from .files import MANIFEST, OutputFolder, atomic_path, command_line, sanitise, write_text_atomic
 from .oem import DUPLICATES, duplicate_ids, oem_names, write_oem
 from .summary import summary_table, write_summary
@@ -21,6 +23,7 @@ __all__ = [
     "oem_names",
     "sanitise",
     "summary_table",
+    "write_event_table",
     "write_oem",
     "write_summary",
     "write_text_atomic",
