@@ -28,7 +28,7 @@ from ..progress import ProgressBar
 from ..propagation import OrbitState
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import check_model
-from ..time import EpochLike, add_seconds, seconds_between, to_datetime64
+from ..time import EpochLike, add_seconds, seconds_between
 from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
 from .approach import _models_for as models_for
 from .event_mc import event_monte_carlo
@@ -43,9 +43,11 @@ from .screening import (
     _as_object,
     _coarse_track,
     _Object,
+    _object_error,
     _radial_ranges,
     _secondaries_list,
     _Window,
+    window_span,
 )
 
 __all__ = ["ALL_ON_ALL_STAGES", "DEFAULT_MAX_MEMORY", "AllOnAllResult", "screen_all"]
@@ -273,7 +275,7 @@ def screen_all(
     n_mc = _validate.count("monte_carlo_events", monte_carlo_events, minimum=0)
     _validate.count("members", members, minimum=2)
     _validate.seed(seed, limit=2**63)
-    objs, skipped = _unique_objects(objects)
+    objs, skipped, given = _unique_objects(objects)
     earliest = min([cfg.start, *(o.state.epoch for o in objs)])
     latest = max([cfg.end, *(o.state.epoch for o in objs)])
     check_options(models, weights, hard_body_radius, radii)
@@ -306,7 +308,7 @@ def screen_all(
     finally:
         run.close()
     skipped += gone
-    counts["objects"] = len(objs) + sum(1 for _n, why in skipped if why.startswith("same"))
+    counts["objects"] = given
     t0 = time.perf_counter()
     chosen = n_mc if pc else 0
     mc_models, mc = _monte_carlo(events, pairs, objs, models, pcs, chosen, members, seed, cfg)
@@ -383,11 +385,7 @@ def _settings(
     zonal_degree: int,
     dynamics: Dynamics | None,
 ) -> _Window:
-    t_start = to_datetime64(start, "start")
-    t_end = to_datetime64(end, "end")
-    span = seconds_between(t_start, t_end)
-    if not span > 0:
-        raise ValueError(f"end ({t_end}) must be after start ({t_start})")
+    t_start, t_end, span = window_span(start, end)
     step = _validate.positive("grid_step", grid_step)
     if step > 300.0:
         raise ValueError(
@@ -432,9 +430,9 @@ def _model_set(model: Any, reference: str | None) -> tuple[dict[str, Any], str]:
     return {ref: models[ref], **{k: v for k, v in models.items() if k != ref}}, ref
 
 
-def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]]]:
+def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]], int]:
     """The objects, each element set once (same epoch and state: the later copy is
-    skipped, named)."""
+    skipped, named), and how many were given."""
     items = _secondaries_list(objects)
     objs = [_as_object(item, f"objects[{i}]", i) for i, item in enumerate(items)]
     if len(objs) < 2:
@@ -449,27 +447,33 @@ def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]]]
             continue
         seen[key] = o
         kept.append(o)
-    return kept, skipped
+    return kept, skipped, len(objs)
+
+
+class _StageBars:
+    """Progress bars on a terminal, one per stage in turn (the previous one closed)."""
+
+    def __init__(self) -> None:
+        self.bar: ProgressBar | None = None
+        self.stage = ""
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        if stage != self.stage or self.bar is None:
+            self.close()
+            unit = STAGE_UNITS.get(stage, "steps")
+            self.bar, self.stage = ProgressBar(total, f"screen_all: {stage}", unit=unit), stage
+        self.bar(done)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
 
 
 def _reporter(progress: Any) -> Callable[[str, int, int], object] | None:
     if callable(progress):
         return progress  # type: ignore[no-any-return]
-    if not progress:
-        return None
-    bars: dict[str, ProgressBar] = {}
-
-    def report(stage: str, done: int, total: int) -> None:
-        if stage not in bars:
-            for bar in bars.values():
-                bar.close()
-            bars.clear()
-            unit = STAGE_UNITS.get(stage, "steps")
-            bars[stage] = ProgressBar(total, f"screen_all: {stage}", unit=unit)
-        bars[stage](done)
-
-    report.bars = bars  # type: ignore[attr-defined]
-    return report
+    return _StageBars() if progress else None
 
 
 def radial_pair_count(objs: list[_Object], distance: float, degree: int) -> int:
@@ -503,8 +507,8 @@ class _Run:
         self.notes: list[tuple[str, str]] = []
 
     def close(self) -> None:
-        for bar in getattr(self.report, "bars", {}).values():
-            bar.close()
+        if isinstance(self.report, _StageBars):
+            self.report.close()
 
     def _tell(self, stage: str, done: int, total: int) -> None:
         if self.report is not None:
@@ -607,7 +611,10 @@ class _Run:
             return times[0] + out.times, out.positions, out.velocities, decay
         except Exception as err:
             if self.errors != "record":
-                raise type(err)(f"object {obj.name} (id {obj.object_id}): {err}") from err
+                named = _object_error(err, obj, "object")
+                if named is err:
+                    raise
+                raise named from err
             self.skipped.append((obj.name, f"{type(err).__name__}: {err}"))
             empty = np.empty((0, 3))
             return np.empty(0), empty, empty, None

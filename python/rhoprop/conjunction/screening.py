@@ -532,6 +532,17 @@ def _objects(primary: Any, secondaries: Any) -> tuple[_Object, list[_Object], li
     return prim, objs, itself
 
 
+def window_span(start: EpochLike, end: EpochLike) -> tuple[np.datetime64, np.datetime64, float]:
+    """UTC start and end of a screening window and its span (s), checked: ValueError
+    unless end is after start."""
+    t_start = to_datetime64(start, "start")
+    t_end = to_datetime64(end, "end")
+    span = seconds_between(t_start, t_end)
+    if not span > 0:
+        raise ValueError(f"end ({t_end}) must be after start ({t_start})")
+    return t_start, t_end, span
+
+
 def _window(
     prim: _Object,
     start: EpochLike,
@@ -543,11 +554,7 @@ def _window(
     zonal_degree: int,
 ) -> _Window:
     """The screen's window and settings, checked (ValueError naming the argument)."""
-    t_start = to_datetime64(start, "start")
-    t_end = to_datetime64(end, "end")
-    span = seconds_between(t_start, t_end)
-    if not span > 0:
-        raise ValueError(f"end ({t_end}) must be after start ({t_start})")
+    t_start, t_end, span = window_span(start, end)
     limit = _validate.positive("distance", distance)
     step = _validate.positive("grid_step", grid_step)
     period = orbital_period(prim.state)
@@ -662,9 +669,11 @@ def _screen_one(
     return _Outcome(Reached.INTERPOLATED, note, near, timings=tm)
 
 
-def _object_error(err: Exception, obj: _Object) -> Exception:
+def _object_error(err: Exception, obj: _Object, role: str = "secondary") -> Exception:
+    """``err`` again with the object named (the same type), or ``err`` itself when its
+    type cannot be built from a message."""
     try:
-        return type(err)(f"secondary {obj.name} (id {obj.object_id}): {err}")
+        return type(err)(f"{role} {obj.name} (id {obj.object_id}): {err}")
     except Exception:  # an exception type with a different constructor
         return err
 

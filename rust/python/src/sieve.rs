@@ -45,6 +45,54 @@ fn triples<'a>(
     Ok(flat.as_chunks::<3>().0)
 }
 
+/// What both calls take besides the sample arrays, checked and owned: grid times (s),
+/// samples per object and the interpolation coefficient per object (zeros where unused).
+struct Grid {
+    times: Vec<f64>,
+    samples: Vec<usize>,
+    fourth: Vec<f64>,
+}
+
+impl Grid {
+    fn new(
+        times: &PyReadonlyArray1<'_, f64>,
+        samples: &PyReadonlyArray1<'_, u64>,
+        positions: &PyReadonlyArray3<'_, f64>,
+        velocities: &PyReadonlyArray3<'_, f64>,
+        fourth: Option<&PyReadonlyArray1<'_, f64>>,
+    ) -> PyResult<Self> {
+        let n = samples.len();
+        if positions.shape()[0] != n
+            || velocities.shape()[0] != n
+            || fourth.is_some_and(|f| f.len() != n)
+        {
+            return Err(PyValueError::new_err(format!(
+                "positions, velocities (and fourth) must hold the {n} objects of samples"
+            )));
+        }
+        Ok(Grid {
+            times: times.as_array().to_vec(),
+            samples: samples.as_array().iter().map(|&s| s as usize).collect(),
+            fourth: fourth.map_or_else(|| vec![0.0; n], |f| f.as_array().to_vec()),
+        })
+    }
+
+    /// The core's view of the tracks (the sample arrays read in place).
+    fn tracks<'a>(
+        &'a self,
+        positions: &'a PyReadonlyArray3<'_, f64>,
+        velocities: &'a PyReadonlyArray3<'_, f64>,
+    ) -> PyResult<Tracks<'a>> {
+        Ok(Tracks {
+            times: &self.times,
+            positions: triples("positions", positions, self.times.len())?,
+            velocities: triples("velocities", velocities, self.times.len())?,
+            samples: &self.samples,
+            fourth: &self.fourth,
+        })
+    }
+}
+
 /// Candidate intervals of every object pair on a common grid; see
 /// `rhoprop.conjunction.screen_all`. times (nt,) s, positions and velocities
 /// (n, nt, 3) m and m/s, samples (n,) valid samples per object, fourth (n,). Runs with
@@ -65,22 +113,8 @@ pub fn screen_candidates<'py>(
     hermite_samples: usize,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<CandidatesOut<'py>> {
-    let t = times.as_array().to_vec();
-    let n = samples.len();
-    if positions.shape()[0] != n || velocities.shape()[0] != n || fourth.len() != n {
-        return Err(PyValueError::new_err(format!(
-            "positions, velocities and fourth must hold the {n} objects of samples"
-        )));
-    }
-    let counts: Vec<usize> = samples.as_array().iter().map(|&s| s as usize).collect();
-    let f = fourth.as_array().to_vec();
-    let tracks = Tracks {
-        times: &t,
-        positions: triples("positions", &positions, t.len())?,
-        velocities: triples("velocities", &velocities, t.len())?,
-        samples: &counts,
-        fourth: &f,
-    };
+    let g = Grid::new(&times, &samples, &positions, &velocities, Some(&fourth))?;
+    let tracks = g.tracks(&positions, &velocities)?;
     let settings = SieveSettings {
         distance,
         max_acceleration,
@@ -117,22 +151,8 @@ pub fn screen_approaches<'py>(
     distance: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<ApproachesOut<'py>> {
-    let t = times.as_array().to_vec();
-    let n = samples.len();
-    if positions.shape()[0] != n || velocities.shape()[0] != n {
-        return Err(PyValueError::new_err(format!(
-            "positions and velocities must hold the {n} objects of samples"
-        )));
-    }
-    let counts: Vec<usize> = samples.as_array().iter().map(|&s| s as usize).collect();
-    let zeros = vec![0.0; n];
-    let tracks = Tracks {
-        times: &t,
-        positions: triples("positions", &positions, t.len())?,
-        velocities: triples("velocities", &velocities, t.len())?,
-        samples: &counts,
-        fourth: &zeros,
-    };
+    let g = Grid::new(&times, &samples, &positions, &velocities, None)?;
+    let tracks = g.tracks(&positions, &velocities)?;
     let (ci, cj, ck) = (
         i.as_array().to_vec(),
         j.as_array().to_vec(),
