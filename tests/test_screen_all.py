@@ -393,7 +393,7 @@ def test_member_monte_carlo_pc_of_the_most_probable_events(shell):
         )
 
 
-def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, tmp_path, capsys):
+def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_path, capsys):
     pytest.importorskip("ccsds_ndm")
     import pyarrow.parquet as pq
 
@@ -403,12 +403,19 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, tmp_path, capsys)
     objs, start = shell
     objs = objs[:120]
     tle = tmp_path / "crowd.tle"
-    tle.write_text("".join(f"{o.name}\n{o.elements[0]}\n{o.elements[1]}\n" for o in objs))
+    # As published: with Chandra (CXO), whose orbit reaches 21.8 Earth radii.
+    raw = gzip.open(test_data / "catalogs" / "celestrak_active_20231113.txt.gz", "rt").read()
+    lines = raw.splitlines()
+    at = next(n for n, line in enumerate(lines) if line.strip() == "CXO")
+    cxo = "\n".join(lines[at : at + 3]) + "\n"
+    tle.write_text(cxo + "".join(f"{o.name}\n{o.elements[0]}\n{o.elements[1]}\n" for o in objs))
     end = add_seconds(start, 6 * 3600.0)
     out = tmp_path / "out"
     args = ["screen", str(tle), "--start", str(start), "--end", str(end), "--distance", "30000"]
     assert main([*args, "--model", "exponential", "--out", str(out)]) == 0
-    printed = capsys.readouterr().out
+    captured = capsys.readouterr()
+    printed = captured.out
+    assert "skipped" in captured.err and "Earth radii" in captured.err  # listed, not fatal
     table = pq.read_table(out / "events.parquet").to_pydict()
     cdms = sorted((out / "cdm").glob("*.cdm"))
     assert len(table["tca"]) == len(cdms) >= 3
@@ -418,6 +425,9 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, tmp_path, capsys)
     assert first.collision_probability == pytest.approx(table["pc"][0], rel=1e-9)
     assert table["pc"] == sorted(table["pc"], reverse=True)
     assert str(first.object1.designator) == str(table["id1"][0])
+    # --strict stops at Chandra, naming it (exit 1, the message on stderr).
+    assert main([*args, "--model", "exponential", "--out", str(tmp_path / "o2"), "--strict"]) == 1
+    assert "Earth radii" in capsys.readouterr().err
     # The same run from Python gives the same events.
     res = screen_all(
         objs,

@@ -101,7 +101,7 @@ def _screen(args: argparse.Namespace) -> int:
         radii_file=args.radii,
         monte_carlo_events=args.monte_carlo,
         members=args.members,
-        skip_bad=args.skip_bad,
+        skip_bad=not args.strict,
         overwrite=args.overwrite,
         command=args.command_line,
     )
@@ -430,7 +430,9 @@ def build_parser() -> argparse.ArgumentParser:
         "minima), and give each event its probability of collision per density model and "
         "for their mixture (CCSP of the objects in events, each object's own covariance). "
         "Writes OUT/events.parquet, one CCSDS CDM per event in OUT/cdm (with the [cdm] "
-        "extra) and prints the most probable. B* <= 0 objects load with an assumed "
+        "extra) and prints the most probable. Element sets that cannot be read or propagated "
+        "(e.g. orbits beyond 10 Earth radii) are skipped and listed (--strict stops "
+        "instead). B* <= 0 objects load with an assumed "
         "Cd*A/m of 0.022 m^2/kg and 100 % drag uncertainty.",
     )
     scr.add_argument("file", help="TLE or OMM file")
@@ -469,9 +471,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     scr.add_argument("--out", default="rhoprop-screen", help="output directory")
     scr.add_argument(
-        "--skip-bad",
+        "--strict",
         action="store_true",
-        help="skip malformed element sets and objects that cannot be propagated (listed)",
+        help="stop at the first element set that cannot be read or propagated (default: "
+        "skip it, listed on stderr, and screen the rest, as a published catalog needs)",
     )
     _overwrite(scr)
     scr.set_defaults(run=_screen)

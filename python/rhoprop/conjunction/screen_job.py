@@ -118,7 +118,7 @@ def run_screen_file(
     radii_file: str | Path | None = None,
     monte_carlo_events: int = 0,
     members: int = 200,
-    skip_bad: bool = False,
+    skip_bad: bool = True,
     overwrite: bool = False,
     command: str | None = None,
 ) -> list[Path]:
