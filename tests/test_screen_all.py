@@ -438,3 +438,20 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
         progress=False,
     )
     assert len(res.events) == len(cdms)
+
+
+def test_default_start_is_not_moved_by_one_element_set_dated_ahead(shell):
+    # The 2023-07-04 snapshot holds one element set of 2023-07-07: the newest epoch would
+    # start the window three days late. The default is the 99 % quantile of the epochs.
+    import dataclasses
+
+    from rhoprop.conjunction.screen_job import default_start
+
+    objs, _ = shell
+    newest = max(o.state.epoch for o in objs)
+    odd = objs[0]
+    ahead = rp.OrbitState(add_seconds(newest, 3 * 86400.0), odd.state.position, odd.state.velocity)
+    cat = catalog.Catalog([*objs, dataclasses.replace(odd, state=ahead)])
+    assert default_start(cat) <= newest
+    epochs = np.sort([o.state.epoch for o in cat])
+    assert default_start(cat) == epochs[int(0.99 * (len(epochs) - 1))]

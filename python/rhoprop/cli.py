@@ -438,7 +438,10 @@ def build_parser() -> argparse.ArgumentParser:
     scr.add_argument("file", help="TLE or OMM file")
     scr.add_argument("--end", required=True, help="end of the window, UTC ISO")
     scr.add_argument(
-        "--start", default=None, help="start of the window, UTC ISO (default: the newest epoch)"
+        "--start",
+        default=None,
+        help="start of the window, UTC ISO (default: the epoch 99 %% of the element sets are "
+        "not after; later ones are propagated back to it)",
     )
     scr.add_argument("--distance", type=float, default=5e3, help="screening distance, m (5000)")
     scr.add_argument(

@@ -17,7 +17,7 @@ from ..time import to_datetime64
 from .all_on_all import AllOnAllResult, screen_all
 from .cdm import CdmObject, ConjunctionMessage
 
-__all__ = ["output_events", "read_radii", "run_screen_file"]
+__all__ = ["default_start", "output_events", "read_radii", "run_screen_file"]
 
 #: Events printed by ``rhoprop screen`` (all are written).
 PRINTED = 15
@@ -96,6 +96,20 @@ def output_events(res: AllOnAllResult, folder: OutputFolder) -> list[Path]:
     return written
 
 
+#: The default start is the epoch this fraction of the element sets is not after: the
+#: newest epoch itself would let one element set dated days ahead (the 2023-07-04
+#: snapshot holds one of 2023-07-07) move the whole window; the few later ones are
+#: propagated back to the start.
+START_QUANTILE = 0.99
+
+
+def default_start(cat: Catalog) -> np.datetime64:
+    """The default start of ``rhoprop screen``: the :data:`START_QUANTILE` quantile of the
+    element sets' epochs (UTC)."""
+    epochs = np.sort(np.array([o.state.epoch for o in cat], dtype="datetime64[ns]"))
+    return np.datetime64(epochs[int(START_QUANTILE * (len(epochs) - 1))], "ns")
+
+
 def _catalog(file: str | Path, skip_bad: bool) -> Catalog:
     cat = load(file, errors="record" if skip_bad else "raise", nonpositive_bstar="prior")
     for where, message in cat.skipped:
@@ -123,14 +137,16 @@ def run_screen_file(
     command: str | None = None,
 ) -> list[Path]:
     """Every element set of ``file`` screened against every other from ``start`` (default
-    the newest epoch of the file) to ``end`` (UTC ISO) within ``distance`` m through
-    ``models`` (reference first); B* <= 0 objects load with an assumed Cd*A/m
-    (``load(nonpositive_bstar="prior")``). Writes ``out/events.parquet``, ``out/cdm/`` and
-    ``out/manifest.json``; prints the events with the largest mixture Pc, the filter
-    counts and the time per stage. Returns the paths written."""
+    :func:`default_start`: the epoch 99 % of the element sets are not after) to ``end``
+    (UTC ISO) within ``distance`` m through ``models`` (reference first); B* <= 0 objects
+    load with an assumed Cd*A/m (``load(nonpositive_bstar="prior")``). Writes
+    ``out/events.parquet``, ``out/cdm/`` and ``out/manifest.json``; prints the events
+    with the largest mixture Pc, the filter counts and the time per stage;
+    ``monte_carlo_events`` events of largest Pc also get the member Monte Carlo's Pc
+    (``members`` members). Returns the paths written."""
     cat = _catalog(file, skip_bad)
     radii = read_radii(radii_file) if radii_file else None
-    t0 = to_datetime64(start, "start") if start else max(o.state.epoch for o in cat)
+    t0 = to_datetime64(start, "start") if start else default_start(cat)
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     res = screen_all(
         cat,
