@@ -325,13 +325,16 @@ def test_cli_catalog(tmp_path, capsys):
 
 
 def test_cli_catalog_duplicate_ids(tmp_path, capsys):
-    # The same element set twice: an error before any work, or suffixed OEM names.
+    # The same element set twice: one object each by default (a history of one epoch),
+    # an error before any work, or suffixed OEM names.
     text = SAMPLE.read_text()
     twice = tmp_path / "twice.tle"
     twice.write_text(text + text)
     out = tmp_path / "out"
     args = ["catalog", str(twice), "--end", END, "--out", str(out), "--model", "exponential"]
-    assert main(args) == 1
+    assert main([*args, "--out", str(tmp_path / "combined")]) == 0
+    assert len(list((tmp_path / "combined" / "oem").glob("*.oem"))) == 6
+    assert main([*args, "--duplicates", "error"]) == 1
     assert "occur more than once" in capsys.readouterr().err and not out.exists()
     assert main([*args, "--duplicates", "suffix"]) == 0
     names = sorted(p.name for p in (out / "oem").glob("*.oem"))

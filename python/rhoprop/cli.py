@@ -322,9 +322,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument(
         "--duplicates",
-        choices=("error", "suffix"),
-        default="error",
-        help="NORAD ids occurring more than once: an error (default) or OEM files named "
+        choices=("newest", "error", "suffix"),
+        default="newest",
+        help="NORAD ids occurring more than once (a history): one object, the newest "
+        "element set (default), an error, or objects of their own in OEM files named "
         "<id>_2.oem, <id>_3.oem, ...",
     )
     cat.add_argument(

@@ -7,6 +7,7 @@ CCSDS OEM and a Parquet summary)."""
 from ..io import summary_table, write_oem, write_summary
 from .covariance import TleAccuracy, tle_accuracy, tle_covariance
 from .elements import (
+    HISTORY_DAYS,
     SGP4_RHO0,
     Catalog,
     CatalogObject,
@@ -14,11 +15,13 @@ from .elements import (
     fit_objects,
     load,
 )
-from .fit import FitResult, fit_element_set
+from .fit import FitResult, bstar_prior, fit_element_set, fit_element_sets
+from .objects import scaled_bstar_drag
 from .reentry_windows import ReentryResult, reentry
 from .run import CatalogResult, common_epochs, propagate_catalog
 
 __all__ = [
+    "HISTORY_DAYS",
     "SGP4_RHO0",
     "Catalog",
     "CatalogObject",
@@ -26,13 +29,16 @@ __all__ = [
     "FitResult",
     "ReentryResult",
     "TleAccuracy",
+    "bstar_prior",
     "common_epochs",
     "drag_parameter_from_bstar",
     "fit_element_set",
+    "fit_element_sets",
     "fit_objects",
     "load",
     "propagate_catalog",
     "reentry",
+    "scaled_bstar_drag",
     "summary_table",
     "tle_accuracy",
     "tle_covariance",

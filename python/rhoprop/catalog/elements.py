@@ -14,7 +14,7 @@ import csv
 import io
 import json
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -288,8 +288,14 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
     return entries
 
 
+#: Element sets of one object older than this before its newest (days) are not fitted
+#: with it: over longer arcs a constant Cd*A/m and the model's density errors dominate
+#: (chosen on the development weeks, docs/catalog-realism.md).
+HISTORY_DAYS = 10.0
+
+
 def load(
-    path: str | Path,
+    path: str | Path | Sequence[str | Path],
     *,
     errors: Errors | Literal["skip"] = "raise",
     drag_parameters: dict[int, float] | None = None,
@@ -299,6 +305,7 @@ def load(
     threads: int | None = None,
     zonal_degree: int = 4,
     nonpositive_bstar: Literal["error", "prior"] = "error",
+    history: Literal["newest", "fit", "each"] = "newest",
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content, plain or gzip-compressed.
@@ -308,7 +315,8 @@ def load(
     saying so.
 
     Args:
-        path: the file.
+        path: the file, or several (e.g. snapshots of a catalog at different dates),
+            read in turn.
         errors: ``"raise"`` (default): the first malformed line/record (or failed fit of
             a B* <= 0 object) raises ValueError naming it and the field; ``"skip"``: it
             is skipped and listed in ``Catalog.skipped``.
@@ -338,9 +346,22 @@ def load(
             ``drag_sigma="auto"`` gives it 100 % (the drag is a guess). For screening a
             whole catalog, where such objects (often manoeuvring or high) must not drop
             out.
+        history: several element sets of one NORAD id (a history: snapshots, or a file
+            as Space-Track serves them): ``"newest"`` (default) makes them one object, the
+            newest element set (fitted alone with ``fit``), whose note counts the others;
+            ``"fit"`` (with ``fit=True``) fits its state and Cd*A/m to all of them within
+            :data:`HISTORY_DAYS` of the newest, each near its own epoch
+            (:func:`~rhoprop.catalog.fit.fit_element_sets`; ``fit.element_sets`` names
+            those used); ``"each"``: every element set is its own object. ``"fit"`` is
+            not the default because on the development weeks it does not predict better
+            than the newest element set's fit (docs/catalog-realism.md, "History fits").
     """
     from .fit import DEFAULT_SPAN
 
+    if history not in ("newest", "fit", "each"):
+        raise ValueError(f"history must be 'newest', 'fit' or 'each', got {history!r}")
+    if history == "fit" and not fit:
+        raise ValueError("history='fit' fits element sets together: it needs fit=True")
     if nonpositive_bstar not in ("error", "prior"):
         raise ValueError(f"nonpositive_bstar must be 'error' or 'prior', got {nonpositive_bstar!r}")
 
@@ -358,29 +379,10 @@ def load(
             )
         for key, value in drag_parameters.items():
             _validate.positive(f"drag_parameters[{key!r}] (Cd*A/m, m^2/kg)", value)
-    p = Path(path)
-    raw = p.read_bytes()
-    if raw[:2] == b"\x1f\x8b":  # gzip, as catalog archives are often stored
-        import gzip
-
-        try:
-            raw = gzip.decompress(raw)
-        except (OSError, EOFError) as err:
-            raise ValueError(f"{p.name}: damaged gzip file ({err})") from err
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as err:
-        if errors == "raise":
-            line = raw[: err.start].count(b"\n") + 1
-            raise ValueError(
-                f"{p.name} line {line}: byte {raw[err.start]:#04x} is not UTF-8 text"
-            ) from err
-        # Element sets are ASCII: a stray byte becomes U+FFFD, so that a damaged data
-        # line fails its own checks (and is skipped) while the rest loads.
-        text = raw.decode("utf-8", errors="replace")
-    head = text.lstrip()[:200]
-    is_omm = head.startswith(("[", "{", "<")) or "NORAD_CAT_ID" in head or "OBJECT_NAME" in head
-    entries = _parse_omm(text, p.name) if is_omm else _parse_tle(text, p.name)
+    paths = [path] if isinstance(path, (str, Path)) else list(path)
+    if not paths:
+        raise ValueError("load needs at least one file")
+    entries = [e for one in paths for e in _read_entries(Path(one), errors)]
     out = Catalog([])
     for where, item in entries:
         try:
@@ -404,10 +406,73 @@ def load(
                 raise ValueError(message) from err
             out.skipped.append((where, str(err)))
     if not out.objects and not out.skipped:
-        raise ValueError(f"{p} holds no TLE or OMM element sets")
+        where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} files"
+        raise ValueError(f"{where} holds no TLE or OMM element sets")
+    older: dict[int, list[CatalogObject]] = {}
+    if history != "each":
+        out.objects, older = _newest_of_each(out.objects)
     if fit and out.objects:
-        _fit_all(out, model, span or DEFAULT_SPAN, errors, threads, zonal_degree)
+        together = older if history == "fit" else None
+        _fit_all(out, model, span or DEFAULT_SPAN, errors, threads, zonal_degree, together)
+    if older and history == "newest":
+        import dataclasses
+
+        out.objects = [
+            dataclasses.replace(
+                o,
+                covariance_note=f"{o.covariance_note}; the newest of "
+                f"{len(older[o.norad_id]) + 1} element sets (history='fit' fits them together)",
+            )
+            if o.norad_id in older
+            else o
+            for o in out.objects
+        ]
     return out
+
+
+def _read_entries(p: Path, errors: str) -> list[tuple[str, Any]]:
+    """The parsed entries (where, element set or exception) of one file."""
+    raw = p.read_bytes()
+    if raw[:2] == b"\x1f\x8b":  # gzip, as catalog archives are often stored
+        import gzip
+
+        try:
+            raw = gzip.decompress(raw)
+        except (OSError, EOFError) as err:
+            raise ValueError(f"{p.name}: damaged gzip file ({err})") from err
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        if errors == "raise":
+            line = raw[: err.start].count(b"\n") + 1
+            raise ValueError(
+                f"{p.name} line {line}: byte {raw[err.start]:#04x} is not UTF-8 text"
+            ) from err
+        # Element sets are ASCII: a stray byte becomes U+FFFD, so that a damaged data
+        # line fails its own checks (and is skipped) while the rest loads.
+        text = raw.decode("utf-8", errors="replace")
+    head = text.lstrip()[:200]
+    is_omm = head.startswith(("[", "{", "<")) or "NORAD_CAT_ID" in head or "OBJECT_NAME" in head
+    return _parse_omm(text, p.name) if is_omm else _parse_tle(text, p.name)
+
+
+def _newest_of_each(
+    objects: list[CatalogObject],
+) -> tuple[list[CatalogObject], dict[int, list[CatalogObject]]]:
+    """One object per NORAD id, the newest element set (first-seen order kept), and the
+    older element sets of each id with several (distinct epochs, ascending)."""
+    groups: dict[int, list[CatalogObject]] = {}
+    for o in objects:
+        groups.setdefault(o.norad_id, []).append(o)
+    kept, older = [], {}
+    for norad, group in groups.items():
+        group.sort(key=lambda o: o.state.epoch)
+        newest = group[-1]
+        kept.append(newest)
+        rest = [o for o in group[:-1] if o.state.epoch != newest.state.epoch]
+        if rest:
+            older[norad] = rest
+    return kept, older
 
 
 #: Largest RMS residual (m) of a fit to SGP4 that :func:`fit_objects` accepts: TLE
@@ -422,29 +487,37 @@ def fit_objects(
     span: tuple[float, float] | None = None,
     threads: int | None = None,
     zonal_degree: int = 2,
+    history: Mapping[int, Sequence[CatalogObject]] | None = None,
 ) -> list[CatalogObject | Exception]:
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
-    (:func:`~rhoprop.catalog.fit.fit_element_set`, ``span`` s around the epoch, default
+    (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
     one day either side; an orbit that comes down within the span's end is fitted to the
     day before the epoch instead), on ``threads`` threads in epoch order (so that fits
-    running at once share their day tiles). A fit that leaves an RMS residual above
-    :data:`MAX_FIT_RMS` (diverged) counts as failed. Returns, in input order, the
-    fitted object (``fit`` set, covariance the TLE accuracy plus the fit's) or the
-    exception of a fit that failed."""
+    running at once share their day tiles). ``history``: {NORAD id: older element sets}
+    fitted together with the object's (those within :data:`HISTORY_DAYS` of it). A fit
+    that leaves an RMS residual above :data:`MAX_FIT_RMS` (diverged) counts as failed.
+    Returns, in input order, the fitted object (``fit`` set, covariance the TLE accuracy
+    plus the fit's) or the exception of a fit that failed."""
     import dataclasses
 
     from ..density import SampledModel
     from .covariance import tle_accuracy, tle_covariance
-    from .fit import DEFAULT_SPAN, fit_element_set
+    from .fit import DEFAULT_SPAN, fit_element_sets
+
+    history = history or {}
 
     first = DEFAULT_SPAN if span is None else span
     atmosphere = model.atlas if isinstance(model, SampledModel) else model
 
     def one(obj: CatalogObject) -> CatalogObject | Exception:
         tried = [first] if span is not None else [first, (first[0], 0.0)]
+        oldest = obj.state.epoch - np.timedelta64(int(HISTORY_DAYS * 86400), "s")
+        sets = [o for o in history.get(obj.norad_id, ()) if o.state.epoch >= oldest]
         for k, window in enumerate(tried):
             try:
-                f = fit_element_set(obj, atmosphere, span=window, zonal_degree=zonal_degree)
+                f = fit_element_sets(
+                    [*sets, obj], atmosphere, span=window, zonal_degree=zonal_degree
+                )
                 if not f.rms_total <= MAX_FIT_RMS:
                     # A diverged fit (e.g. over an arc running into the decay) is no fit.
                     raise ValueError(
@@ -464,9 +537,10 @@ def fit_objects(
             covariance=tle_covariance(f.state, acc) + f.covariance[:6, :6],
             covariance_note=(
                 f"{_tle_note(acc)} plus the covariance of the fit to SGP4 over "
-                f"{window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h (RMS residual "
-                f"{f.rms_total:.0f} m); Cd*A/m fitted, {f.drag_parameter:.4g} "
-                f"+- {f.drag_sigma:.2g} m^2/kg (its uncertainty is not propagated)"
+                f"{window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h"
+                + (f" of {len(f.element_sets)} element sets" if len(f.element_sets) > 1 else "")
+                + f" (RMS residual {f.rms_total:.0f} m); Cd*A/m fitted, "
+                f"{f.drag_parameter:.4g} +- {f.drag_sigma:.2g} m^2/kg ({f.prior_note})"
             ),
             fit=f,
         )
@@ -484,12 +558,16 @@ def _fit_all(
     errors: str,
     threads: int | None,
     zonal_degree: int = 2,
+    history: Mapping[int, Sequence[CatalogObject]] | None = None,
 ) -> None:
-    """Replaces the objects of ``cat`` by fitted ones (in place, order kept)."""
+    """Replaces the objects of ``cat`` by fitted ones (in place, order kept), each with
+    its ``history`` of older element sets."""
     import dataclasses
 
     objs = cat.objects
-    fitted = fit_objects(objs, model, span=span, threads=threads, zonal_degree=zonal_degree)
+    fitted = fit_objects(
+        objs, model, span=span, threads=threads, zonal_degree=zonal_degree, history=history
+    )
     kept: list[CatalogObject] = []
     for obj, res in zip(objs, fitted, strict=True):
         if isinstance(res, CatalogObject):

@@ -1,17 +1,30 @@
 """TLE -> numerical state and ballistic coefficient: a least-squares fit of the initial
-state and Cd*A/m to SGP4 positions (pseudo-observations) over a span around the element
-set's epoch, with rhoprop's own dynamics (two-body + J2 + drag, RK8) and the chosen
-density model, so that the state and the drag parameter are consistent with the model
-the catalog is then propagated with (SGP4's B* absorbs its own static density).
+state and Cd*A/m to SGP4 positions (pseudo-observations) near the epochs of one or several
+element sets of an object, with rhoprop's own dynamics (two-body + zonals + drag, RK8)
+and the chosen density model, so that the state and the drag parameter are consistent
+with the model the catalog is then propagated with (SGP4's B* absorbs its own static
+density).
 
 Method: Gauss-Newton on p = [r (m), v (m/s), Cd*A/m (m^2/kg)] at the start of the span;
 the model is ``rp.propagate`` (RK8, default step) with outputs every ``spacing`` s;
 Jacobian by forward differences (1 m, 1 mm/s, 1 % of Cd*A/m), 8 propagations per
-iteration. Observations: SGP4 positions (TEME, taken as inertial) every ``spacing`` s over
-``span``, equally weighted with ``obs_sigma`` (m) per component. Cd*A/m has a weak prior:
-its starting value (from B*, or 0.022 m^2/kg when B* <= 0) with 100 % sigma (at least
-0.01 m^2/kg), so that an orbit whose drag the span cannot see (high LEO) keeps a sensible
-value; it is kept above ``MIN_DRAG_PARAMETER``.
+iteration.
+
+Observations: SGP4 positions (TEME, taken as inertial) every ``spacing`` s within
+``span`` of each element set's epoch (for a history, each element set only up to halfway
+to its neighbours: every set speaks near its own epoch, the idea of Levit & Marshall
+2011, "Improved orbit predictions using two-line elements", Adv. Space Res. 47). Each is
+weighted by SGP4's own error growth away from its epoch, in the RTN frame: the published
+TLE accuracy at epoch (:func:`~rhoprop.catalog.covariance.tle_accuracy`: radial,
+along-track, cross-track) with the along-track sigma growing by the regime's drift rate,
+sigma_T(dt) = sqrt(sigma_T0^2 + (drift dt)^2).
+
+Prior on Cd*A/m (:func:`bstar_prior`): B* converted with the density ratio of SGP4's own
+static atmosphere to the fit's model along the element set's orbit (B* was fitted by the
+catalog's owner to weeks of tracking with SGP4's density; the same deceleration with the
+model's density needs Cd*A/m = B_SGP4 rho_SGP4 / rho_model), with relative 1-sigma
+:data:`BSTAR_PRIOR_SIGMA`; where B* <= 0, 0.022 m^2/kg with 100 %. The fitted value is kept
+above ``MIN_DRAG_PARAMETER``.
 """
 
 from __future__ import annotations
@@ -23,7 +36,7 @@ import numpy as np
 
 from ..density.model import ModelLike
 from ..frames import rtn_basis
-from ..propagation import OrbitState, Spacecraft, propagate
+from ..propagation import OrbitState
 from ..time import add_seconds, from_jd
 
 #: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
@@ -64,6 +77,13 @@ class FitResult:
             1 cm and 1e-4 relative in Cd*A/m.
         drag_observable: False when the prior on Cd*A/m dominated (its formal sigma is
             over half the prior's): the span barely sees drag (high orbits).
+        prior, prior_sigma: the prior on Cd*A/m and its 1-sigma, m^2/kg
+            (:func:`bstar_prior`); prior_note: how it was made.
+        element_sets: the sources of the element sets fitted, oldest first (one without
+            a history); element_set_rms: each one's 3-D RMS residual, m.
+        all_times, all_residuals, observation_set: every observation of a history fit
+            (s from the newest epoch; RTN residuals, m; index into ``element_sets``);
+            ``times``/``residuals``/``rms`` are the newest element set's.
     """
 
     state: OrbitState
@@ -77,41 +97,65 @@ class FitResult:
     iterations: int
     converged: bool
     drag_observable: bool
+    prior: float = np.nan
+    prior_sigma: float = np.nan
+    prior_note: str = ""
+    element_sets: tuple[str, ...] = ()
+    element_set_rms: np.ndarray | None = None
+    all_times: np.ndarray | None = None
+    all_residuals: np.ndarray | None = None
+    observation_set: np.ndarray | None = None
 
 
-def _positions(
+def _states(
     p: np.ndarray,
-    t0: np.datetime64,
+    epoch: np.datetime64,
     model: Any,
-    duration: float,
+    back: int,
+    forward: int,
     spacing: float,
-    zonal_degree: int = 2,
+    zonal_degree: int,
 ) -> np.ndarray:
-    """States (k, 6) at the observation times for parameters ``p`` at ``t0``."""
-    traj = propagate(
-        OrbitState(t0, p[:3], p[3:6]),
-        Spacecraft(1.0, max(float(p[6]), MIN_DRAG_PARAMETER)),
-        model,
-        duration,
-        output_step=spacing,
-        integrator="rk8",
-        zonal_degree=zonal_degree,
-    )
-    k = round(duration / spacing) + 1
-    if traj.decayed_at is not None or len(traj.times) < k:
-        raise ValueError("the orbit decays within the fit span; shorten span")
-    return np.hstack([traj.positions[:k], traj.velocities[:k]])
+    """States (back + forward + 1, 6) on the grid epoch + g spacing, g = -back..forward,
+    for parameters ``p`` at ``epoch``: one run backwards, one forwards."""
+    from ..constants import DEFAULT_FLOOR_ALTITUDE
+    from ..propagation.propagate import core_propagate, fixed_step, run_in_field
+
+    state = OrbitState(epoch, p[:3], p[3:6])
+    drag = max(float(p[6]), MIN_DRAG_PARAMETER)
+    step = fixed_step("rk8", None, state)
+    parts = [p[None, :6]]
+    for steps, sign in ((back, -1.0), (forward, 1.0)):
+        if steps == 0:
+            continue
+        times = sign * spacing * np.arange(steps + 1, dtype=float)
+
+        def _one_way(atmosphere: Any, times: np.ndarray = times) -> Any:
+            return core_propagate(
+                atmosphere,
+                state,
+                drag,
+                times,
+                integrator="rk8",
+                step=step,
+                floor_altitude=DEFAULT_FLOOR_ALTITUDE,
+                zonal_degree=zonal_degree,
+            )
+
+        t, states, decayed_at, _, _ = run_in_field(
+            model, state, float(times[-1]), DEFAULT_FLOOR_ALTITUDE, _one_way
+        )
+        if decayed_at is not None or len(t) < steps + 1:
+            raise ValueError("the orbit decays within the fit span; shorten span")
+        parts.insert(0 if sign < 0 else len(parts), states[1:][::-1] if sign < 0 else states[1:])
+    return np.vstack(parts)
 
 
-def _sgp4_observations(
-    sat: Any, start: float, end: float, spacing: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Times (s from the epoch), positions (k, 3) m and velocities (k, 3) m/s of the
-    element set by SGP4 every ``spacing`` s over [start, end]; ValueError naming SGP4's
-    error."""
+def _sgp4_observations(sat: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (k, 3) m and velocities (k, 3) m/s of the element set by SGP4 at
+    ``times`` (s from its epoch); ValueError naming SGP4's error."""
     from sgp4.api import SGP4_ERRORS
 
-    times = np.arange(start, end + spacing / 2, spacing)
     err, r, v = sat.sgp4_array(
         np.full(len(times), sat.jdsatepoch), sat.jdsatepochF + times / 86400.0
     )
@@ -121,7 +165,178 @@ def _sgp4_observations(
             f"SGP4 error {int(err[bad])} at {times[bad]:.0f} s from the epoch: "
             f"{SGP4_ERRORS.get(int(err[bad]), '')}"
         )
-    return times, np.asarray(r) * 1e3, np.asarray(v) * 1e3
+    return np.asarray(r) * 1e3, np.asarray(v) * 1e3
+
+
+#: Relative 1-sigma of the B*-derived prior on Cd*A/m (:func:`bstar_prior`): weak on
+#: purpose (B* is itself a fit, noisy from one element set to the next). On the four
+#: development weeks of ``benches/catalog_realism.py`` the fitted Cd*A/m is the prior to
+#: 1-2 % (robust log scatter 0.007-0.014, median ratio 0.98-0.99): over one day the SGP4
+#: pseudo-observations carry SGP4's own deceleration, which the density ratio reproduces.
+BSTAR_PRIOR_SIGMA = 0.5
+#: Relative 1-sigma of the prior where B* gives none (B* <= 0): a guess.
+GUESS_PRIOR_SIGMA = 1.0
+#: SGP4's static atmosphere: density at q0 = 120 km altitude (kg/m^3; B* = B rho0 / 2 with
+#: rho0 = 0.15696615 kg m^-2 ER^-1 over one Earth radius) and its fourth-power profile
+#: ((q0 - s) / (r - s))^4 with s = 78 km (lowered for perigees below 156 km, as SGP4 does).
+SGP4_RHO_Q0 = SGP4_RHO0 / 6378135.0
+SGP4_Q0_KM, SGP4_S_KM, SGP4_RADIUS_KM = 120.0, 78.0, 6378.135
+#: An element set of a history whose normalised RMS residual exceeds this (the fit
+#: cannot reconcile it with the newer ones: a manoeuvre, a cross-tag) is dropped with every
+#: older one, and the fit repeated.
+HISTORY_MAX_NORMALISED_RMS = 3.0
+
+
+def sgp4_density(radius_km: np.ndarray, perigee_km: float) -> np.ndarray:
+    """SGP4's static density (kg/m^3) at geocentric distances ``radius_km`` for an orbit
+    of perigee altitude ``perigee_km``."""
+    s = SGP4_S_KM
+    if perigee_km < 156.0:
+        s = max(perigee_km - 78.0, 20.0)
+    alt = np.maximum(np.asarray(radius_km) - SGP4_RADIUS_KM - s, 1.0)
+    return SGP4_RHO_Q0 * ((SGP4_Q0_KM - s) / alt) ** 4
+
+
+def _perigee_km(sat: Any) -> float:
+    """Perigee altitude (km) of an ``sgp4`` ``Satrec``'s mean elements, as SGP4 takes it."""
+    return float(sat.a * (1 - sat.ecco)) * SGP4_RADIUS_KM - SGP4_RADIUS_KM
+
+
+def bstar_prior(
+    bstar: float,
+    perigee_km: float,
+    atmosphere: ModelLike,
+    times: np.ndarray,
+    positions: np.ndarray,
+) -> tuple[float, float, str]:
+    """The fit's prior on Cd*A/m (m^2/kg), its 1-sigma (m^2/kg) and a note: ``bstar``
+    (1/ER) scaled by the ratio of SGP4's static density (perigee altitude ``perigee_km``)
+    to ``atmosphere``'s mean density at the element set's SGP4 ``positions`` (m, TEME as
+    inertial) at ``times`` (UTC); where B* <= 0, :data:`DEFAULT_DRAG_PARAMETER` with
+    100 %; where the model cannot be evaluated there, B*'s plain conversion with 100 %."""
+    from ..frames import geodetic, inertial_to_fixed
+
+    bstar = float(bstar)
+    if bstar <= 0:
+        return (
+            DEFAULT_DRAG_PARAMETER,
+            GUESS_PRIOR_SIGMA * DEFAULT_DRAG_PARAMETER,
+            f"B* <= 0: prior {DEFAULT_DRAG_PARAMETER} m^2/kg +- 100 %",
+        )
+    radius = np.linalg.norm(positions, axis=1) / 1e3
+    lla = geodetic(inertial_to_fixed(times, positions))
+    mean_std = getattr(atmosphere, "mean_std", None)  # None: called below, caught
+    try:
+        mean, _ = mean_std(times, lla[:, 0], lla[:, 1], lla[:, 2])  # type: ignore[misc]
+    except Exception:  # outside the field (any model's error): the plain conversion
+        mean = np.array([np.nan])
+    ratio = float(np.mean(sgp4_density(radius, perigee_km)) / np.mean(mean))
+    plain = drag_parameter_from_bstar(bstar)
+    if not (np.isfinite(ratio) and ratio > 0):
+        return plain, plain * GUESS_PRIOR_SIGMA, "B* converted plainly (no model density)"
+    prior = max(plain * ratio, MIN_DRAG_PARAMETER)
+    return (
+        prior,
+        BSTAR_PRIOR_SIGMA * prior,
+        f"prior from B*: {plain:.3g} x density ratio {ratio:.3g} = {prior:.3g} m^2/kg "
+        f"+- {100 * BSTAR_PRIOR_SIGMA:.0f} %",
+    )
+
+
+def _windows(epochs: np.ndarray, span: tuple[float, float]) -> list[tuple[float, float]]:
+    """Each element set's observation window, s from its own epoch (``epochs`` in s from
+    the newest, ascending): ``span``, cut halfway to its neighbours."""
+    out = []
+    for k, e in enumerate(epochs):
+        lo, hi = span
+        if k > 0:
+            lo = max(lo, (epochs[k - 1] - e) / 2)
+        if k < len(epochs) - 1:
+            hi = min(hi, (epochs[k + 1] - e) / 2)
+        out.append((lo, hi))
+    return out
+
+
+@dataclass
+class _Observations:
+    """Pseudo-observations of one fit on the grid newest epoch + g spacing."""
+
+    back: int  # grid steps before the newest epoch
+    forward: int  # grid steps after it
+    rows: np.ndarray  # row of each observation in the grid, g + back (k,)
+    times: np.ndarray  # s from the newest epoch (k,)
+    which: np.ndarray  # element set index of each observation (k,)
+    positions: np.ndarray  # (k, 3) m
+    velocities: np.ndarray  # (k, 3) m/s
+    bases: np.ndarray  # (k, 3, 3) RTN rows of the SGP4 orbit
+    sigmas: np.ndarray  # (k, 3) RTN 1-sigma, m
+
+
+#: Relative 1-sigma of the model's density (and so drag) error over a history's arc: the
+#: older element sets are weighted by the along-track error it makes between them and
+#: the newest (:func:`_model_drift`), so that they inform the fit without forcing the
+#: model's density error of past weeks onto the newest state.
+HISTORY_DENSITY_SIGMA = 0.2
+
+
+def _model_drift(old: Any, new: Any, gap: float, tau: np.ndarray) -> np.ndarray:
+    """Along-track error (m) that a relative drag error :data:`HISTORY_DENSITY_SIGMA`
+    makes at ``tau`` s from the newest epoch: a n_dot tau^2 / 2 times the error, with the
+    mean motion's decay rate n_dot from the two element sets' mean motions (``gap`` s
+    apart, negative)."""
+    n_dot = abs(new.no_kozai - old.no_kozai) / 60.0 / max(abs(gap), 1.0)  # rad/s^2
+    a = float(new.a) * SGP4_RADIUS_KM * 1e3
+    return np.asarray(0.5 * HISTORY_DENSITY_SIGMA * a * n_dot * tau**2, dtype=float)
+
+
+def _observe(
+    sats: list[Any], span: tuple[float, float], spacing: float
+) -> tuple[_Observations, np.datetime64]:
+    """The observations of ``sats`` (ascending epochs, the newest last) and the newest
+    epoch; ValueError naming an element set SGP4 fails on."""
+    from .covariance import tle_accuracy
+
+    epochs = [from_jd(s.jdsatepoch, s.jdsatepochF, scale="utc") for s in sats]
+    newest = epochs[-1]
+    rel = np.array([(e - newest) / np.timedelta64(1, "ns") / 1e9 for e in epochs])
+    parts = []
+    for k, (sat, (lo, hi)) in enumerate(zip(sats, _windows(rel, span), strict=True)):
+        # grid times (multiples of spacing from the newest epoch) within the window
+        g0 = int(np.ceil((rel[k] + lo) / spacing - 1e-9))
+        g1 = int(np.floor((rel[k] + hi) / spacing + 1e-9))
+        if g1 < g0:
+            continue
+        grid = np.arange(g0, g1 + 1)
+        t_own = grid * spacing - rel[k]
+        try:
+            r, v = _sgp4_observations(sat, t_own)
+        except ValueError as err:
+            raise ValueError(f"element set of {epochs[k]}: {err}") from err
+        at = int(np.argmin(np.abs(t_own)))
+        acc = tle_accuracy(OrbitState(epochs[k], r[at], v[at]))
+        sig = np.empty((len(grid), 3))
+        sig[:, 0] = acc.radial
+        sig[:, 1] = np.hypot(acc.along_track, acc.drift_rate * t_own)
+        if k < len(sats) - 1:
+            sig[:, 1] = np.hypot(sig[:, 1], _model_drift(sats[k], sats[-1], rel[k], grid * spacing))
+        sig[:, 2] = acc.cross_track
+        parts.append((grid, np.full(len(grid), k), r, v, sig))
+    grid = np.concatenate([p[0] for p in parts])
+    back, forward = max(-int(grid.min()), 0), max(int(grid.max()), 0)
+    pos = np.concatenate([p[2] for p in parts])
+    vel = np.concatenate([p[3] for p in parts])
+    obs = _Observations(
+        back=back,
+        forward=forward,
+        rows=grid + back,
+        times=grid * spacing,
+        which=np.concatenate([p[1] for p in parts]),
+        positions=pos,
+        velocities=vel,
+        bases=rtn_basis(pos, vel),
+        sigmas=np.concatenate([p[4] for p in parts]),
+    )
+    return obs, newest
 
 
 def fit_element_set(
@@ -131,7 +346,6 @@ def fit_element_set(
     drag_parameter: float | None = None,
     span: tuple[float, float] = DEFAULT_SPAN,
     spacing: float = DEFAULT_SPACING,
-    obs_sigma: float = 1000.0,
     max_iterations: int = 8,
     zonal_degree: int = 2,
 ) -> FitResult:
@@ -143,12 +357,10 @@ def fit_element_set(
         model: density model (a sampled one through its atlas's day tiles) or a
             ``DensityField`` covering the span and the orbit's altitudes.
         drag_parameter: Cd*A/m to start from and the prior's centre, m^2/kg (default
-            from B*, or 0.022 when B* <= 0).
+            :func:`bstar_prior`).
         span: (start, end) of the pseudo-observations, s from the epoch; start <= 0 <= end,
             both multiples of ``spacing``. Default one day either side.
         spacing: observation spacing, s (default 600).
-        obs_sigma: weight of a pseudo-observation, 1-sigma per component, m (default 1 km,
-            the order of TLE accuracy); only sets the balance against the prior.
         max_iterations: Gauss-Newton iterations at most.
         zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6; use the
             degree the fitted state will be propagated with.
@@ -157,80 +369,234 @@ def fit_element_set(
         :class:`FitResult`. Raises ValueError if SGP4 fails over the span or the orbit
         decays within it.
     """
-    if hasattr(sat, "satrec") and callable(sat.satrec):
-        drag_parameter = drag_parameter if drag_parameter is not None else sat.drag_parameter
-        sat = sat.satrec()
+    return fit_element_sets(
+        [sat],
+        model,
+        drag_parameter=drag_parameter,
+        span=span,
+        spacing=spacing,
+        max_iterations=max_iterations,
+        zonal_degree=zonal_degree,
+    )
+
+
+def _satrec(item: Any) -> tuple[Any, float | None, str]:
+    """(Satrec, Cd*A/m override or None, source) of a Satrec or CatalogObject."""
+    if hasattr(item, "satrec") and callable(item.satrec):
+        sat = item.satrec()
         if sat is None:
             raise ValueError("the catalog object carries no element set to fit")
+        from_bstar = item.bstar > 0 and item.drag_parameter == drag_parameter_from_bstar(item.bstar)
+        guessed = item.bstar <= 0 and item.drag_parameter == DEFAULT_DRAG_PARAMETER
+        override = None if from_bstar or guessed else float(item.drag_parameter)
+        return sat, override, str(item.source)
+    epoch = from_jd(item.jdsatepoch, item.jdsatepochF, scale="utc")
+    return item, None, f"element set of {epoch}"
+
+
+def fit_element_sets(
+    sats: Any,
+    model: ModelLike,
+    *,
+    drag_parameter: float | None = None,
+    span: tuple[float, float] = DEFAULT_SPAN,
+    spacing: float = DEFAULT_SPACING,
+    max_iterations: int = 8,
+    zonal_degree: int = 2,
+) -> FitResult:
+    """Fits one state and Cd*A/m to several element sets of one object (a history), each
+    speaking near its own epoch (module docstring); the state is at the newest epoch.
+    Element sets the fit cannot reconcile with the newer ones (normalised RMS residual
+    above :data:`HISTORY_MAX_NORMALISED_RMS`: a manoeuvre) are dropped with every older
+    one; ``FitResult.element_sets`` says which were used.
+
+    Args:
+        sats: ``Satrec`` objects or :class:`~rhoprop.catalog.CatalogObject` of one object,
+            any order (sorted by epoch; repeated epochs count once).
+        model, drag_parameter, span, spacing, max_iterations, zonal_degree: as
+            :func:`fit_element_set` (``span`` is each element set's window, s from its own
+            epoch, cut halfway to its neighbours; the newest one's B* gives the prior).
+
+    Returns:
+        :class:`FitResult`. Raises ValueError if SGP4 fails, the orbit decays within the
+        span or the element sets belong to different objects.
+    """
+    items = [_satrec(s) for s in (sats if isinstance(sats, (list, tuple)) else [sats])]
+    if not items:
+        raise ValueError("no element sets to fit")
+    if len({int(s.satnum) for s, _, _ in items}) > 1:
+        raise ValueError("the element sets belong to different objects (NORAD ids)")
     start, end = float(span[0]), float(span[1])
     if not (start <= 0 <= end and end > start and spacing > 0):
         raise ValueError(f"span must satisfy start <= 0 <= end, start < end; got {span}")
     if abs(start / spacing - round(start / spacing)) > 1e-9:
         raise ValueError(f"span start {start} s is not a multiple of spacing {spacing} s")
-    epoch = from_jd(sat.jdsatepoch, sat.jdsatepochF, scale="utc")
-    times, obs, obs_v = _sgp4_observations(sat, start, end, spacing)
-    t0 = add_seconds(epoch, start)
-    duration = end - start
-    i_epoch = round(-start / spacing)
+    by_epoch: dict[float, tuple[Any, float | None, str]] = {}
+    for item in items:
+        by_epoch[item[0].jdsatepoch + item[0].jdsatepochF] = item
+    ordered = [by_epoch[k] for k in sorted(by_epoch)]
     if drag_parameter is None:
-        bstar = float(sat.bstar)
-        drag_parameter = drag_parameter_from_bstar(bstar) if bstar > 0 else DEFAULT_DRAG_PARAMETER
-    prior = max(float(drag_parameter), MIN_DRAG_PARAMETER)
-    prior_sigma = max(prior, 0.01)
-    p = np.concatenate([obs[0], obs_v[0], [prior]])
+        drag_parameter = ordered[-1][1]
+    args = (model, drag_parameter, (start, end), spacing, max_iterations, zonal_degree)
+    result, _ = _fit(ordered[-1:], *args)
+    for k in range(len(ordered) - 2, -1, -1):
+        # One older element set at a time, from the solution of the newer ones: a long
+        # arc from the SGP4 state alone starts hundreds of km off along-track.
+        try:
+            longer, worst = _fit(ordered[k:], *args, start=result)
+        except ValueError:  # the arc decays or SGP4 fails on the older set
+            break
+        if worst > HISTORY_MAX_NORMALISED_RMS:
+            break
+        result = longer
+    return result
+
+
+def _prior(
+    sat: Any, model: Any, drag_parameter: float | None, obs: _Observations, epoch: Any
+) -> tuple[float, float, str]:
+    """The Cd*A/m prior of a fit: ``drag_parameter`` if given, else :func:`bstar_prior`
+    along the newest element set's observations."""
+    if drag_parameter is not None:
+        prior = max(float(drag_parameter), MIN_DRAG_PARAMETER)
+        return prior, BSTAR_PRIOR_SIGMA * prior, f"prior {prior:.4g} m^2/kg given"
+    newest = obs.which == obs.which.max()
+    times = np.array([add_seconds(epoch, float(t)) for t in obs.times[newest]])
+    return bstar_prior(sat.bstar, _perigee_km(sat), model, times, obs.positions[newest])
+
+
+def _fit(
+    ordered: list[tuple[Any, float | None, str]],
+    model: Any,
+    drag_parameter: float | None,
+    span: tuple[float, float],
+    spacing: float,
+    max_iterations: int,
+    zonal_degree: int,
+    start: FitResult | None = None,
+) -> tuple[FitResult, float]:
+    """One Gauss-Newton fit to ``ordered`` element sets (from ``start``'s solution if
+    given); the result and the largest normalised RMS residual of the element sets older
+    than the newest."""
+    sats = [o[0] for o in ordered]
+    obs, epoch = _observe(sats, span, spacing)
+    if start is not None:
+        prior, prior_sigma, note = start.prior, start.prior_sigma, start.prior_note
+        p = np.concatenate([start.state.state, [start.drag_parameter]])
+    else:
+        prior, prior_sigma, note = _prior(sats[-1], model, drag_parameter, obs, epoch)
+        r, v = _sgp4_observations(sats[-1], np.array([0.0]))
+        p = np.concatenate([r[0], v[0], [prior]])
+
+    def model_states(q: np.ndarray) -> np.ndarray:
+        return _states(q, epoch, model, obs.back, obs.forward, spacing, zonal_degree)
+
+    def weighted(d: np.ndarray) -> np.ndarray:
+        """Inertial (k, 3) differences -> RTN, over the sigmas, flattened."""
+        return np.asarray(np.einsum("kij,kj->ki", obs.bases, d) / obs.sigmas).ravel()
+
+    def cost(q: np.ndarray, states: np.ndarray) -> float:
+        r = weighted(obs.positions - states[obs.rows, :3])
+        return float(r @ r) + float((prior - q[6]) / prior_sigma) ** 2
+
     steps = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3, 1e-3, 0.0])
     converged = False
     iterations = 0
-    jac = np.zeros((len(times) * 3, 7))
-    jac_epoch = np.zeros((6, 7))
-    nominal = _positions(p, t0, model, duration, spacing, zonal_degree)
+    jac = np.zeros((len(obs.rows) * 3, 7))
+    nominal = model_states(p)
     for iterations in range(1, max_iterations + 1):  # noqa: B007 - reported
         steps[6] = 0.01 * p[6]
         for j in range(7):
             q = p.copy()
             q[j] += steps[j]
-            pert = _positions(q, t0, model, duration, spacing, zonal_degree)
-            jac[:, j] = ((pert[:, :3] - nominal[:, :3]) / steps[j]).ravel()
-            jac_epoch[:, j] = (pert[i_epoch] - nominal[i_epoch]) / steps[j]
-        res = (obs - nominal[:, :3]).ravel()
-        a = np.vstack([jac / obs_sigma, np.eye(7)[6] / prior_sigma])
-        b = np.concatenate([res / obs_sigma, [(prior - p[6]) / prior_sigma]])
+            pert = model_states(q)
+            jac[:, j] = weighted(pert[obs.rows, :3] - nominal[obs.rows, :3]) / steps[j]
+        res = weighted(obs.positions - nominal[obs.rows, :3])
+        a = np.vstack([jac, np.eye(7)[6] / prior_sigma])
+        b = np.concatenate([res, [(prior - p[6]) / prior_sigma]])
         scale = np.linalg.norm(a, axis=0)
         dp = np.linalg.lstsq(a / scale, b, rcond=None)[0] / scale
-        p = p + dp
-        p[6] = max(p[6], MIN_DRAG_PARAMETER)
-        nominal = _positions(p, t0, model, duration, spacing, zonal_degree)
+        before = cost(p, nominal)
+        for _ in range(5):  # halve a step that makes the fit worse (long arcs)
+            q = p + dp
+            q[6] = max(q[6], MIN_DRAG_PARAMETER)
+            try:
+                trial = model_states(q)
+            except ValueError:  # the step took the orbit into the ground
+                dp = dp / 2
+                continue
+            if cost(q, trial) <= before * (1 + 1e-9):
+                break
+            dp = dp / 2
+        else:
+            break
+        p, nominal = q, trial
         if np.linalg.norm(dp[:3]) < 0.01 and abs(dp[6]) < 1e-4 * p[6]:
             converged = True
             break
-    res3 = obs - nominal[:, :3]
-    dof = max(res3.size - 7, 1)
-    s2 = float(np.sum(res3**2)) / dof
-    a = np.vstack([jac * np.sqrt(1.0 / s2), np.eye(7)[6] / prior_sigma])
-    cov_t0 = np.linalg.pinv(a.T @ a)
-    phi = np.zeros((7, 7))
-    phi[:6] = jac_epoch
-    phi[6, 6] = 1.0
-    cov = phi @ cov_t0 @ phi.T
+    fitted = _Solution(p, nominal, jac, iterations, converged, prior, prior_sigma, note)
+    return _result(fitted, obs, epoch, weighted, [o[2] for o in ordered])
+
+
+@dataclass
+class _Solution:
+    """Where a Gauss-Newton fit ended: parameters, states on the grid, the last Jacobian
+    (weighted), iterations, convergence and the prior it had."""
+
+    p: np.ndarray
+    nominal: np.ndarray
+    jac: np.ndarray
+    iterations: int
+    converged: bool
+    prior: float
+    prior_sigma: float
+    prior_note: str
+
+
+def _result(
+    fit: _Solution,
+    obs: _Observations,
+    epoch: Any,
+    weighted: Any,
+    sources: list[str],
+) -> tuple[FitResult, float]:
+    """The :class:`FitResult` of a solution and the largest normalised RMS residual of
+    the element sets older than the newest."""
+    count = len(sources)
+    res3 = obs.positions - fit.nominal[obs.rows, :3]
+    normalised = weighted(res3).reshape(-1, 3)
+    s2 = float(np.sum(normalised**2)) / max(normalised.size - 7, 1)
+    a = np.vstack([fit.jac / np.sqrt(s2), np.eye(7)[6] / fit.prior_sigma])
+    cov = np.linalg.pinv(a.T @ a)
     cov = (cov + cov.T) / 2
-    bases = rtn_basis(obs, obs_v)
-    residuals = np.einsum("kij,kj->ki", bases, res3)
-    rms = np.sqrt(np.mean(residuals**2, axis=0))
-    at_epoch = nominal[i_epoch]
+    residuals = np.einsum("kij,kj->ki", obs.bases, res3)
+    newest = obs.which == count - 1
+    rms = np.sqrt(np.mean(residuals[newest] ** 2, axis=0))
+    per_set = [residuals[obs.which == i] for i in range(count)]
+    per_set_norm = [np.sqrt(np.mean(normalised[obs.which == i] ** 2)) for i in range(count)]
     drag_sigma = float(np.sqrt(max(cov[6, 6], 0.0)))
-    return FitResult(
-        state=OrbitState(epoch, at_epoch[:3], at_epoch[3:]),
-        drag_parameter=float(p[6]),
+    result = FitResult(
+        state=OrbitState(epoch, fit.p[:3].copy(), fit.p[3:6].copy()),
+        drag_parameter=float(fit.p[6]),
         covariance=cov,
         drag_sigma=drag_sigma,
-        times=times,
-        residuals=residuals,
+        times=obs.times[newest],
+        residuals=residuals[newest],
         rms=rms,
         rms_total=float(np.sqrt(np.sum(rms**2))),
-        iterations=iterations,
-        converged=converged,
-        drag_observable=drag_sigma < 0.5 * prior_sigma,
+        iterations=fit.iterations,
+        converged=fit.converged,
+        drag_observable=drag_sigma < 0.5 * fit.prior_sigma,
+        prior=fit.prior,
+        prior_sigma=fit.prior_sigma,
+        prior_note=fit.prior_note,
+        element_sets=tuple(sources),
+        element_set_rms=np.array([np.sqrt(np.mean(np.sum(r**2, axis=1))) for r in per_set]),
+        all_times=obs.times,
+        all_residuals=residuals,
+        observation_set=obs.which,
     )
+    return result, float(max(per_set_norm[:-1])) if count > 1 else 0.0
 
 
 def fit_span_epochs(epoch: np.datetime64, span: tuple[float, float]) -> tuple[Any, Any]:
@@ -239,13 +605,18 @@ def fit_span_epochs(epoch: np.datetime64, span: tuple[float, float]) -> tuple[An
 
 
 __all__ = [
+    "BSTAR_PRIOR_SIGMA",
     "DEFAULT_DRAG_PARAMETER",
     "DEFAULT_SPACING",
     "DEFAULT_SPAN",
+    "HISTORY_MAX_NORMALISED_RMS",
     "MIN_DRAG_PARAMETER",
     "SGP4_RHO0",
     "FitResult",
+    "bstar_prior",
     "drag_parameter_from_bstar",
     "fit_element_set",
+    "fit_element_sets",
     "fit_span_epochs",
+    "sgp4_density",
 ]

@@ -152,7 +152,7 @@ def run_catalog_file(
     scheduler: str | None = None,
     skip_bad: bool = False,
     overwrite: bool = False,
-    duplicates: Duplicates = "error",
+    duplicates: Duplicates | Literal["newest"] = "newest",
     command: str | None = None,
     fit: bool = False,
     initial_covariance: str | None = None,
@@ -169,18 +169,17 @@ def run_catalog_file(
     the ``distributed`` extra).
 
     ``skip_bad``: malformed element sets are skipped and objects whose propagation fails
-    get status "failed" (both reported on stderr) instead of stopping the run.
-    ``overwrite``: clear ``out`` if it holds an earlier run's files (else refused).
-    ``duplicates``: NORAD ids occurring twice are an error (default, checked before any
-    propagation) or get suffixed OEM names (``"suffix"``). ``fit``: fit state and Cd*A/m
+    get status "failed" (both on stderr). ``overwrite``: clear ``out`` of an earlier run.
+    ``duplicates``: a NORAD id given several times is one object, the newest element set
+    (``"newest"``), an error before any work or objects with suffixed OEM names
+    (``"suffix"``). ``fit``: fit state and Cd*A/m
     to each element set first (``load(fit=True)``). ``initial_covariance``: see
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only) to 6 (J2..J6), default 4 (J2..J4).
     ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
     interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
-    ``drag_sigma``: relative 1-sigma of Cd*A/m, "auto" or a number (text from the command
-    line is converted), see :func:`~rhoprop.catalog.propagate_catalog`.
-    Returns the paths written."""
+    ``drag_sigma``: relative 1-sigma of Cd*A/m, "auto" or a number (or its text), see
+    :func:`~rhoprop.catalog.propagate_catalog`. Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma: float | Literal["auto"] = "auto"
     if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
@@ -203,12 +202,14 @@ def run_catalog_file(
         model=atmosphere if fit else None,
         drag_parameters=drag,
         zonal_degree=zonal_degree,
+        history="newest" if duplicates == "newest" else "each",
     )
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
     if not len(cat):
         raise ValueError(f"{file}: no element set could be read ({len(cat.skipped)} skipped)")
-    oem_names(cat.objects, duplicates)  # repeated ids fail here, before any work
+    kind: Duplicates = "error" if duplicates == "newest" else duplicates  # none left
+    oem_names(cat.objects, kind)  # repeated ids fail here, before any work
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
     client = None
     if scheduler:
@@ -234,9 +235,9 @@ def run_catalog_file(
     wall = time.perf_counter() - t0
     directory = folder.directory
     # Announced before they are written, so that an interrupted run's files are its own.
-    folder.expect([directory / "oem" / n for n in oem_names(result.objects, duplicates)])
+    folder.expect([directory / "oem" / n for n in oem_names(result.objects, kind)])
     folder.expect([directory / "summary.parquet"])
-    paths = write_oem(result, directory / "oem", duplicates=duplicates)
+    paths = write_oem(result, directory / "oem", duplicates=kind)
     folder.add(paths)
     summary = write_summary(result, directory / "summary.parquet")
     folder.add([summary])
@@ -302,7 +303,8 @@ def run_reentry_file(
     from .reentry_windows import reentry
 
     atmosphere = model_by_name(model)
-    cat = load(file, errors="record" if skip_bad else "raise")
+    # reentry() itself predicts a history once (history="newest") or each element set
+    cat = load(file, errors="record" if skip_bad else "raise", history="each")
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
     if not len(cat):

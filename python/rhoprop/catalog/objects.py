@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..constants import R_EARTH
+from ..density.model import ModelLike
 from ..errors import CovarianceError, RhopropError
 from ..propagation import (
     Spacecraft,
@@ -114,6 +115,9 @@ def _drag_note(obj: CatalogObject, sigma: float, choice: Any) -> str:
             f"the fit's formal sigma, at least {AUTO_FITTED_DRAG_SIGMA_MIN:g}, at most "
             f"{AUTO_DRAG_SIGMA_MAX:g}"
             if obj.fit is not None
+            else f"B* scaled to the model's density, as fitted objects: at least "
+            f"{AUTO_FITTED_DRAG_SIGMA_MIN:g}"
+            if "scaled to the model" in obj.covariance_note
             else "assumed, no fit"
         )
     else:
@@ -218,13 +222,73 @@ class ObjectPlan:
     drag_sigma: float
 
 
-def _plans(objs: list[CatalogObject], initial_covariance: Any, drag_sigma: Any) -> list[ObjectPlan]:
-    """One :class:`ObjectPlan` per object, in catalog order."""
+def _plans(
+    objs: list[CatalogObject], initial_covariance: Any, drag_sigma: Any, model: Any = None
+) -> list[ObjectPlan]:
+    """One :class:`ObjectPlan` per object, in catalog order; with ``model``, an object
+    whose Cd*A/m is B*'s plain conversion runs with it scaled to the model
+    (:func:`scaled_bstar_drag`)."""
     plans = []
     for i, obj in enumerate(objs):
-        initial, note = _initial_covariance(obj, initial_covariance)
-        plans.append(ObjectPlan(i, obj, initial, note, _drag_sigma(obj, drag_sigma)))
+        scaled = scaled_bstar_drag(obj, model) if model is not None else obj
+        initial, note = _initial_covariance(scaled, initial_covariance)
+        # B* scaled to the model gives the fit's Cd*A/m (within 1-2 %, the realism
+        # benchmark's weeks): the same floor as a fitted object's.
+        sigma = (
+            AUTO_FITTED_DRAG_SIGMA_MIN
+            if scaled is not obj and isinstance(drag_sigma, str) and drag_sigma == "auto"
+            else _drag_sigma(scaled, drag_sigma)
+        )
+        plans.append(ObjectPlan(i, scaled, initial, note, sigma))
     return plans
+
+
+#: Span (s) after the epoch over which :func:`scaled_bstar_drag` averages the densities.
+SCALE_SPAN = 86400.0
+
+
+def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
+    """``obj`` with its Cd*A/m scaled from B*'s plain conversion to ``model``: B* was
+    fitted with SGP4's static density, so the same deceleration with the model's density
+    needs Cd*A/m times rho_SGP4 / rho_model, averaged over the element set's SGP4 orbit
+    for a day from its epoch (:func:`~rhoprop.catalog.fit.bstar_prior`, the fit's prior,
+    which matches the fitted Cd*A/m to 1-2 %; ``drag_sigma="auto"`` then propagates the
+    fitted objects' floor, :data:`AUTO_FITTED_DRAG_SIGMA_MIN`). Only for models of the real atmosphere (a sampled model, its atlas, a
+    ``DensityField``); analytic atmospheres (``Exponential``, a function) are test
+    atmospheres, with which B* keeps its plain conversion. Objects fitted, given their
+    Cd*A/m, or with B* <= 0 come back as they are, and so does any whose densities
+    cannot be evaluated (note unchanged)."""
+    import dataclasses
+
+    from ..density import DensityField, SampledModel
+    from ..density.atlas import Atlas
+    from .fit import _perigee_km, _sgp4_observations, bstar_prior, drag_parameter_from_bstar
+
+    if obj.fit is not None or obj.bstar <= 0:
+        return obj
+    if obj.drag_parameter != drag_parameter_from_bstar(obj.bstar):
+        return obj
+    sat = obj.satrec()
+    if sat is None:
+        return obj
+    times = np.arange(0.0, SCALE_SPAN + 1.0, 600.0)
+    try:
+        r, _ = _sgp4_observations(sat, times)
+    except ValueError:
+        return obj
+    epochs = obj.state.epoch + (times * 1e9).astype("timedelta64[ns]")
+    atmosphere = model.atlas if isinstance(model, SampledModel) else model
+    if not isinstance(atmosphere, (Atlas, DensityField)):
+        return obj  # an analytic test atmosphere (Exponential, a function): as given
+    value, _, note = bstar_prior(obj.bstar, _perigee_km(sat), atmosphere, epochs, r)
+    if not note.startswith("prior from B*"):
+        return obj
+    return dataclasses.replace(
+        obj,
+        drag_parameter=value,
+        covariance_note=f"{obj.covariance_note}; Cd*A/m scaled to the model: "
+        f"{note.removeprefix('prior from B*: ')}",
+    )
 
 
 def _object_error(err: Exception, obj: CatalogObject) -> Exception:

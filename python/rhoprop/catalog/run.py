@@ -332,7 +332,7 @@ def propagate_catalog(
         errors=errors,
         zonal_degree=zonal_degree_argument(zonal_degree),
     )
-    plans = _plans(objs, initial_covariance, drag_sigma)
+    plans = _plans(objs, initial_covariance, drag_sigma, model)
     notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step)
     shipped = _shipped_model(model)
@@ -372,7 +372,7 @@ def _result(
         dtype="datetime64[ns]",
     )
     return CatalogResult(
-        objects=objs,
+        objects=[p.obj for p in plans],
         epochs=epochs,
         mean=np.stack([r.mean for r in order]),
         covariance=np.stack([r.cov for r in order]),

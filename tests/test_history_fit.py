@@ -1,0 +1,152 @@
+"""Fits to a history of element sets (``load([files], fit=True, history="fit")``: Levit &
+Marshall 2011)
+against fits to the newest element set alone, on real data: the CelesTrak snapshots of
+2023-08-07 and 2023-08-13 predict the same objects' element sets of 2023-08-20 (the
+development week 2023-08-13 of ``benches/catalog_realism.py``, same selection rules), and
+the B*-derived prior against the fitted Cd*A/m."""
+
+from __future__ import annotations
+
+import gzip
+
+import numpy as np
+import pytest
+from sgp4.api import Satrec
+
+import rhoprop as rp
+from rhoprop import catalog
+from rhoprop.catalog.fit import (
+    SGP4_Q0_KM,
+    SGP4_RADIUS_KM,
+    SGP4_S_KM,
+    drag_parameter_from_bstar,
+    fit_element_sets,
+)
+from rhoprop.density import Msis
+from rhoprop.frames import rtn_basis
+
+EXCLUDE = ("STARLINK", "ONEWEB", "IRIDIUM", "GLOBALSTAR", "ORBCOMM", "KUIPER", "ISS ",
+           "CSS ", "PROGRESS", "SOYUZ", "DRAGON", "CYGNUS", "SHENZHOU", "TIANZHOU")  # fmt: skip
+OBJECTS = 48
+
+
+def _snapshot(path):
+    lines = [ln.rstrip() for ln in gzip.open(path, "rt") if ln.strip()]
+    return {int(lines[k + 1][2:7]): lines[k : k + 3] for k in range(0, len(lines) - 2, 3)}
+
+
+def _altitudes(sat):
+    a = sat.a * SGP4_RADIUS_KM
+    return a * (1 - sat.ecco) - SGP4_RADIUS_KM, a * (1 + sat.ecco) - SGP4_RADIUS_KM
+
+
+@pytest.fixture(scope="module")
+def week(test_data, tmp_path_factory):
+    """(older file, start file, truth {id: Satrec}, ids) of the week 2023-08-13."""
+    folder = test_data / "catalogs" / "history"
+    old = _snapshot(folder / "celestrak_active_20230807.txt.gz")
+    start = _snapshot(folder / "celestrak_active_20230813.txt.gz")
+    truth = _snapshot(folder / "celestrak_active_20230820.txt.gz")
+    ids = []
+    for norad in sorted(set(old) & set(start) & set(truth)):
+        if any(w in start[norad][0].upper() for w in EXCLUDE):
+            continue
+        s0, s1, s2 = (Satrec.twoline2rv(*snap[norad][1:]) for snap in (old, start, truth))
+        lo, hi = _altitudes(s1)
+        gap = s2.jdsatepoch + s2.jdsatepochF - s1.jdsatepoch - s1.jdsatepochF
+        history_gap = s1.jdsatepoch + s1.jdsatepochF - s0.jdsatepoch - s0.jdsatepochF
+        if lo < 200 or hi > 700 or gap < 2 or not 1 < history_gap < 10:
+            continue
+        if s2.no_kozai < s1.no_kozai * (1 - 1e-6) or s1.no_kozai < s0.no_kozai * (1 - 1e-6):
+            continue  # an orbit raise: a manoeuvre
+        ids.append(norad)
+    ids = [ids[i] for i in np.linspace(0, len(ids) - 1, OBJECTS).round().astype(int)]
+    tmp = tmp_path_factory.mktemp("history")
+    files = []
+    for name, snap in (("0807.tle", old), ("0813.tle", start)):
+        files.append(tmp / name)
+        files[-1].write_text("".join("\n".join(snap[i]) + "\n" for i in ids))
+    return files, {i: Satrec.twoline2rv(*truth[i][1:]) for i in ids}, ids
+
+
+def _along_track_errors(objects, truth, model):
+    """|along-track error| (m) at each truth element set's epoch of the fitted means."""
+    out = []
+    for obj in objects:
+        sat = truth[obj.norad_id]
+        _, r, v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
+        end = rp.time.from_jd(sat.jdsatepoch, sat.jdsatepochF)
+        span = (end - obj.state.epoch) / np.timedelta64(1, "ns") / 1e9
+        tr = rp.propagate(
+            obj.state, rp.Spacecraft(1.0, obj.drag_parameter), model, span, zonal_degree=4
+        )
+        r, v = np.array(r) * 1e3, np.array(v) * 1e3
+        out.append(abs((rtn_basis(r, v) @ (tr.positions[-1] - r))[1]))
+    return np.array(out)
+
+
+def test_a_history_fit_against_a_single_fit_on_a_real_week(week):
+    # Measured: the history fit does NOT predict better here (median 12.1 km against
+    # 8.5 km, better for 46 % of the 48 objects; the benchmark's 148 objects of the same
+    # week: 8.3 vs 8.8 km), which is why load's default is history="newest"
+    # (docs/catalog-realism.md, "History fits"). The band pins the measured figure: a
+    # change that makes history fits better (or worse still) must update the docs.
+    files, truth, ids = week
+    model = Msis("2.1")
+    single = catalog.load(files[-1], fit=True, model=model)
+    history = catalog.load(files, fit=True, model=model, history="fit")
+    newest = catalog.load(files, fit=True, model=model)  # the default: the newest, alone
+    assert [o.drag_parameter for o in newest] == [o.drag_parameter for o in single]
+    assert all("the newest of 2 element sets" in o.covariance_note for o in newest)
+    assert [o.norad_id for o in history] == [o.norad_id for o in single] == ids
+    used = [len(o.fit.element_sets) for o in history]
+    assert max(used) == 2 and np.mean(used) > 1.5  # most histories are fitted whole
+    for o in history:
+        assert o.fit.element_set_rms.shape == (len(o.fit.element_sets),)
+        assert o.fit.element_sets[-1].startswith("0813.tle")
+    e_single = _along_track_errors(single, truth, model)
+    e_history = _along_track_errors(history, truth, model)
+    print(
+        f"median |along-track error|: single {np.median(e_single) / 1e3:.2f} km, history "
+        f"{np.median(e_history) / 1e3:.2f} km; history better for "
+        f"{np.mean(e_history < e_single):.0%} of objects"
+    )
+    assert 1.2 < np.median(e_history) / np.median(e_single) < 1.7
+    assert 0.3 < np.mean(e_history < e_single) < 0.6
+
+
+def test_the_bstar_prior_is_the_fitted_drag_where_the_fit_sees_it(week):
+    # The prior is B* converted with the ratio of SGP4's static density to the model's:
+    # where the fit sees the drag well (formal sigma < 10 %), the fitted Cd*A/m - an
+    # independent estimate, from SGP4's positions through rhoprop's dynamics - is the
+    # prior to a few per cent (measured: median ratio 0.98, robust log scatter 0.012 on
+    # the benchmark's 149 objects of this week), while B*'s plain conversion is several
+    # times too small (SGP4's density is several times NRLMSIS's at 400-600 km).
+    files, _, _ = week
+    model = Msis("2.1")
+    fitted = [o for o in catalog.load(files[-1], fit=True, model=model)]
+    seen = [o for o in fitted if o.fit.drag_sigma < 0.1 * o.drag_parameter]
+    assert len(seen) >= 20
+    to_prior = np.log([o.drag_parameter / o.fit.prior for o in seen])
+    to_plain = np.log([o.drag_parameter / drag_parameter_from_bstar(o.bstar) for o in seen])
+    assert abs(np.median(to_prior)) < 0.05
+    assert np.median(to_plain) > np.log(2.0)
+    assert 1.4826 * np.median(np.abs(to_prior - np.median(to_prior))) < 0.05
+
+
+def test_sgp4_density_constants_are_spacetrack_report_3s():
+    # qoms2t = ((q0 - s) / ER)^4 = 1.88027916e-9 and s = 1.01222928 ER (Hoots & Roehrich
+    # 1980, Spacetrack Report No. 3, with ER = 6378.135 km).
+    er = SGP4_RADIUS_KM
+    assert ((SGP4_Q0_KM - SGP4_S_KM) / er) ** 4 == pytest.approx(1.88027916e-9, rel=1e-7)
+    assert 1 + SGP4_S_KM / er == pytest.approx(1.01222928, rel=1e-8)
+
+
+def test_history_fit_refuses_element_sets_of_different_objects(week):
+    files, _, ids = week
+    cat = catalog.load(files, history="each", nonpositive_bstar="prior")
+    a, b = (next(o for o in cat if o.norad_id == i) for i in ids[:2])
+    with pytest.raises(ValueError, match="different objects"):
+        fit_element_sets([a, b], Msis("2.1"))
+    with pytest.raises(ValueError, match="history must be"):
+        catalog.load(files, history="all")
