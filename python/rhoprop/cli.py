@@ -305,7 +305,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="auto|S",
         help="relative 1-sigma of each object's Cd*A/m propagated with the density "
         "uncertainty (CCSP consider parameter, Monte Carlo samples): 'auto' (default: the "
-        "fit's, at least 0.08, at most 1; 0.15 without --fit) or a number (0: none)",
+        "fit's, at least 0.08, at most 1; 0.5 without --fit, where B* is scaled to the "
+        "model's density) or a number (0: none)",
     )
     cat.add_argument(
         "--model",

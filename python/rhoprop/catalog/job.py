@@ -86,6 +86,15 @@ def refresh_data(timeout: float = 60.0) -> list[str]:
     return lines
 
 
+def _connect(scheduler: str | None) -> Any:
+    """A Dask ``Client`` of ``scheduler`` (checked by :func:`_need_dask`), or None."""
+    if not scheduler:
+        return None
+    from distributed import Client
+
+    return Client(scheduler)
+
+
 def _need_dask() -> None:
     """ImportError in one line when the ``distributed`` extra is missing."""
     try:
@@ -172,23 +181,21 @@ def run_catalog_file(
     get status "failed" (both on stderr). ``overwrite``: clear ``out`` of an earlier run.
     ``duplicates``: a NORAD id given several times is one object, the newest element set
     (``"newest"``), an error before any work or objects with suffixed OEM names
-    (``"suffix"``). ``fit``: fit state and Cd*A/m
-    to each element set first (``load(fit=True)``). ``initial_covariance``: see
+    (``"suffix"``). ``fit``: fit state and Cd*A/m first (``load``). ``initial_covariance``:
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only) to 6 (J2..J6), default 4 (J2..J4).
     ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
     interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
-    ``drag_sigma``: relative 1-sigma of Cd*A/m, "auto" or a number (or its text), see
-    :func:`~rhoprop.catalog.propagate_catalog`. Returns the paths written."""
+    ``drag_sigma``: "auto" or a number (or its text), see ``propagate_catalog``.
+    Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma: float | Literal["auto"] = "auto"
     if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
         try:
             sigma = float(drag_sigma)
         except ValueError:
-            raise ValueError(
-                f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
-            ) from None
+            msg = f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
+            raise ValueError(msg) from None
     drag = read_drag_file(drag_file, cd) if drag_file is not None else None
     if drag_file is None and cd is not None:
         raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
@@ -211,11 +218,7 @@ def run_catalog_file(
     kind: Duplicates = "error" if duplicates == "newest" else duplicates  # none left
     oem_names(cat.objects, kind)  # repeated ids fail here, before any work
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
-    client = None
-    if scheduler:
-        from distributed import Client  # checked by _need_dask
-
-        client = Client(scheduler)
+    client = _connect(scheduler)
     t0 = time.perf_counter()
     result = propagate_catalog(
         cat,

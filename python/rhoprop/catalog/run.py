@@ -276,10 +276,14 @@ def propagate_catalog(
             15 %), propagated as the CCSP's second consider parameter or sampled per Monte
             Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
             fit's formal relative sigma but at least 0.08 (at most 1, for fits whose prior
-            dominated), or 0.15 for an object without a fit (as ``rp.catalog.reentry``);
-            a number for every object (0: none,
+            dominated); for an object without a fit whose B* is scaled to a real
+            model (below) 0.5, else 0.15 (as ``rp.catalog.reentry``); a number for
+            every object (0: none,
             the behaviour before issue 16); or a callable object -> number. Recorded in
-            ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md).
+            ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md). An object
+            whose Cd*A/m is B*'s plain conversion runs with it scaled to the model's
+            density (:func:`~rhoprop.catalog.scaled_bstar_drag`; real-atmosphere models
+            only), and ``objects`` of the result carry the value used.
         dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
             ``zonal_degree`` at once (then leave those keywords at their defaults; its
             integrator and step are not used: the CCSP integrates with RK8 at its default

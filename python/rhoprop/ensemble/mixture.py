@@ -412,9 +412,10 @@ class GaussianMixture:
         posterior component probabilities, started from every (positive-weight) component
         mean and run until the step is below ``1e-3 tol s`` (at most ``max_iter`` steps);
         ``s`` is the smallest component standard deviation (square root of the smallest
-        covariance eigenvalue). The points are then polished by Newton steps with the
-        analytic gradient and Hessian while the Hessian is negative definite (this only
-        matters at nearly degenerate modes, where mean-shift converges slowly). Points
+        covariance eigenvalue), and merged (below). Single stops are then polished by
+        Newton steps with the analytic gradient and Hessian while the Hessian is negative
+        definite (this only matters at nearly degenerate modes, where mean-shift converges
+        slowly). Points
         closer than ``tol s`` are merged, and a point is kept only if the analytic Hessian
         of the density is negative definite there, or, at a flat top whose curvature
         vanishes to rounding, if the density falls ``s / 100`` away along the flat
@@ -429,8 +430,17 @@ class GaussianMixture:
         scale = float(np.sqrt(np.min(np.linalg.eigvalsh(self._covariances[active]))))
         step_tol = 1e-3 * tol * scale
         points = self._mean_shift(self._means[active].copy(), step_tol, max_iter)
-        points = np.array([self._newton_polish(p, step_tol, scale) for p in points])
-        candidates = self._merge(points, tol * scale)
+        # Merged before the polish too: stops on both sides of a flat top average to its
+        # middle, which a Newton step from either side would overshoot.
+        points, sizes = self._merge(points, tol * scale)
+        polish = [n == 1 for n in sizes]
+        points = np.array(
+            [
+                self._newton_polish(p, step_tol, scale) if k else p
+                for p, k in zip(points, polish, strict=True)
+            ]
+        )
+        candidates, _ = self._merge(points, tol * scale)
         keep = [self._is_local_maximum(c, scale) for c in candidates]
         return np.asarray(candidates[np.array(keep, dtype=bool)])
 
@@ -456,7 +466,9 @@ class GaussianMixture:
         self, x: np.ndarray, step_tol: float, max_step: float, max_iter: int = 100
     ) -> np.ndarray:
         """Newton steps ``x <- x - H^-1 grad`` from x (d,) towards a local maximum, while
-        the Hessian is negative definite and the step is shorter than ``max_step``."""
+        the Hessian is negative definite, the step is shorter than ``max_step`` and the
+        density does not fall (at a flat top gradient and Hessian are rounding, and a
+        step would only wander off the middle)."""
         for _ in range(max_iter):
             hess = self._scaled_hessian(x)
             if not self._negative_definite(hess):
@@ -465,21 +477,37 @@ class GaussianMixture:
             size = float(np.linalg.norm(step))
             if not size < max_step:
                 break
+            if self.logpdf((x - step)[None, :])[0] < self.logpdf(x[None, :])[0]:
+                break
             x = x - step
             if size < step_tol:
                 break
         return x
 
-    def _merge(self, points: np.ndarray, radius: float) -> np.ndarray:
+    def _merge(self, points: np.ndarray, radius: float) -> tuple[np.ndarray, list[int]]:
         """Points (m, d) merged greedily, highest density first, within ``radius`` or with
         no dip of the density between them (two stops of the iteration on one flat,
-        nearly degenerate mode, where mean-shift and Newton converge slowly)."""
-        order = np.argsort(-self.logpdf(points), kind="stable")
-        kept: list[np.ndarray] = []
-        for p in points[order]:
-            if all(np.linalg.norm(p - q) >= radius and self._dip(p, q) for q in kept):
-                kept.append(p)
-        return np.array(kept)
+        nearly degenerate mode, where mean-shift and Newton converge slowly). Each mode is
+        the mean of the stops merged into it whose density equals the highest's to 1e-12
+        (relative): on a flat top, where rounding cannot tell them apart, stops from
+        either side average to its middle (not polished then: a Newton step there follows
+        rounding). Also returns how many stops each mode merged."""
+        dens = self.logpdf(points)
+        order = np.argsort(-dens, kind="stable")
+        groups: list[list[int]] = []
+        for i in order:
+            p = points[i]
+            for group in groups:
+                q = points[group[0]]
+                if np.linalg.norm(p - q) < radius or not self._dip(p, q):
+                    group.append(int(i))
+                    break
+            else:
+                groups.append([int(i)])
+        modes = [
+            np.mean([points[i] for i in g if dens[i] >= dens[g[0]] - 1e-12], axis=0) for g in groups
+        ]
+        return np.array(modes), [len(g) for g in groups]
 
     def _dip(self, p: np.ndarray, q: np.ndarray, samples: int = 33) -> bool:
         """Whether the log-density falls below both ends somewhere on the segment p-q."""
