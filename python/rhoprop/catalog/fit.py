@@ -202,6 +202,22 @@ def _perigee_km(sat: Any) -> float:
     return float(sat.a * (1 - sat.ecco)) * SGP4_RADIUS_KM - SGP4_RADIUS_KM
 
 
+def _model_density(atmosphere: Any, times: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Mean density (kg/m^3) of ``atmosphere`` at inertial ``positions`` (m) and UTC
+    ``times``. An atlas is read through its day tiles (the densities a run sees, one
+    interpolation in the core), not by fresh model calls (NRLMSIS's ``mean_std`` runs
+    pymsis five times for its driver variance: 10 ms an object)."""
+    from ..density.atlas import Atlas
+    from ..frames import geodetic, inertial_to_fixed
+    from ..time import ut1_seconds
+
+    if isinstance(atmosphere, Atlas):
+        field = atmosphere.field(times[0], times[-1])
+        return np.asarray(field.mean_sigma(ut1_seconds(times), positions)[0])
+    lla = geodetic(inertial_to_fixed(times, positions))
+    return np.asarray(atmosphere.mean_std(times, lla[:, 0], lla[:, 1], lla[:, 2])[0])
+
+
 def bstar_prior(
     bstar: float,
     perigee_km: float,
@@ -214,8 +230,6 @@ def bstar_prior(
     to ``atmosphere``'s mean density at the element set's SGP4 ``positions`` (m, TEME as
     inertial) at ``times`` (UTC); where B* <= 0, :data:`DEFAULT_DRAG_PARAMETER` with
     100 %; where the model cannot be evaluated there, B*'s plain conversion with 100 %."""
-    from ..frames import geodetic, inertial_to_fixed
-
     bstar = float(bstar)
     if bstar <= 0:
         return (
@@ -224,10 +238,8 @@ def bstar_prior(
             f"B* <= 0: prior {DEFAULT_DRAG_PARAMETER} m^2/kg +- 100 %",
         )
     radius = np.linalg.norm(positions, axis=1) / 1e3
-    lla = geodetic(inertial_to_fixed(times, positions))
-    mean_std = getattr(atmosphere, "mean_std", None)  # None: called below, caught
     try:
-        mean, _ = mean_std(times, lla[:, 0], lla[:, 1], lla[:, 2])  # type: ignore[misc]
+        mean = _model_density(atmosphere, times, positions)
     except Exception:  # outside the field (any model's error): the plain conversion
         mean = np.array([np.nan])
     ratio = float(np.mean(sgp4_density(radius, perigee_km)) / np.mean(mean))
