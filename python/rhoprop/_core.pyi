@@ -28,6 +28,7 @@ __all__ = [
     "GriddedAtmosphere",
     "ccsp",
     "ccsp_many",
+    "fit_orbits",
     "geodetic",
     "geodetic_to_fixed",
     "gmst",
@@ -193,6 +194,23 @@ def ccsp_many(
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
     update_times, step, drag_sigma), in one call: per object the dict of ``ccsp`` or the
     exception its run raised."""
+
+def fit_orbits(
+    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    jobs: list[
+        tuple[float, _F64, float, float, float, int, int, npt.NDArray[np.int64], _F64, _F64]
+    ],
+    step: float,
+    zonal_degree: int,
+    floor_altitude: float,
+    max_iterations: int,
+    min_drag: float,
+    progress: Callable[[int], object] | None = None,
+) -> list[tuple[_F64, _F64, _F64, int, bool] | Exception]:
+    """Least-squares fits of [r, v, Cd*A/m], each job (epoch UT1 s, p0 (7,), prior and
+    its sigma (m^2/kg), spacing (s), grid steps back and forward, observation rows (k,),
+    observed positions (k, 3) m, weights (k, 9) 1/m) in one call: per job (p (7,), grid
+    states (n, 6), J^T J (7, 7), iterations, converged) or the exception of that job."""
 
 def monte_carlo(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,

@@ -305,8 +305,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="auto|S",
         help="relative 1-sigma of each object's Cd*A/m propagated with the density "
         "uncertainty (CCSP consider parameter, Monte Carlo samples): 'auto' (default: the "
-        "fit's, at least 0.08, at most 1; 0.5 without --fit, where B* is scaled to the "
-        "model's density) or a number (0: none)",
+        "fit's, at least 0.08, at most 1; 0.5 for objects not fitted, where B* is scaled to "
+        "the model's density) or a number (0: none)",
     )
     cat.add_argument(
         "--model",
@@ -331,17 +331,28 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument(
         "--fit",
-        action="store_true",
-        help="fit each object's state and Cd*A/m to its SGP4 positions over one day either "
-        "side of its epoch with rhoprop's dynamics and the model (about 0.1 s per object; "
-        "needed for B* <= 0 objects)",
+        dest="fit",
+        action="store_const",
+        const=True,
+        default="auto",
+        help="fit every object's state and Cd*A/m to its SGP4 positions over one day "
+        "either side of its epoch with rhoprop's dynamics and the model (about 100 objects/s "
+        "on 2 cores; needed for B* <= 0 objects). Default: only the near-Earth objects with "
+        "perigee below 700 km and B* > 0",
+    )
+    cat.add_argument(
+        "--no-fit",
+        dest="fit",
+        action="store_const",
+        const=False,
+        help="fit no object: states and B* as published (B* scaled to the model)",
     )
     cat.add_argument(
         "--initial-covariance",
         default=None,
         metavar="KIND|FILE",
         help="initial covariance: 'object' (default: published TLE accuracy by regime, plus "
-        "the fit's with --fit), 'tle', 'paper' (near-zero, 1 mm / 1 um/s) or a text file "
+        "the fit's for fitted objects), 'tle', 'paper' (near-zero, 1 mm / 1 um/s) or a text file "
         "with a 6x6 inertial covariance in m^2, m^2/s, m^2/s^2",
     )
     cat.add_argument(

@@ -9,7 +9,6 @@ radius), i.e. 12.7416 B* m^2/kg, unless the caller gives a drag parameter per ob
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import csv
 import io
 import json
@@ -24,7 +23,6 @@ import numpy as np
 from .. import _validate
 from ..density.model import ModelLike
 from ..options import Errors
-from ..parallel import worker_count
 from ..propagation import OrbitState
 from ..time import from_jd
 from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
@@ -492,63 +490,75 @@ def fit_objects(
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
     one day either side; an orbit that comes down within the span's end is fitted to the
-    day before the epoch instead), on ``threads`` threads in epoch order (so that fits
-    running at once share their day tiles). ``history``: {NORAD id: older element sets}
-    fitted together with the object's (those within :data:`HISTORY_DAYS` of it). A fit
-    that leaves an RMS residual above :data:`MAX_FIT_RMS` (diverged) counts as failed.
+    day before the epoch instead), in the core many objects per call
+    (:func:`~rhoprop.catalog.fit.fit_histories`; ``threads`` calls prepared at once), in
+    epoch order so that the fits of a call share their day tiles. ``history``: {NORAD
+    id: older element sets} fitted together with the object's (those within
+    :data:`HISTORY_DAYS` of it). A fit that leaves an RMS residual above
+    :data:`MAX_FIT_RMS` (diverged) counts as failed.
     Returns, in input order, the fitted object (``fit`` set, covariance the TLE accuracy
     plus the fit's) or the exception of a fit that failed."""
-    import dataclasses
-
     from ..density import SampledModel
-    from .covariance import tle_accuracy, tle_covariance
-    from .fit import DEFAULT_SPAN, fit_element_sets
+    from .fit import DEFAULT_SPAN, fit_histories
 
     history = history or {}
-
     first = DEFAULT_SPAN if span is None else span
     atmosphere = model.atlas if isinstance(model, SampledModel) else model
-
-    def one(obj: CatalogObject) -> CatalogObject | Exception:
-        tried = [first] if span is not None else [first, (first[0], 0.0)]
+    histories = []
+    for obj in objects:
         oldest = obj.state.epoch - np.timedelta64(int(HISTORY_DAYS * 86400), "s")
-        sets = [o for o in history.get(obj.norad_id, ()) if o.state.epoch >= oldest]
-        for k, window in enumerate(tried):
-            try:
-                f = fit_element_sets(
-                    [*sets, obj], atmosphere, span=window, zonal_degree=zonal_degree
-                )
-                if not f.rms_total <= MAX_FIT_RMS:
-                    # A diverged fit (e.g. over an arc running into the decay) is no fit.
-                    raise ValueError(
-                        f"the fit over {window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h "
-                        f"diverged (RMS residual {f.rms_total:.3g} m, at most "
-                        f"{MAX_FIT_RMS:g} m accepted)"
-                    )
-                break
-            except Exception as err:  # returned per object
-                if k == len(tried) - 1:
-                    return err
-        acc = tle_accuracy(f.state)
-        return dataclasses.replace(
-            obj,
-            state=f.state,
-            drag_parameter=f.drag_parameter,
-            covariance=tle_covariance(f.state, acc) + f.covariance[:6, :6],
-            covariance_note=(
-                f"{_tle_note(acc)} plus the covariance of the fit to SGP4 over "
-                f"{window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h"
-                + (f" of {len(f.element_sets)} element sets" if len(f.element_sets) > 1 else "")
-                + f" (RMS residual {f.rms_total:.0f} m); Cd*A/m fitted, "
-                f"{f.drag_parameter:.4g} +- {f.drag_sigma:.2g} m^2/kg ({f.prior_note})"
-            ),
-            fit=f,
+        histories.append(
+            [*(o for o in history.get(obj.norad_id, ()) if o.state.epoch >= oldest), obj]
         )
+    out: list[Any] = [None] * len(objects)
+    todo = list(range(len(objects)))
+    tried = [first] if span is not None else [first, (first[0], 0.0)]
+    for k, window in enumerate(tried):
+        runs = fit_histories(
+            [histories[i] for i in todo],
+            atmosphere,
+            span=window,
+            zonal_degree=zonal_degree,
+            threads=threads,
+        )
+        for i, f in zip(todo, runs, strict=True):
+            out[i] = f if isinstance(f, Exception) else _fitted(objects[i], f, window)
+        if k < len(tried) - 1:
+            todo = [i for i in todo if isinstance(out[i], Exception)]
+            if not todo:
+                break
+    return out
 
-    order = sorted(range(len(objects)), key=lambda i: objects[i].state.epoch)
-    with cf.ThreadPoolExecutor(max_workers=worker_count(threads)) as pool:
-        ran = list(pool.map(one, [objects[i] for i in order]))
-    return [ran[k] for k in np.argsort(order)]
+
+def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogObject | Exception:
+    """``obj`` with the state, Cd*A/m and covariance of its fit ``f`` over ``window``, or
+    the ValueError of a fit that diverged (RMS residual above :data:`MAX_FIT_RMS`, e.g.
+    over an arc running into the decay)."""
+    import dataclasses
+
+    from .covariance import tle_accuracy, tle_covariance
+
+    if not f.rms_total <= MAX_FIT_RMS:
+        return ValueError(
+            f"the fit over {window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h "
+            f"diverged (RMS residual {f.rms_total:.3g} m, at most "
+            f"{MAX_FIT_RMS:g} m accepted)"
+        )
+    acc = tle_accuracy(f.state)
+    return dataclasses.replace(
+        obj,
+        state=f.state,
+        drag_parameter=f.drag_parameter,
+        covariance=tle_covariance(f.state, acc) + f.covariance[:6, :6],
+        covariance_note=(
+            f"{_tle_note(acc)} plus the covariance of the fit to SGP4 over "
+            f"{window[0] / 3600:+.0f}..{window[1] / 3600:+.0f} h"
+            + (f" of {len(f.element_sets)} element sets" if len(f.element_sets) > 1 else "")
+            + f" (RMS residual {f.rms_total:.0f} m); Cd*A/m fitted, "
+            f"{f.drag_parameter:.4g} +- {f.drag_sigma:.2g} m^2/kg ({f.prior_note})"
+        ),
+        fit=f,
+    )
 
 
 def _fit_all(

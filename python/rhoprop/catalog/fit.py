@@ -5,10 +5,15 @@ and the chosen density model, so that the state and the drag parameter are consi
 with the model the catalog is then propagated with (SGP4's B* absorbs its own static
 density).
 
-Method: Gauss-Newton on p = [r (m), v (m/s), Cd*A/m (m^2/kg)] at the start of the span;
-the model is ``rp.propagate`` (RK8, default step) with outputs every ``spacing`` s;
-Jacobian by forward differences (1 m, 1 mm/s, 1 % of Cd*A/m), 8 propagations per
-iteration.
+Method: Gauss-Newton on p = [r (m), v (m/s), Cd*A/m (m^2/kg)] at the newest epoch, run in
+the core (``rhoprop._core.fit_orbits``, :func:`fit_histories`): the model is RK8 (180 s
+largest step, each 600 s observation interval cut into equal steps) through the density
+model's field; the Jacobian by forward differences (1 m, 1 mm/s, 1 % of Cd*A/m), the
+nominal orbit and its seven perturbed neighbours flying as the eight lanes of one SIMD
+batch, so an accepted step already holds the next Jacobian; a step that raises the cost
+is halved (up to 5 times); an update below 1 cm and 1e-4 relative in Cd*A/m ends the fit.
+Many objects per core call, in parallel. ``tests/reference_fit.py`` is the independent
+Python version (one propagation per column) the core is checked against.
 
 Observations: SGP4 positions (TEME, taken as inertial) every ``spacing`` s within
 ``span`` of each element set's epoch (for a history, each element set only up to halfway
@@ -29,15 +34,16 @@ above ``MIN_DRAG_PARAMETER``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..density.model import ModelLike
+from ..density.model import AtmosphereLike, ModelLike
 from ..frames import rtn_basis
 from ..propagation import OrbitState
-from ..time import add_seconds, from_jd
+from ..time import add_seconds, from_jd, offsets_to_epochs, ut1_seconds
 
 #: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
 SGP4_RHO0 = 0.15696615
@@ -105,50 +111,6 @@ class FitResult:
     all_times: np.ndarray | None = None
     all_residuals: np.ndarray | None = None
     observation_set: np.ndarray | None = None
-
-
-def _states(
-    p: np.ndarray,
-    epoch: np.datetime64,
-    model: Any,
-    back: int,
-    forward: int,
-    spacing: float,
-    zonal_degree: int,
-) -> np.ndarray:
-    """States (back + forward + 1, 6) on the grid epoch + g spacing, g = -back..forward,
-    for parameters ``p`` at ``epoch``: one run backwards, one forwards."""
-    from ..constants import DEFAULT_FLOOR_ALTITUDE
-    from ..propagation.propagate import core_propagate, fixed_step, run_in_field
-
-    state = OrbitState(epoch, p[:3], p[3:6])
-    drag = max(float(p[6]), MIN_DRAG_PARAMETER)
-    step = fixed_step("rk8", None, state)
-    parts = [p[None, :6]]
-    for steps, sign in ((back, -1.0), (forward, 1.0)):
-        if steps == 0:
-            continue
-        times = sign * spacing * np.arange(steps + 1, dtype=float)
-
-        def _one_way(atmosphere: Any, times: np.ndarray = times) -> Any:
-            return core_propagate(
-                atmosphere,
-                state,
-                drag,
-                times,
-                integrator="rk8",
-                step=step,
-                floor_altitude=DEFAULT_FLOOR_ALTITUDE,
-                zonal_degree=zonal_degree,
-            )
-
-        t, states, decayed_at, _, _ = run_in_field(
-            model, state, float(times[-1]), DEFAULT_FLOOR_ALTITUDE, _one_way
-        )
-        if decayed_at is not None or len(t) < steps + 1:
-            raise ValueError("the orbit decays within the fit span; shorten span")
-        parts.insert(0 if sign < 0 else len(parts), states[1:][::-1] if sign < 0 else states[1:])
-    return np.vstack(parts)
 
 
 def _sgp4_observations(sat: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -406,6 +368,29 @@ def _satrec(item: Any) -> tuple[Any, float | None, str]:
     return item, None, f"element set of {epoch}"
 
 
+def _ordered(sats: Any) -> list[tuple[Any, float | None, str]]:
+    """The element sets of one object as (Satrec, override, source), ascending epochs,
+    repeated epochs once; ValueError for none or for several objects."""
+    items = [_satrec(s) for s in (sats if isinstance(sats, (list, tuple)) else [sats])]
+    if not items:
+        raise ValueError("no element sets to fit")
+    if len({int(s.satnum) for s, _, _ in items}) > 1:
+        raise ValueError("the element sets belong to different objects (NORAD ids)")
+    by_epoch: dict[float, tuple[Any, float | None, str]] = {}
+    for item in items:
+        by_epoch[item[0].jdsatepoch + item[0].jdsatepochF] = item
+    return [by_epoch[k] for k in sorted(by_epoch)]
+
+
+def _check_span(span: tuple[float, float], spacing: float) -> tuple[float, float]:
+    start, end = float(span[0]), float(span[1])
+    if not (start <= 0 <= end and end > start and spacing > 0):
+        raise ValueError(f"span must satisfy start <= 0 <= end, start < end; got {span}")
+    if abs(start / spacing - round(start / spacing)) > 1e-9:
+        raise ValueError(f"span start {start} s is not a multiple of spacing {spacing} s")
+    return start, end
+
+
 def fit_element_sets(
     sats: Any,
     model: ModelLike,
@@ -433,35 +418,86 @@ def fit_element_sets(
         :class:`FitResult`. Raises ValueError if SGP4 fails, the orbit decays within the
         span or the element sets belong to different objects.
     """
-    items = [_satrec(s) for s in (sats if isinstance(sats, (list, tuple)) else [sats])]
-    if not items:
-        raise ValueError("no element sets to fit")
-    if len({int(s.satnum) for s, _, _ in items}) > 1:
-        raise ValueError("the element sets belong to different objects (NORAD ids)")
-    start, end = float(span[0]), float(span[1])
-    if not (start <= 0 <= end and end > start and spacing > 0):
-        raise ValueError(f"span must satisfy start <= 0 <= end, start < end; got {span}")
-    if abs(start / spacing - round(start / spacing)) > 1e-9:
-        raise ValueError(f"span start {start} s is not a multiple of spacing {spacing} s")
-    by_epoch: dict[float, tuple[Any, float | None, str]] = {}
-    for item in items:
-        by_epoch[item[0].jdsatepoch + item[0].jdsatepochF] = item
-    ordered = [by_epoch[k] for k in sorted(by_epoch)]
-    if drag_parameter is None:
-        drag_parameter = ordered[-1][1]
-    args = (model, drag_parameter, (start, end), spacing, max_iterations, zonal_degree)
-    result, _ = _fit(ordered[-1:], *args)
-    for k in range(len(ordered) - 2, -1, -1):
-        # One older element set at a time, from the solution of the newer ones: a long
-        # arc from the SGP4 state alone starts hundreds of km off along-track.
+    out = fit_histories(
+        [sats if isinstance(sats, (list, tuple)) else [sats]],
+        model,
+        drag_parameter=drag_parameter,
+        span=span,
+        spacing=spacing,
+        max_iterations=max_iterations,
+        zonal_degree=zonal_degree,
+    )[0]
+    if isinstance(out, Exception):
+        raise out
+    return out
+
+
+def fit_histories(
+    histories: Sequence[Sequence[Any]],
+    model: ModelLike,
+    *,
+    drag_parameter: float | None = None,
+    span: tuple[float, float] = DEFAULT_SPAN,
+    spacing: float = DEFAULT_SPACING,
+    max_iterations: int = 8,
+    zonal_degree: int = 2,
+    threads: int | None = None,
+) -> list[FitResult | Exception]:
+    """:func:`fit_element_sets` of many objects at once: the fits run in the core, many
+    objects per call in parallel (``threads``, default all cores), each trial's nominal
+    and perturbed orbits as the 8 lanes of one batch. A history grows by one older
+    element set per round, every object's round in one call.
+
+    Args:
+        histories: per object, its element sets (``Satrec`` or
+            :class:`~rhoprop.catalog.CatalogObject`, any order).
+        model, drag_parameter, span, spacing, max_iterations, zonal_degree: as
+            :func:`fit_element_sets`.
+        threads: core threads (default: ``rhoprop.parallel``'s setting).
+
+    Returns:
+        Per object, in order, its :class:`FitResult` or the exception (ValueError) its fit
+        raised.
+    """
+    start, end = _check_span(span, spacing)
+    ordered: list[Any] = []
+    for h in histories:
         try:
-            longer, worst = _fit(ordered[k:], *args, start=result)
-        except ValueError:  # the arc decays or SGP4 fails on the older set
+            ordered.append(_ordered(list(h)))
+        except ValueError as err:
+            ordered.append(err)
+    results: list[Any] = [o if isinstance(o, Exception) else None for o in ordered]
+    settings = (model, (start, end), spacing, max_iterations, zonal_degree, threads)
+    todo = [i for i, o in enumerate(ordered) if not isinstance(o, Exception)]
+    runs = _fit_round(
+        [ordered[i][-1:] for i in todo],
+        [drag_parameter if drag_parameter is not None else ordered[i][-1][1] for i in todo],
+        [None] * len(todo),
+        *settings,
+    )
+    for i, run in zip(todo, runs, strict=True):
+        results[i] = run if isinstance(run, Exception) else run[0]
+    # One older element set at a time, from the solution of the newer ones: a long arc
+    # from the SGP4 state alone starts hundreds of km off along-track.
+    used = {i: 1 for i in todo if not isinstance(results[i], Exception)}
+    while True:
+        grow = [i for i, n in used.items() if n < len(ordered[i])]
+        if not grow:
             break
-        if worst > HISTORY_MAX_NORMALISED_RMS:
-            break
-        result = longer
-    return result
+        runs = _fit_round(
+            [ordered[i][-(used[i] + 1) :] for i in grow],
+            [None] * len(grow),
+            [results[i] for i in grow],
+            *settings,
+        )
+        for i, run in zip(grow, runs, strict=True):
+            # the arc decays, SGP4 fails on the older set, or a manoeuvre: stop here
+            if isinstance(run, Exception) or run[1] > HISTORY_MAX_NORMALISED_RMS:
+                del used[i]
+            else:
+                results[i] = run[0]
+                used[i] += 1
+    return results
 
 
 def _prior(
@@ -473,23 +509,38 @@ def _prior(
         prior = max(float(drag_parameter), MIN_DRAG_PARAMETER)
         return prior, BSTAR_PRIOR_SIGMA * prior, f"prior {prior:.4g} m^2/kg given"
     newest = obs.which == obs.which.max()
-    times = np.array([add_seconds(epoch, float(t)) for t in obs.times[newest]])
+    times = offsets_to_epochs(epoch, obs.times[newest])
     return bstar_prior(sat.bstar, _perigee_km(sat), model, times, obs.positions[newest])
 
 
-def _fit(
+@dataclass
+class _Job:
+    """One Gauss-Newton fit, ready for the core."""
+
+    sources: list[str]
+    obs: _Observations
+    epoch: np.datetime64
+    p0: np.ndarray  # [r (m), v (m/s), Cd*A/m (m^2/kg)]
+    prior: float
+    prior_sigma: float
+    prior_note: str
+
+    def weights(self) -> np.ndarray:
+        """(k, 9) RTN rows over the 1-sigmas: weighted residual = W (observed - model)."""
+        w = self.obs.bases / self.obs.sigmas[:, :, None]
+        return np.ascontiguousarray(w.reshape(-1, 9))
+
+
+def _job(
     ordered: list[tuple[Any, float | None, str]],
     model: Any,
     drag_parameter: float | None,
     span: tuple[float, float],
     spacing: float,
-    max_iterations: int,
-    zonal_degree: int,
-    start: FitResult | None = None,
-) -> tuple[FitResult, float]:
-    """One Gauss-Newton fit to ``ordered`` element sets (from ``start``'s solution if
-    given); the result and the largest normalised RMS residual of the element sets older
-    than the newest."""
+    start: FitResult | None,
+) -> _Job:
+    """The fit of ``ordered`` element sets, from ``start``'s solution if given, else from
+    the newest one's SGP4 state at its epoch and the prior."""
     sats = [o[0] for o in ordered]
     obs, epoch = _observe(sats, span, spacing)
     if start is not None:
@@ -499,96 +550,181 @@ def _fit(
         prior, prior_sigma, note = _prior(sats[-1], model, drag_parameter, obs, epoch)
         r, v = _sgp4_observations(sats[-1], np.array([0.0]))
         p = np.concatenate([r[0], v[0], [prior]])
+    return _Job([o[2] for o in ordered], obs, epoch, p, prior, prior_sigma, note)
 
-    def model_states(q: np.ndarray) -> np.ndarray:
-        return _states(q, epoch, model, obs.back, obs.forward, spacing, zonal_degree)
 
-    def weighted(d: np.ndarray) -> np.ndarray:
-        """Inertial (k, 3) differences -> RTN, over the sigmas, flattened."""
-        return np.asarray(np.einsum("kij,kj->ki", obs.bases, d) / obs.sigmas).ravel()
+#: Most fits in one core call, and the longest time span (s) their common density field
+#: may cover: bounds the memory of a call's observations and of its field's day tiles.
+CALL_JOBS, CALL_SPAN = 64, 5 * 86400.0
 
-    def cost(q: np.ndarray, states: np.ndarray) -> float:
-        r = weighted(obs.positions - states[obs.rows, :3])
-        return float(r @ r) + float((prior - q[6]) / prior_sigma) ** 2
 
-    steps = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3, 1e-3, 0.0])
-    converged = False
-    iterations = 0
-    jac = np.zeros((len(obs.rows) * 3, 7))
-    nominal = model_states(p)
-    for iterations in range(1, max_iterations + 1):  # noqa: B007 - reported
-        steps[6] = 0.01 * p[6]
-        for j in range(7):
-            q = p.copy()
-            q[j] += steps[j]
-            pert = model_states(q)
-            jac[:, j] = weighted(pert[obs.rows, :3] - nominal[obs.rows, :3]) / steps[j]
-        res = weighted(obs.positions - nominal[obs.rows, :3])
-        a = np.vstack([jac, np.eye(7)[6] / prior_sigma])
-        b = np.concatenate([res, [(prior - p[6]) / prior_sigma]])
-        scale = np.linalg.norm(a, axis=0)
-        dp = np.linalg.lstsq(a / scale, b, rcond=None)[0] / scale
-        before = cost(p, nominal)
-        for _ in range(5):  # halve a step that makes the fit worse (long arcs)
-            q = p + dp
-            q[6] = max(q[6], MIN_DRAG_PARAMETER)
+def _fit_round(
+    sets: list[list[tuple[Any, float | None, str]]],
+    drags: list[float | None],
+    starts: list[FitResult | None],
+    model: Any,
+    span: tuple[float, float],
+    spacing: float,
+    max_iterations: int,
+    zonal_degree: int,
+    threads: int | None,
+) -> list[tuple[FitResult, float] | Exception]:
+    """One fit of each of ``sets`` (from ``starts``): groups of nearby epochs, each
+    prepared in Python and run in core calls, ``threads`` groups at once (one prepares
+    while another runs); per fit the result and the largest normalised RMS residual of
+    its older element sets, or its exception."""
+    import concurrent.futures as cf
+
+    from ..parallel import worker_count
+
+    newest = [o[-1][0].jdsatepoch + o[-1][0].jdsatepochF for o in sets]
+    order = sorted(range(len(sets)), key=newest.__getitem__)
+    groups = [order[k : k + CALL_JOBS] for k in range(0, len(order), CALL_JOBS)]
+
+    def one(group: list[int]) -> dict[int, Any]:
+        out: dict[int, Any] = {}
+        jobs: list[tuple[int, _Job]] = []
+        for i in group:
             try:
-                trial = model_states(q)
-            except ValueError:  # the step took the orbit into the ground
-                dp = dp / 2
+                jobs.append((i, _job(sets[i], model, drags[i], span, spacing, starts[i])))
+            except ValueError as err:
+                out[i] = err
+        for chunk in _chunks(jobs, spacing):
+            ran = _run_chunk([j for _, j in chunk], model, spacing, max_iterations, zonal_degree)
+            if len(chunk) > 1 and len(ran) == 1:
+                # the chunk's field failed (drivers, coverage): each job on its own field
+                ran = [
+                    _run_chunk([j], model, spacing, max_iterations, zonal_degree)[0]
+                    for _, j in chunk
+                ]
+            out.update({i: r for (i, _), r in zip(chunk, ran, strict=True)})
+        return out
+
+    merged: dict[int, Any] = {}
+    with cf.ThreadPoolExecutor(max_workers=min(worker_count(threads), max(len(groups), 1))) as pool:
+        for part in pool.map(one, groups):
+            merged.update(part)
+    return [merged[i] for i in range(len(sets))]
+
+
+def _span_of(job: _Job, spacing: float) -> tuple[np.datetime64, np.datetime64]:
+    """First and last time of a job's grid (UTC)."""
+    return (
+        add_seconds(job.epoch, -job.obs.back * spacing),
+        add_seconds(job.epoch, job.obs.forward * spacing),
+    )
+
+
+def _chunks(jobs: list[tuple[int, _Job]], spacing: float) -> list[list[tuple[int, _Job]]]:
+    """Consecutive jobs in calls of at most :data:`CALL_JOBS` whose grids together span
+    at most :data:`CALL_SPAN` more than the longest of them."""
+    chunks: list[list[tuple[int, _Job]]] = []
+    bounds = (0.0, 0.0, 0.0)  # the last chunk's first start, last end, longest grid (s)
+    for item in jobs:
+        t0, t1 = (float(ut1_seconds(t)) for t in _span_of(item[1], spacing))
+        if chunks and len(chunks[-1]) < CALL_JOBS:
+            lo, hi, longest = min(bounds[0], t0), max(bounds[1], t1), max(bounds[2], t1 - t0)
+            if hi - lo <= CALL_SPAN + longest:
+                chunks[-1].append(item)
+                bounds = (lo, hi, longest)
                 continue
-            if cost(q, trial) <= before * (1 + 1e-9):
-                break
-            dp = dp / 2
-        else:
-            break
-        p, nominal = q, trial
-        if np.linalg.norm(dp[:3]) < 0.01 and abs(dp[6]) < 1e-4 * p[6]:
-            converged = True
-            break
-    fitted = _Solution(p, nominal, jac, iterations, converged, prior, prior_sigma, note)
-    return _result(fitted, obs, epoch, weighted, [o[2] for o in ordered])
+        chunks.append([item])
+        bounds = (t0, t1, t1 - t0)
+    return chunks
+
+
+def _run_chunk(
+    jobs: list[_Job], model: Any, spacing: float, max_iterations: int, zonal_degree: int
+) -> list[tuple[FitResult, float] | Exception]:
+    """The jobs in one core call through one field covering all their grids; a field
+    that cannot be made is one exception for the whole call (a list of one)."""
+    from .. import _core
+    from ..constants import DEFAULT_FLOOR_ALTITUDE
+    from ..propagation.propagate import DEFAULT_STEP, run_in_field
+
+    spans = [_span_of(j, spacing) for j in jobs]
+    t0 = min(s[0] for s in spans)
+    t1 = max(s[1] for s in spans)
+    args = [
+        (
+            float(ut1_seconds(j.epoch)),
+            np.ascontiguousarray(j.p0, dtype=float),
+            float(j.prior),
+            float(j.prior_sigma),
+            float(spacing),
+            int(j.obs.back),
+            int(j.obs.forward),
+            np.ascontiguousarray(j.obs.rows, dtype=np.int64),
+            np.ascontiguousarray(j.obs.positions, dtype=float),
+            j.weights(),
+        )
+        for j in jobs
+    ]
+    where = OrbitState(t0, jobs[0].p0[:3], jobs[0].p0[3:6])
+    step = DEFAULT_STEP["rk8"]
+
+    def run(atmosphere: AtmosphereLike) -> list[Any]:
+        return _core.fit_orbits(
+            atmosphere,
+            args,
+            step,
+            zonal_degree,
+            DEFAULT_FLOOR_ALTITUDE,
+            max_iterations,
+            MIN_DRAG_PARAMETER,
+        )
+
+    span = (t1 - t0) / np.timedelta64(1, "ns") / 1e9
+    try:
+        ran = run_in_field(model, where, span, DEFAULT_FLOOR_ALTITUDE, run)
+    except ValueError as err:
+        return [err]
+    return [
+        r if isinstance(r, Exception) else _result(_solution(r), j)
+        for r, j in zip(ran, jobs, strict=True)
+    ]
 
 
 @dataclass
 class _Solution:
-    """Where a Gauss-Newton fit ended: parameters, states on the grid, the last Jacobian
-    (weighted), iterations, convergence and the prior it had."""
+    """Where a Gauss-Newton fit ended: parameters, states on the grid, J^T J of the
+    weighted Jacobian, iterations and convergence."""
 
     p: np.ndarray
     nominal: np.ndarray
-    jac: np.ndarray
+    normal: np.ndarray
     iterations: int
     converged: bool
-    prior: float
-    prior_sigma: float
-    prior_note: str
 
 
-def _result(
-    fit: _Solution,
-    obs: _Observations,
-    epoch: Any,
-    weighted: Any,
-    sources: list[str],
-) -> tuple[FitResult, float]:
+def _solution(ran: Any) -> _Solution:
+    """The :class:`_Solution` of a core fit's tuple."""
+    p, states, normal, iterations, converged = ran
+    return _Solution(
+        np.asarray(p), np.asarray(states), np.asarray(normal), int(iterations), bool(converged)
+    )
+
+
+def _result(fit: _Solution, job: _Job) -> tuple[FitResult, float]:
     """The :class:`FitResult` of a solution and the largest normalised RMS residual of
     the element sets older than the newest."""
-    count = len(sources)
+    obs = job.obs
+    count = len(job.sources)
     res3 = obs.positions - fit.nominal[obs.rows, :3]
-    normalised = weighted(res3).reshape(-1, 3)
-    s2 = float(np.sum(normalised**2)) / max(normalised.size - 7, 1)
-    a = np.vstack([fit.jac / np.sqrt(s2), np.eye(7)[6] / fit.prior_sigma])
-    cov = np.linalg.pinv(a.T @ a)
-    cov = (cov + cov.T) / 2
     residuals = np.einsum("kij,kj->ki", obs.bases, res3)
+    normalised = residuals / obs.sigmas
+    s2 = float(np.sum(normalised**2)) / max(normalised.size - 7, 1)
+    info = fit.normal / s2
+    info[6, 6] += 1.0 / job.prior_sigma**2
+    cov = np.linalg.pinv(info)
+    cov = (cov + cov.T) / 2
     newest = obs.which == count - 1
     rms = np.sqrt(np.mean(residuals[newest] ** 2, axis=0))
     per_set = [residuals[obs.which == i] for i in range(count)]
     per_set_norm = [np.sqrt(np.mean(normalised[obs.which == i] ** 2)) for i in range(count)]
     drag_sigma = float(np.sqrt(max(cov[6, 6], 0.0)))
     result = FitResult(
-        state=OrbitState(epoch, fit.p[:3].copy(), fit.p[3:6].copy()),
+        state=OrbitState(job.epoch, fit.p[:3].copy(), fit.p[3:6].copy()),
         drag_parameter=float(fit.p[6]),
         covariance=cov,
         drag_sigma=drag_sigma,
@@ -598,11 +734,11 @@ def _result(
         rms_total=float(np.sqrt(np.sum(rms**2))),
         iterations=fit.iterations,
         converged=fit.converged,
-        drag_observable=drag_sigma < 0.5 * fit.prior_sigma,
-        prior=fit.prior,
-        prior_sigma=fit.prior_sigma,
-        prior_note=fit.prior_note,
-        element_sets=tuple(sources),
+        drag_observable=drag_sigma < 0.5 * job.prior_sigma,
+        prior=job.prior,
+        prior_sigma=job.prior_sigma,
+        prior_note=job.prior_note,
+        element_sets=tuple(job.sources),
         element_set_rms=np.array([np.sqrt(np.mean(np.sum(r**2, axis=1))) for r in per_set]),
         all_times=obs.times,
         all_residuals=residuals,
@@ -629,6 +765,7 @@ __all__ = [
     "drag_parameter_from_bstar",
     "fit_element_set",
     "fit_element_sets",
+    "fit_histories",
     "fit_span_epochs",
     "sgp4_density",
 ]

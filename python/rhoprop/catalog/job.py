@@ -163,7 +163,7 @@ def run_catalog_file(
     overwrite: bool = False,
     duplicates: Duplicates | Literal["newest"] = "newest",
     command: str | None = None,
-    fit: bool = False,
+    fit: bool | Literal["auto"] = "auto",
     initial_covariance: str | None = None,
     zonal_degree: int = 4,
     seed: int = 0,
@@ -181,7 +181,9 @@ def run_catalog_file(
     get status "failed" (both on stderr). ``overwrite``: clear ``out`` of an earlier run.
     ``duplicates``: a NORAD id given several times is one object, the newest element set
     (``"newest"``), an error before any work or objects with suffixed OEM names
-    (``"suffix"``). ``fit``: fit state and Cd*A/m first (``load``). ``initial_covariance``:
+    (``"suffix"``). ``fit``: "auto" (default) fits the low near-Earth objects with B*
+    (``propagate_catalog(fit="auto")``), True every object (``load(fit=True)``), False
+    none. ``initial_covariance``:
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only) to 6 (J2..J6), default 4 (J2..J4).
     ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
@@ -205,8 +207,8 @@ def run_catalog_file(
     cat = load(
         file,
         errors="record" if skip_bad else "raise",
-        fit=fit,
-        model=atmosphere if fit else None,
+        fit=fit is True,
+        model=atmosphere if fit is True else None,
         drag_parameters=drag,
         zonal_degree=zonal_degree,
         history="newest" if duplicates == "newest" else "each",
@@ -234,6 +236,7 @@ def run_catalog_file(
         seed=seed,
         update_interval=update_interval,
         drag_sigma=sigma,
+        fit="auto" if fit == "auto" else False,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory

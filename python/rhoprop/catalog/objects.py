@@ -265,8 +265,7 @@ def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
     whose densities cannot be evaluated (note unchanged)."""
     import dataclasses
 
-    from ..density import DensityField, SampledModel
-    from ..density.atlas import Atlas
+    from ..density import SampledModel
     from .fit import _perigee_km, _sgp4_observations, bstar_prior, drag_parameter_from_bstar
 
     if obj.fit is not None or obj.bstar <= 0:
@@ -283,7 +282,7 @@ def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
         return obj
     epochs = obj.state.epoch + (times * 1e9).astype("timedelta64[ns]")
     atmosphere = model.atlas if isinstance(model, SampledModel) else model
-    if not isinstance(atmosphere, (Atlas, DensityField)):
+    if not _real_atmosphere(atmosphere):
         return obj  # an analytic test atmosphere (Exponential, a function): as given
     value, _, note = bstar_prior(obj.bstar, _perigee_km(sat), atmosphere, epochs, r)
     if not note.startswith("prior from B*"):
@@ -294,6 +293,79 @@ def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
         covariance_note=f"{obj.covariance_note}; Cd*A/m scaled to the model: "
         f"{note.removeprefix('prior from B*: ')}",
     )
+
+
+#: Objects that ``propagate_catalog(fit="auto")`` fits before it runs them: near-Earth
+#: orbits (period under SGP4's 225-minute deep-space limit) with perigee below this
+#: altitude (km), the regime of the four development weeks of
+#: ``benches/catalog_realism.py`` (200-700 km), where the fit halves the along-track error
+#: of B*'s scaled conversion (pooled 8.5 against 15.2 km, 0.80 against 1.44 of SGP4's:
+#: docs/catalog-realism.md). Above it drag barely moves an orbit over a day and the fit
+#: was not measured; those objects keep B* scaled to the model.
+AUTO_FIT_PERIGEE_KM = 700.0
+#: SGP4's near-Earth limit of the period, min: a fit's dynamics carry no Moon or Sun.
+AUTO_FIT_MAX_PERIOD_MIN = 225.0
+
+FitChoice = bool | Literal["auto"]
+
+
+def _real_atmosphere(model: object) -> bool:
+    """Whether ``model`` is a model of the real atmosphere (sampled, an atlas, a field)."""
+    from ..density import DensityField, SampledModel
+    from ..density.atlas import Atlas
+
+    return isinstance(model, (SampledModel, Atlas, DensityField))
+
+
+def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:
+    """Whether ``propagate_catalog(fit=...)`` fits ``obj``: never if False or if it is
+    fitted already or carries no element set; if True every other object; if "auto" the
+    near-Earth ones below :data:`AUTO_FIT_PERIGEE_KM` whose Cd*A/m is B*'s (B* > 0)."""
+    from .fit import _perigee_km, drag_parameter_from_bstar
+
+    if fit is False or obj.fit is not None:
+        return False
+    sat = obj.satrec()
+    if sat is None:
+        return False
+    if fit is True:
+        return True
+    period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
+    return bool(
+        obj.bstar > 0
+        and obj.drag_parameter == drag_parameter_from_bstar(obj.bstar)
+        and period < AUTO_FIT_MAX_PERIOD_MIN
+        and _perigee_km(sat) < AUTO_FIT_PERIGEE_KM
+    )
+
+
+def fit_catalog_objects(
+    objs: list[CatalogObject], model: ModelLike, fit: FitChoice, zonal_degree: int
+) -> list[CatalogObject]:
+    """``objs`` with those :func:`fit_choice` picks fitted to their element sets with
+    ``model`` (real-atmosphere models only; batched in the core,
+    :func:`~rhoprop.catalog.fit_objects`). An object whose fit fails stays as it was,
+    the failure in its ``covariance_note``."""
+    import dataclasses
+
+    from .elements import fit_objects
+
+    if fit not in (True, False, "auto"):
+        raise ValueError(f"fit must be True, False or 'auto', got {fit!r}")
+    if not _real_atmosphere(model):
+        return objs
+    picked = [i for i, o in enumerate(objs) if fit_choice(o, fit)]
+    if not picked:
+        return objs
+    out = list(objs)
+    fitted = fit_objects([objs[i] for i in picked], model, zonal_degree=zonal_degree)
+    for i, f in zip(picked, fitted, strict=True):
+        if isinstance(f, Exception):
+            note = f"{objs[i].covariance_note}; fit failed: {type(f).__name__}: {f}"
+            out[i] = dataclasses.replace(objs[i], covariance_note=note)
+        else:
+            out[i] = f
+    return out
 
 
 def _object_error(err: Exception, obj: CatalogObject) -> Exception:

@@ -311,6 +311,7 @@ def _model_moments(
                 errors="record",
                 progress=False,
                 client=client,
+                fit=False,  # each model's Cd*A/m is set above (debiased)
             )
             base = res if name == ref else base
             # One model's run at a time is held (with the reference's): bounded memory.

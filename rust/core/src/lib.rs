@@ -15,6 +15,7 @@
 //! - [`simd`]: the batch lane width and the runtime instruction-set dispatch;
 //! - [`progress`]: progress and cancellation of long calls;
 //! - [`propagate`], [`montecarlo`], [`ccsp`]: the three runs the binding exposes;
+//! - [`fit`]: least-squares fits of state and Cd*A/m to pseudo-observations, 8 lanes a trial;
 //! - [`conjunction`]: probability of collision (2-D Gaussian Pc, Monte Carlo pair count);
 //! - [`sieve`]: all-on-all screening's candidate intervals (spatial grid, distance bounds);
 //! - [`error`]: what can go wrong, with messages fit for the user.
@@ -30,6 +31,7 @@ pub mod decay;
 pub mod density;
 pub mod dynamics;
 pub mod error;
+pub mod fit;
 pub mod frames;
 pub mod integrators;
 pub mod kappa;

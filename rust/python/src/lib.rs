@@ -8,6 +8,7 @@ mod conjunction;
 mod constants;
 mod density;
 mod errors;
+mod fit;
 mod frames;
 mod long_call;
 mod models;
@@ -27,6 +28,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(montecarlo::monte_carlo, m)?)?;
     m.add_function(wrap_pyfunction!(ccsp::ccsp, m)?)?;
     m.add_function(wrap_pyfunction!(ccsp::ccsp_many, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::fit_orbits, m)?)?;
     m.add_function(wrap_pyfunction!(frames::gmst, m)?)?;
     m.add_function(wrap_pyfunction!(frames::inertial_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;
