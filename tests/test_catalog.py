@@ -118,7 +118,7 @@ def test_malformed_input_is_named_or_skipped(tmp_path):
     npath = tmp_path / "neg.tle"
     npath.write_text("\n".join(neg))
     with pytest.raises(ValueError, match=r"B\* = -0.0001 is not positive"):
-        catalog.load(npath)
+        catalog.load(npath, nonpositive_bstar="error")
     cat = catalog.load(npath, drag_parameters={90001: 0.005})
     assert cat[0].drag_parameter == 0.005
     with pytest.raises(ValueError, match="errors must be"):

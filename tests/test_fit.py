@@ -14,7 +14,7 @@ from sgp4.api import WGS72, Satrec
 import rhoprop as rp
 from rhoprop import catalog
 from rhoprop.catalog.covariance import tle_accuracy, tle_covariance
-from rhoprop.catalog.fit import fit_element_set
+from rhoprop.catalog.fit import DEFAULT_DRAG_PARAMETER, fit_element_set
 from rhoprop.cli import main
 from rhoprop.frames import rtn_basis
 
@@ -71,9 +71,12 @@ def test_fit_is_independent_of_the_starting_drag(tle_file, atmosphere):
     assert abs(a.drag_parameter - b.drag_parameter) < 0.1 * a.drag_parameter
 
 
-def test_nonpositive_bstar_loads_only_with_fit(tle_file, atmosphere):
+def test_nonpositive_bstar_loads_with_a_guess_fitted_or_refused(tle_file, atmosphere):
     with pytest.raises(ValueError, match="fit=True"):
-        catalog.load(tle_file)
+        catalog.load(tle_file, nonpositive_bstar="error")
+    guessed = catalog.load(tle_file)[1:]  # B* = 0 and < 0: the fit's starting guess
+    assert all(o.drag_parameter == DEFAULT_DRAG_PARAMETER for o in guessed)
+    assert all("0.022" in o.covariance_note for o in guessed)
     fitted = catalog.load(tle_file, fit=True, model=atmosphere)
     assert [o.norad_id for o in fitted] == [91001, 91002, 91003]
     assert all(o.fit is not None and o.drag_parameter > 0 for o in fitted)

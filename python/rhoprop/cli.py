@@ -337,8 +337,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="auto",
         help="fit every object's state and Cd*A/m to its SGP4 positions over one day "
         "either side of its epoch with rhoprop's dynamics and the model (about 100 objects/s "
-        "on 2 cores; needed for B* <= 0 objects). Default: only the near-Earth objects with "
-        "perigee below 700 km and B* > 0",
+        "on 2 cores). Default: only the near-Earth objects with "
+        "perigee below 700 km whose drag comes from the element set",
     )
     cat.add_argument(
         "--no-fit",

@@ -320,7 +320,8 @@ def _real_atmosphere(model: object) -> bool:
 def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:
     """Whether ``propagate_catalog(fit=...)`` fits ``obj``: never if False or if it is
     fitted already or carries no element set; if True every other object; if "auto" the
-    near-Earth ones below :data:`AUTO_FIT_PERIGEE_KM` whose Cd*A/m is B*'s (B* > 0)."""
+    near-Earth ones below :data:`AUTO_FIT_PERIGEE_KM` whose Cd*A/m comes from B* (or is
+    the guess of a B* <= 0 element set) rather than from the user."""
     from .fit import _perigee_km, drag_parameter_from_bstar
 
     if fit is False or obj.fit is not None:
@@ -331,9 +332,13 @@ def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:
     if fit is True:
         return True
     period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
+    from_elements = (
+        obj.drag_parameter == drag_parameter_from_bstar(obj.bstar)
+        if obj.bstar > 0
+        else obj.drag_parameter == DEFAULT_DRAG_PARAMETER
+    )
     return bool(
-        obj.bstar > 0
-        and obj.drag_parameter == drag_parameter_from_bstar(obj.bstar)
+        from_elements
         and period < AUTO_FIT_MAX_PERIOD_MIN
         and _perigee_km(sat) < AUTO_FIT_PERIGEE_KM
     )

@@ -292,7 +292,8 @@ def propagate_catalog(
             integrator and step are not used: the CCSP integrates with RK8 at its default
             step, the Monte Carlo with its defaults).
         fit: ``"auto"`` (default): with a model of the real atmosphere, the near-Earth
-            objects with perigee below 700 km whose Cd*A/m comes from B* are first fitted
+            objects with perigee below 700 km whose Cd*A/m comes from the element set (B*,
+            or the guess for B* <= 0) are first fitted
             to their element sets with ``model`` (state and Cd*A/m,
             :func:`~rhoprop.catalog.fit_objects`, in the core at about 100 objects/s on 2
             cores; :data:`~rhoprop.catalog.objects.AUTO_FIT_PERIGEE_KM`); True: every
