@@ -256,7 +256,7 @@ def write_oem(
             f"MonteCarloResult or Trajectory (one file), not a {type(result).__name__}"
         )
     names = oem_names(result.objects, duplicates)
-    paths = []
+    paths: list[Path] = []
     for k, obj in enumerate(result.objects):
         idx = np.flatnonzero(result.valid[k])
         if not len(idx):
