@@ -90,15 +90,19 @@ def _oem_text(
         "META_STOP",
         "",
     ]
-    for t, s in zip(epochs, mean / 1e3, strict=True):
-        lines.append(f"{_iso(t)} " + " ".join(f"{v:.9e}" for v in s))
+    # One %-format per line (formatting is most of a whole catalog's output time).
+    stamps = np.datetime_as_string(np.asarray(epochs).astype("datetime64[us]"), unit="us")
+    state_line = "%s " + " ".join(["%.9e"] * 6)
+    for t, s in zip(stamps, (mean / 1e3).tolist(), strict=True):
+        lines.append(state_line % (t, *s))
     if covariance is not None:
         lines += ["", "COVARIANCE_START"]
         lines += [f"COMMENT {chunk}" for chunk in _wrap(sanitise(note, 2000))]
-        for t, c in zip(epochs, covariance / 1e6, strict=True):
-            lines += [f"EPOCH = {_iso(t)}", f"COV_REF_FRAME = {cov_frame or frame}"]
-            for row in range(6):
-                lines.append(" ".join(f"{c[row, col]:.9e}" for col in range(row + 1)))
+        rows, cols = np.tril_indices(6)
+        block = "\n".join(" ".join(["%.9e"] * (r + 1)) for r in range(6))
+        head = f"\nCOV_REF_FRAME = {cov_frame or frame}\n"
+        for t, c in zip(stamps, (covariance / 1e6)[:, rows, cols].tolist(), strict=True):
+            lines.append("EPOCH = " + t + head + block % tuple(c))
         lines += ["COVARIANCE_STOP"]
     lines.append("")
     return "\n".join(lines)
