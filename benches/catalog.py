@@ -113,6 +113,23 @@ def fit_all(snapshot: Path) -> None:
     )
 
 
+def on_dask(objs, model, end, **options):
+    """(result, wall s) of ``propagate_catalog`` on a 2-worker Dask LocalCluster."""
+    import distributed
+
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        t0 = time.perf_counter()
+        remote = catalog.propagate_catalog(
+            objs, model, end, client=client, progress=False, **options
+        )
+        return remote, time.perf_counter() - t0
+
+
 def whole(snapshot: Path, days: float, dask: bool) -> None:
     """Every element set of a snapshot as published, with the defaults (near-Earth objects
     below 700 km fitted, CCSP, NRLMSIS 2.1), ``days`` after the newest epoch: the time of
@@ -154,19 +171,7 @@ def whole(snapshot: Path, days: float, dask: bool) -> None:
     print(f"peak RSS {peak_rss_mb():.0f} MB; atlas peak {memory.peak / 1e6:.0f} MB of tiles")
     if not dask:
         return
-    import distributed
-
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        t0 = time.perf_counter()
-        remote = catalog.propagate_catalog(
-            objs, model, end, client=client, progress=False, errors="record"
-        )
-        wall = time.perf_counter() - t0
+    remote, wall = on_dask(objs, model, end, errors="record")
     same = np.array_equal(remote.mean, local.mean, equal_nan=True) and np.array_equal(
         remote.covariance, local.covariance, equal_nan=True
     )
@@ -254,17 +259,7 @@ def main() -> None:
     )
     if not args.dask:
         return
-    import distributed
-
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        t0 = time.perf_counter()
-        remote = catalog.propagate_catalog(cat, field, end, client=client, progress=False)
-        wall = time.perf_counter() - t0
+    remote, wall = on_dask(cat, field, end)
     print(
         f"Dask LocalCluster, 2 workers: {len(cat)} objects in {wall:.1f} s = "
         f"{len(cat) / wall:.1f} objects/s; identical to local: "
