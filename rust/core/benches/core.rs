@@ -14,14 +14,7 @@ use rhoprop_core::progress::Progress;
 use rhoprop_core::simd::SimdPath;
 use std::hint::black_box;
 
-const PAPER: [f64; 6] = [
-    3782900.7032,
-    -5441600.6779,
-    -1420075.1327,
-    -606.6600,
-    1539.2559,
-    -7488.3946,
-];
+const PAPER: [f64; 6] = rhoprop_core::constants::PAPER_STATE;
 
 fn batch<const W: usize>() -> State<W> {
     PAPER.map(|c| [c; W])

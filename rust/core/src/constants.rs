@@ -28,6 +28,17 @@ pub const OMEGA_EARTH: f64 = 7.292115e-5;
 /// Seconds per day.
 pub const SECONDS_PER_DAY: f64 = 86400.0;
 
+/// The paper's initial state [x, y, z (m), vx, vy, vz (m/s)] (docs/paper-study.md): the
+/// orbit the tests and benchmarks fly.
+pub const PAPER_STATE: [f64; 6] = [
+    3782900.7032,
+    -5441600.6779,
+    -1420075.1327,
+    -606.6600,
+    1539.2559,
+    -7488.3946,
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;

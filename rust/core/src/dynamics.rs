@@ -435,14 +435,7 @@ mod tests {
     #[test]
     fn lanes_are_independent() {
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
-        let s0 = [
-            3782900.7032,
-            -5441600.6779,
-            -1420075.1327,
-            -606.66,
-            1539.2559,
-            -7488.3946,
-        ];
+        let s0 = crate::constants::PAPER_STATE;
         let s1 = [7.0e6, 1.0e5, 2.0e5, 10.0, 7500.0, 100.0];
         let mut batch = Dynamics::new(&atm, 5e8, [0.004, 0.01]);
         batch.kappa.k0 = [0.5, -1.0];

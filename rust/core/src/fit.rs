@@ -447,14 +447,7 @@ mod tests {
     use crate::propagate::{propagate, Method};
 
     /// The paper's initial state (docs/paper-study.md) and a drag parameter.
-    const Y0: [f64; 6] = [
-        3782900.7032,
-        -5441600.6779,
-        -1420075.1327,
-        -606.6600,
-        1539.2559,
-        -7488.3946,
-    ];
+    const Y0: [f64; 6] = crate::constants::PAPER_STATE;
     const DRAG: f64 = 0.0046;
 
     fn atmosphere() -> Exponential {

@@ -491,14 +491,7 @@ mod tests {
     use crate::propagate::{propagate, Method};
     use std::sync::atomic::Ordering;
 
-    const PAPER: [f64; 6] = [
-        3782900.7032,
-        -5441600.6779,
-        -1420075.1327,
-        -606.6600,
-        1539.2559,
-        -7488.3946,
-    ];
+    const PAPER: [f64; 6] = crate::constants::PAPER_STATE;
 
     fn config(members: usize, kappa: KappaProcess) -> MonteCarloConfig {
         MonteCarloConfig {

@@ -115,14 +115,7 @@ mod tests {
 
     const PAPER: Problem = Problem {
         epoch: 8.4e7,
-        y0: [
-            3782900.7032,
-            -5441600.6779,
-            -1420075.1327,
-            -606.6600,
-            1539.2559,
-            -7488.3946,
-        ],
+        y0: crate::constants::PAPER_STATE,
         drag: 3.0912 * 0.0015,
         floor_altitude: DEFAULT_FLOOR_ALTITUDE,
         zonal_degree: 2,

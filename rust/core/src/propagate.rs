@@ -225,14 +225,7 @@ mod tests {
     }
 
     /// The paper's initial state (docs/paper-study.md).
-    const PAPER: [f64; 6] = [
-        3782900.7032,
-        -5441600.6779,
-        -1420075.1327,
-        -606.6600,
-        1539.2559,
-        -7488.3946,
-    ];
+    const PAPER: [f64; 6] = crate::constants::PAPER_STATE;
     const DRAG: f64 = 3.0912 * 0.0015;
 
     fn paper_atmosphere() -> Exponential {
