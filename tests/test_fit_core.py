@@ -108,3 +108,18 @@ def test_propagate_catalog_fits_low_near_earth_objects_by_default(test_data):
     assert "Cd*A/m fitted" not in plain.covariance_note[0]
     with pytest.raises(ValueError, match="fit must be"):
         catalog.propagate_catalog(objs, model, end, progress=False, fit="yes")
+
+
+def test_rhoprop_catalog_names_skip_bad_when_an_element_set_is_unusable(tmp_path, capsys):
+    from rhoprop.cli import main
+
+    bad = tmp_path / "far.tle"
+    bad.write_text(
+        "FAR\n"
+        "1 99998U 23001A   23317.50000000  .00000000  00000-0  10000-3 0  9990\n"
+        "2 99998  51.6000 100.0000 0001000  90.0000 270.0000  0.10000000    01\n"
+    )  # its checksum digit is wrong: an unusable element set, as the loader says
+    out = str(tmp_path / "o")
+    assert main(["catalog", str(bad), "--end", "2023-11-14T12:00", "--out", out]) == 1
+    err = capsys.readouterr().err
+    assert "checksum" in err and "--skip-bad" in err, err

@@ -15,7 +15,7 @@ from ..io import OutputFolder, command_line, oem_names, sanitise, write_oem, wri
 from ..options import Duplicates, UncertaintyMethod
 from ..spaceweather import SpaceWeather
 from .covariance import COVARIANCE_NAMES
-from .elements import load
+from .elements import Catalog, load
 from .run import STATUSES, propagate_catalog
 
 #: Density models by the names the command line accepts.
@@ -149,6 +149,19 @@ def read_drag_file(path: str | Path, cd: float | None = None) -> dict[int, float
     return out
 
 
+def _load(file: str | Path, skip_bad: bool, **options: Any) -> Catalog:
+    """``load`` of a command's file: without ``skip_bad`` the first unusable element set
+    stops the command, its error saying how to go on (``--skip-bad``)."""
+    if skip_bad:
+        return load(file, errors="record", **options)
+    try:
+        return load(file, errors="raise", **options)
+    except ValueError as err:
+        raise ValueError(
+            f"{err} (--skip-bad skips such element sets, lists them and goes on)"
+        ) from err
+
+
 def run_catalog_file(
     file: str | Path,
     end: str,
@@ -204,9 +217,9 @@ def run_catalog_file(
     if scheduler:
         _need_dask()
     atmosphere = model_by_name(model)
-    cat = load(
+    cat = _load(
         file,
-        errors="record" if skip_bad else "raise",
+        skip_bad,
         fit=fit is True,
         model=atmosphere if fit is True else None,
         drag_parameters=drag,
@@ -310,7 +323,7 @@ def run_reentry_file(
 
     atmosphere = model_by_name(model)
     # reentry() itself predicts a history once (history="newest") or each element set
-    cat = load(file, errors="record" if skip_bad else "raise", history="each")
+    cat = _load(file, skip_bad, history="each")
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
     if not len(cat):
