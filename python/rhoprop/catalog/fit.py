@@ -354,15 +354,21 @@ def fit_element_set(
     )
 
 
+def _drag_from_element_set(obj: Any) -> bool:
+    """Whether a :class:`~rhoprop.catalog.CatalogObject`'s Cd*A/m is what its element set
+    gives (B*'s plain conversion, or the guess of a B* <= 0 set), not the user's."""
+    if obj.bstar > 0:
+        return bool(obj.drag_parameter == drag_parameter_from_bstar(obj.bstar))
+    return bool(obj.drag_parameter == DEFAULT_DRAG_PARAMETER)
+
+
 def _satrec(item: Any) -> tuple[Any, float | None, str]:
     """(Satrec, Cd*A/m override or None, source) of a Satrec or CatalogObject."""
     if hasattr(item, "satrec") and callable(item.satrec):
         sat = item.satrec()
         if sat is None:
             raise ValueError("the catalog object carries no element set to fit")
-        from_bstar = item.bstar > 0 and item.drag_parameter == drag_parameter_from_bstar(item.bstar)
-        guessed = item.bstar <= 0 and item.drag_parameter == DEFAULT_DRAG_PARAMETER
-        override = None if from_bstar or guessed else float(item.drag_parameter)
+        override = None if _drag_from_element_set(item) else float(item.drag_parameter)
         return sat, override, str(item.source)
     epoch = from_jd(item.jdsatepoch, item.jdsatepochF, scale="utc")
     return item, None, f"element set of {epoch}"

@@ -322,7 +322,7 @@ def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:
     fitted already or carries no element set; if True every other object; if "auto" the
     near-Earth ones below :data:`AUTO_FIT_PERIGEE_KM` whose Cd*A/m comes from B* (or is
     the guess of a B* <= 0 element set) rather than from the user."""
-    from .fit import _perigee_km, drag_parameter_from_bstar
+    from .fit import _drag_from_element_set, _perigee_km
 
     if fit is False or obj.fit is not None:
         return False
@@ -332,13 +332,8 @@ def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:
     if fit is True:
         return True
     period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
-    from_elements = (
-        obj.drag_parameter == drag_parameter_from_bstar(obj.bstar)
-        if obj.bstar > 0
-        else obj.drag_parameter == DEFAULT_DRAG_PARAMETER
-    )
     return bool(
-        from_elements
+        _drag_from_element_set(obj)
         and period < AUTO_FIT_MAX_PERIOD_MIN
         and _perigee_km(sat) < AUTO_FIT_PERIGEE_KM
     )
