@@ -183,3 +183,30 @@ def test_fit_with_sgp4s_own_zonals_matches_sgp4(atmosphere):
     assert fitted[0].fit.rms_total == pytest.approx(rms[4], rel=1e-6)
     with pytest.raises(ValueError, match="zonal_degree"):
         catalog.load(SAMPLE, zonal_degree=7)
+
+
+def test_tle_covariance_near_the_apogee_of_an_eccentric_orbit_has_full_rank(test_data, tmp_path):
+    # 57045 NUSANTARA TIGA (e = 0.78) as published on 2023-07-04, near apogee at its epoch:
+    # the drift alone took the whole radial variance, the covariance had rank 4 and the
+    # CCSP's factorisation failed ("not positive definite", smallest eigenvalue -8.7e-11).
+    import gzip
+
+    src = test_data / "catalogs" / "history" / "celestrak_active_20230704.txt.gz"
+    lines = gzip.decompress(src.read_bytes()).decode().splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("1 57045U"))
+    one = tmp_path / "57045.tle"
+    one.write_text("\n".join(lines[k - 1 : k + 2]) + "\n")
+    obj = catalog.load(one)[0]
+    acc = tle_accuracy(obj.state)
+    assert acc.regime == "eccentric"
+    cov = tle_covariance(obj.state)
+    sd = np.sqrt(np.diag(cov))
+    # Full rank at the scale of each component (rank 4 gave 1e-17).
+    assert np.linalg.eigvalsh(cov / np.outer(sd, sd)).min() > 1e-4
+    basis = rtn_basis(obj.state.position, obj.state.velocity)
+    sig = np.sqrt(np.diag(basis @ cov[:3, :3] @ basis.T))
+    np.testing.assert_allclose(sig, [acc.radial, acc.along_track, acc.cross_track], rtol=1e-9)
+    r = catalog.propagate_catalog(
+        [obj], rp.scenarios.benchmark_exponential(0.2), "2023-06-30T13:00", progress=False
+    )
+    assert list(r.status) == ["propagated"]

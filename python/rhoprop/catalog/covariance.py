@@ -46,7 +46,8 @@ class TleAccuracy:
     Attributes:
         radial, along_track, cross_track: RMS position errors at epoch, m.
         drift_rate: RMS rate of growth of the along-track error from the epoch state
-            alone (a semi-major-axis error), m/s (1 km/day = 0.01157 m/s).
+            alone (a semi-major-axis error), m/s (1 km/day = 0.01157 m/s); at most
+            1.5 n radial / sqrt(2) is used (n the orbital rate, :func:`tle_covariance`).
         regime: the regime's name, for reports.
     """
 
@@ -92,9 +93,15 @@ def tle_covariance(state: OrbitState, accuracy: TleAccuracy | None = None) -> np
     acc = accuracy or tle_accuracy(state)
     r, v = state.position, state.velocity
     n = float(np.linalg.norm(np.cross(r, v))) / float(r @ r)  # orbital rate, rad/s
-    var_a = (acc.drift_rate / (1.5 * n)) ** 2
-    amp2 = max(2.0 * (acc.radial**2 - var_a), 0.0)  # A^2
-    var_a = acc.radial**2 - amp2 / 2.0
+    # The semi-major-axis error gives the drift; where the drift alone would take more
+    # than half the radial variance (slow orbits: near the apogee of an eccentric one),
+    # it is held to half, so the eccentricity amplitude A keeps the other half and the
+    # matrix keeps full rank (with A = 0 the radial velocity has no variance and the
+    # radial / along-track-rate block is rank 1: a singular covariance that stopped the
+    # CCSP of 57045 NUSANTARA TIGA, e = 0.78, in the 2023-07-04 snapshot). The drift is
+    # then smaller than the regime's: 1.5 n radial / sqrt(2).
+    var_a = min((acc.drift_rate / (1.5 * n)) ** 2, acc.radial**2 / 2.0)
+    amp2 = 2.0 * (acc.radial**2 - var_a)  # A^2, >= radial^2
     var_y0 = max(acc.along_track**2 - amp2, 0.0)
     b2 = 2.0 * acc.cross_track**2
     rot = np.zeros((6, 6))  # rotating-frame RTN covariance [x y z xdot ydot zdot]
