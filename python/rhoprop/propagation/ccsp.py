@@ -77,8 +77,8 @@ def ccsp(
     becomes [r, v, kappa, c]. c is a constant of the object, so its cross-covariance D
     with the state is carried whole from update to update (kappa's shrinks by 1 / l2):
     the factor is S = [[Chol(A), C / sqrt(l2), a sqrt(l2) D], [0, diag(sqrt(l2),
-    a sqrt(l2))]] with A = l1 (P - D D^T) - C C^T / l2 and a = 0.01 (the c points probe
-    the tangent-linear limit), and P = P_set1 + C C^T + D D^T after each update
+    a sqrt(l2))]] with A = l1 (P - D D^T) - C C^T / l2 and a = 0.001 (one c point, a
+    one-sided difference in the tangent-linear limit), and P = P_set1 + C C^T + D D^T after each update
     (derivation: docs/conventions.md). This is the covariance linearised in c: a Monte
     Carlo over the same log-normal Cd*A/m samples spreads about 1 + 3 drag_sigma^2 / 4
     times as much (0.75 % more at 10 %), whatever the update interval.
@@ -107,7 +107,7 @@ def ccsp(
             by 1.6 km in a day.
         drag_sigma: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
             0.1 = 10 %; at most 3). Default 0: density uncertainty only, the paper's filter
-            (results unchanged). Costs two more sigma points per update.
+            (results unchanged). Costs one more sigma point, in the lane the 15 points leave free.
         dynamics: a :class:`~rhoprop.Dynamics` holding ``step``, ``floor_altitude`` and
             ``zonal_degree`` at once (its integrator must be None or "rk8": the filter
             integrates its sigma points with RK8).

@@ -70,19 +70,30 @@ pub struct CcspOutput {
 }
 
 const N: usize = 6;
-/// Sigma points: 2n + 1 state points, then the consider points: their centre, kappa + and
-/// -, and (with a ballistic-coefficient sigma) c + and -.
-const POINTS_KAPPA: usize = 2 * N + 1 + 3;
-const POINTS_DRAG: usize = POINTS_KAPPA + 2;
-/// Scaling alpha of the c points (the scaled unscented transform, Julier 2002, for the
-/// ballistic-coefficient set alone): they probe +-alpha sqrt(l2) in c and the state
-/// +-alpha sqrt(l2) D, with weights 1 / (2 l2 alpha^2), so they reproduce D D^T for any
-/// alpha; a small alpha is the tangent-linear limit. At alpha = 1 the points lie
-/// sqrt(3) sigma along a straight line in Cartesian space while the spread is curved
-/// along the orbit (kilometres along-track): re-drawn there every update, they lost 24 %
-/// of the along-track sigma by 3 days at drag_sigma = 0.3 against finite differences and
-/// a Monte Carlo (docs/conventions.md).
-pub const DRAG_ALPHA: f64 = 0.01;
+/// Sigma points: 2n + 1 state points, then the consider points kappa + and -, and (with a
+/// ballistic-coefficient sigma) c +, one-sided ([`DRAG_ALPHA`]). The consider set's centre
+/// (state at the mean, kappa = c = 0) is the state set's point 0, so it is not flown
+/// twice. 15 or 16 points, one batch of [`LANES`] either way.
+const POINTS_KAPPA: usize = 2 * N + 1 + 2;
+const POINTS_DRAG: usize = POINTS_KAPPA + 1;
+/// Lanes of a whole-object batch: a multiple of the SIMD width. An odd count costs far
+/// more than its share (measured through the NRLMSIS field, AVX-512, one thread: 15 lanes
+/// 0.76 s, 16 lanes 0.51 s, 17 lanes 0.62 s, 18 lanes 0.67 s for the same 100 objects),
+/// so the kappa-only filter pads its 15 points with one discarded lane.
+const LANES: usize = 16;
+/// Index of the first kappa point.
+const KAPPA: usize = 2 * N + 1;
+/// Scaling alpha of the c point (the tangent-linear limit of the scaled unscented
+/// transform, Julier 2002, for the ballistic-coefficient set alone): it probes
+/// alpha sqrt(l2) in c and the state alpha sqrt(l2) D, and D' = (x_c - x_0) / (alpha
+/// sqrt(l2)) is a one-sided difference, exact to O(alpha drag_sigma) (2.6e-4 relative at
+/// drag_sigma 0.3; rounding ~1e-7): one lane instead of the pair +-, which with the
+/// consider centre no longer flown twice fits the filter in 16 lanes (issue 28). At
+/// alpha = 1 (points +-sqrt(3) sigma) the points lay on a straight line in Cartesian space
+/// while the spread is curved along the orbit (kilometres along-track): re-drawn there
+/// every update, they lost 24 % of the along-track sigma by 3 days at drag_sigma = 0.3
+/// against finite differences and a Monte Carlo (docs/conventions.md).
+pub const DRAG_ALPHA: f64 = 1e-3;
 /// A sigma point: [state (6), kappa, c].
 type Point = [f64; 8];
 
@@ -127,7 +138,7 @@ pub fn factor(
 
 /// Runs the filter. `progress.done` counts the updates done; setting `progress.cancel`
 /// stops the run at the next update. The sigma points of an update step together in one
-/// batch of 16 (or, with `drag_sigma`, 18) lanes on the calling thread: per-update
+/// batch of 16 lanes on the calling thread: per-update
 /// parallel work over lane-width batches cost more in thread wake-ups than it gained
 /// (one paper CCSP over 3 days: 4.6 ms on rayon over 2 cores, 2.3 ms in one batch).
 pub fn ccsp<A: Atmosphere + ?Sized>(
@@ -139,8 +150,8 @@ pub fn ccsp<A: Atmosphere + ?Sized>(
 }
 
 /// Runs the filter for several objects (a catalog chunk) through one atmosphere: objects
-/// in parallel, each object's sigma points stepping together in one batch as wide as
-/// their count (16 or 18 lanes: the lane loops fill whole SIMD registers and the
+/// in parallel, each object's sigma points stepping together in one batch of
+/// 16 lanes ([`LANES`]: the lane loops fill whole SIMD registers and the
 /// time-dependent parts of a stage, Earth rotation and the field's time cell, are
 /// computed once per object). Each object's result is bit-identical to [`ccsp`] of its
 /// config alone (lanes never mix, whatever the batching), and independent of the thread
@@ -231,13 +242,12 @@ fn run<A: Atmosphere + ?Sized>(
         let mut points = vec![[0.0f64; 8]; npoints];
         for (k, pt) in points.iter_mut().enumerate() {
             let (col, sign) = match k {
-                0 | 13 => (None, 0.0),
+                0 => (None, 0.0),
                 1..=6 => (Some(k - 1), 1.0),
                 7..=12 => (Some(k - 7), -1.0),
-                14 => (Some(6), 1.0),
-                15 => (Some(6), -1.0),
-                16 => (Some(7), 1.0),
-                _ => (Some(7), -1.0),
+                13 => (Some(6), 1.0),
+                14 => (Some(6), -1.0),
+                _ => (Some(7), 1.0),
             };
             for i in 0..8 {
                 let base = if i < N { mean[i] } else { 0.0 };
@@ -251,18 +261,20 @@ fn run<A: Atmosphere + ?Sized>(
             break;
         }
         // Set 1 (state points): mean and covariance.
-        let m1: Vector6<f64> = (0..13).map(|k| weight(k, w0, wi) * ends[k]).sum();
+        let m1: Vector6<f64> = (0..KAPPA).map(|k| weight(k, w0, wi) * ends[k]).sum();
         let mut p1 = Matrix6::zeros();
-        for (k, e) in ends.iter().enumerate().take(13) {
+        for (k, e) in ends.iter().enumerate().take(KAPPA) {
             let d = e - m1;
             p1 += weight(k, w0, wi) * d * d.transpose();
         }
-        // Set 2 (consider points): cross-covariance between state and kappa.
-        let m2: Vector6<f64> = (0..3).map(|k| weight(k, v0, vi) * ends[13 + k]).sum();
+        // Set 2 (consider points, centred on point 0): cross-covariance between state and
+        // kappa. Summed in the order of the layout that flew the centre twice (same bits).
+        let consider = [0, KAPPA, KAPPA + 1];
+        let m2: Vector6<f64> = (0..3).map(|k| weight(k, v0, vi) * ends[consider[k]]).sum();
         let mut cross = Vector6::zeros();
         for k in 0..3 {
-            let kappa = points[13 + k][6];
-            cross += weight(k, v0, vi) * (ends[13 + k] - m2) * kappa;
+            let kappa = points[consider[k]][6];
+            cross += weight(k, v0, vi) * (ends[consider[k]] - m2) * kappa;
         }
         mean = m1;
         c = cross;
@@ -278,15 +290,11 @@ fn run<A: Atmosphere + ?Sized>(
         }
         let mut p = pc;
         if drag_on {
-            // Set 2, c points: the cross-covariance with the ballistic-coefficient error,
-            // carried whole. The points sit at +-alpha sqrt(l2) in c with weights
-            // 1 / (2 l2 alpha^2) (they reproduce D D^T for any alpha); the consider
-            // centre (point 13) is the reference, as the weighted mean cancels.
-            let wc = 0.5 / (l2 * DRAG_ALPHA * DRAG_ALPHA);
-            d = [16, 17]
-                .iter()
-                .map(|&k| wc * (ends[k] - ends[13]) * points[k][7])
-                .sum();
+            // Set 2, c point: the cross-covariance with the ballistic-coefficient error,
+            // carried whole: a one-sided difference from the centre (point 0) at
+            // c = alpha sqrt(l2).
+            let k = KAPPA + 2;
+            d = (ends[k] - ends[0]) / points[k][7];
             p = pc + d * d.transpose();
             p = (p + p.transpose()) * 0.5;
         }
@@ -329,10 +337,7 @@ fn propagate_points<A: Atmosphere + ?Sized>(
     if grouping == Grouping::Whole {
         progress.check()?;
         let plan = StepPlan::equal_steps(t0, &[t1], cfg.max_step)?;
-        return match points.len() {
-            POINTS_KAPPA => whole_batch::<A, POINTS_KAPPA>(path, atmosphere, cfg, points, &plan),
-            _ => whole_batch::<A, POINTS_DRAG>(path, atmosphere, cfg, points, &plan),
-        };
+        return whole_batch::<A, LANES>(path, atmosphere, cfg, points, &plan);
     }
     propagate_points_in::<A, 8>(path, atmosphere, cfg, points, t0, t1, progress)
 }
@@ -377,7 +382,6 @@ fn whole_batch<A: Atmosphere + ?Sized, const W: usize>(
     points: &[Point],
     plan: &StepPlan,
 ) -> Result<PointEnds, CoreError> {
-    debug_assert_eq!(points.len(), W);
     dispatch_on(
         path,
         SigmaBatch::<A, W> {
@@ -677,7 +681,7 @@ mod tests {
     #[test]
     fn many_objects_in_one_call_equal_each_alone_bit_for_bit() {
         use crate::density::Exponential;
-        // 16 and 18 sigma points in one batch each, different epochs, update grids and
+        // 15 and 16 sigma points in one batch each, different epochs, update grids and
         // drag sigmas: every object's output is that of `ccsp` alone (lanes never mix).
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
         let cfgs: Vec<CcspConfig> = (0..5)
