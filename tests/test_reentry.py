@@ -142,7 +142,7 @@ def test_several_element_sets_of_one_object_are_one_history(atmosphere):
         [obj, later, other], atmosphere, n=10, duration=86400.0, fit=False, history="each"
     )
     assert len(each.objects) == 3 and list(each.element_sets) == [2, 2, 1]
-    with pytest.raises(ValueError, match="history must be 'newest' or 'each'"):
+    with pytest.raises(ValueError, match="history must be 'newest', 'fit' or 'each'"):
         catalog.reentry([obj], atmosphere, history="all")
 
 
@@ -156,3 +156,108 @@ def test_the_object_whose_time_nodes_aborted_runs(test_data):
     objs = _load_text("\n".join(lines[k - 1 : k + 2]))
     r = catalog.reentry(objs, rp.density.Msis("2.1"), n=10, duration=6 * 86400.0, groups=2)
     assert r.decayed_fraction[0] == 1.0 and not np.isnat(r.epoch_q975[0])
+
+
+def test_the_density_error_is_held_over_each_members_run(atmosphere):
+    """Issue 25 item 3: the default kappa is the model's density error held over the whole
+    run (DEFAULT_KAPPA, Constant), not the paper's 18-minute Gauss-Markov that averages
+    away over a multi-day decay. A member with density mean + k sigma = (1 + 0.2 k) mean
+    (the benchmark atmosphere's 20 %) is exactly a member with Cd*A/m x (1 + 0.2 k), so
+    without Cd*A/m uncertainty (groups=1) the 2.5 % / 97.5 % decay epochs are the
+    deterministic decays (a 0 % sigma atmosphere) with Cd*A/m x (1 +- 1.96 x 0.2).
+    Tolerance 5 %: 4000 members put the sample's k quantiles within 0.04 (1 sigma) of
+    +-1.96, 1.4 % in decay time; measured 2.1 % and 0.0 %."""
+    import dataclasses
+
+    obj = _low(1, 200e3)
+    span = 20 * 86400.0
+    assert catalog.reentry_windows.DEFAULT_KAPPA == rp.kappa.Constant()
+    wide = catalog.reentry([obj], atmosphere, n=4000, duration=span, groups=1, seed=1)
+    still = rp.scenarios.benchmark_exponential(0.0)
+
+    def decay(factor: float) -> np.datetime64:
+        scaled = dataclasses.replace(obj, drag_parameter=obj.drag_parameter * factor)
+        return catalog.reentry([scaled], still, n=2, duration=span, groups=1).epoch_median[0]
+
+    def days(t: np.datetime64) -> float:
+        return float((t - obj.state.epoch) / np.timedelta64(1, "s")) / 86400.0
+
+    assert days(wide.epoch_q025[0]) == pytest.approx(days(decay(1 + 1.96 * 0.2)), rel=0.05)
+    assert days(wide.epoch_q975[0]) == pytest.approx(days(decay(1 - 1.96 * 0.2)), rel=0.05)
+    assert days(wide.epoch_median[0]) == pytest.approx(days(decay(1.0)), rel=0.05)
+    # The paper's 18-minute process averages the same 20 % away over the 4-day decay.
+    brief = catalog.reentry(
+        [obj], atmosphere, n=400, duration=span, groups=1, seed=1, kappa=rp.kappa.GaussMarkov()
+    )
+    assert days(brief.epoch_q975[0]) < 1.1 * days(decay(1.0))
+
+
+def test_history_fit_takes_the_earlier_element_sets(test_data):
+    """Issue 25 item 2: with history="fit" the fit of the newest element set also takes the
+    object's earlier ones (fit_objects' history). Two element sets one day apart of a low
+    object of CelesTrak's 2023-11-18 and 11-19 snapshots are reconciled (both used); a fit
+    needs fit=True."""
+    snaps = test_data / "catalogs"
+    older = catalog.load(snaps / "history" / "celestrak_active_20231118.txt.gz", errors="record")
+    older = older.objects
+    newer = catalog.load(snaps / "celestrak_active_20231119.txt.gz", errors="record").objects
+    by_id = {o.norad_id: o for o in older}
+    model = rp.density.Msis("2.1")
+
+    def gap(o: CatalogObject) -> float:
+        return float((o.state.epoch - by_id[o.norad_id].state.epoch) / np.timedelta64(1, "D"))
+
+    pair = next(
+        (by_id[o.norad_id], o)
+        for o in newer
+        if o.norad_id in by_id
+        and 0.5 < gap(o) < 2
+        and np.linalg.norm(o.state.position) < 6378137.0 + 330e3
+        and o.bstar > 1e-4
+    )
+    r = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2, history="fit")
+    assert len(r.objects) == 1 and r.element_sets[0] == 2 and r.fitted[0]
+    assert len(r.objects[0].fit.element_sets) == 2
+    alone = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2)
+    assert len(alone.objects[0].fit.element_sets) == 1
+    with pytest.raises(ValueError, match="needs fit=True"):
+        catalog.reentry(list(pair), model, fit=False, history="fit")
+
+
+def _earliest_within_a_week(
+    test_data: Path,
+) -> tuple[list[CatalogObject], dict[int, np.datetime64]]:
+    """Per real reentry of the reference set, its earliest element set 1-7 days before the
+    SATCAT decay day (benches/reentry.py's choice), and the decay days."""
+    import csv
+
+    folder = test_data / "reentry"
+    with open(folder / "satcat_decay_2022_2023.csv") as f:
+        rows = list(csv.DictReader(f))
+    days = {int(r["NORAD_CAT_ID"]): np.datetime64(r["DECAY_DATE"], "ns") for r in rows}
+    best: dict[int, CatalogObject] = {}
+    for obj in catalog.load(folder / "reentry_tles_2022_2023.txt", history="each").objects:
+        lead = (days[obj.norad_id] - obj.state.epoch) / np.timedelta64(1, "D")
+        if 1 <= lead <= 7 and (
+            obj.norad_id not in best or obj.state.epoch < best[obj.norad_id].state.epoch
+        ):
+            best[obj.norad_id] = obj
+    return [best[k] for k in sorted(best)], days
+
+
+def test_default_windows_hold_real_decays(test_data):
+    """Issue 25's goal on the real reentries (SATCAT decay days, an independent record):
+    the default 95 % windows hold the decay day for >= 70 % of the 49 objects, no wider
+    than 80 % of the remaining life (median). benches/reentry.py with 200 members: 76 %,
+    median width 61 % (2026-12-03); with the 18-minute Gauss-Markov of before: 55 %, 37 %.
+    Here 60 members (6 per Cd*A/m value) for time."""
+    objs, days = _earliest_within_a_week(test_data)
+    assert len(objs) == 49
+    r = catalog.reentry(objs, rp.density.Msis("2.1"), n=60, duration=12 * 86400.0)
+    day = np.array([days[o.norad_id] for o in r.objects])
+    top = np.where(np.isnat(r.epoch_q975), np.datetime64("2100-01-01", "ns"), r.epoch_q975)
+    held = (r.epoch_q025 < day + np.timedelta64(1, "D")) & (top >= day)
+    remaining = day + np.timedelta64(12, "h") - np.array([o.state.epoch for o in r.objects])
+    width = (r.epoch_q975 - r.epoch_q025) / remaining
+    assert held.mean() >= 0.70, f"{held.mean():.0%} of windows hold the decay day"
+    assert np.nanmedian(width.astype(float)) <= 0.80, f"median width {np.nanmedian(width):.0%}"

@@ -370,9 +370,10 @@ def build_parser() -> argparse.ArgumentParser:
         "reentry",
         help="reentry windows of a TLE/OMM catalog",
         description="Monte Carlo over density and ballistic-coefficient uncertainty for "
-        "every element set of FILE: the 2.5 %, median and 97.5 % decay epochs within "
-        "--horizon days and the fraction of members decayed; printed and written to "
-        "OUT/reentry.csv.",
+        "every element set of FILE (each member's density off the model's by one draw of "
+        "the model's sigma for its whole run): the 2.5 %, median and 97.5 % decay epochs "
+        "within --horizon days and the fraction of members decayed; printed and written "
+        "to OUT/reentry.csv.",
     )
     reentry.add_argument("file", help="TLE or OMM file")
     reentry.add_argument("--horizon", type=float, default=30.0, help="days after each epoch")
@@ -387,10 +388,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     reentry.add_argument(
         "--history",
-        choices=("newest", "each"),
+        choices=("newest", "fit", "each"),
         default="newest",
-        help="several element sets of one object: predict from the newest (default) or "
-        "from each on its own",
+        help="several element sets of one object: predict from the newest (default), from "
+        "the newest with the fit taking the earlier ones too (fit), or from each on its own",
     )
     reentry.add_argument(
         "--drag-sigma",

@@ -1,6 +1,7 @@
 """Reentry windows: when each object of a catalog comes down, from a Monte Carlo over
-density uncertainty (the model's sigma, correlated in time by ``kappa``) and the
-uncertainty of the ballistic coefficient Cd*A/m.
+density uncertainty (the model's sigma, correlated in time by ``kappa``: by default one
+draw per member held over the whole run, :data:`DEFAULT_KAPPA`) and the uncertainty of
+the ballistic coefficient Cd*A/m.
 
 Ballistic coefficient per member, exactly and without the core's help: the ``n`` members
 are run as ``groups`` Monte Carlos, each with its own Cd*A/m. The group values are the
@@ -32,7 +33,7 @@ from ..density.model import ModelLike
 from ..parallel import map_in_threads, worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, resolve
-from ..propagation.kappa import GaussMarkov, KappaProcess
+from ..propagation.kappa import Constant, KappaProcess
 from ..time import DurationLike, add_seconds
 from .elements import CatalogObject, fit_objects
 
@@ -40,6 +41,18 @@ from .elements import CatalogObject, fit_objects
 #: spread of fitted ballistic coefficients over successive element sets of one object is
 #: of this order; drag-coefficient models for the same body differ by 10-20 %).
 DEFAULT_DRAG_RELATIVE_SIGMA = 0.15
+
+#: Default density perturbation of a reentry run: one N(0,1) draw per member held over
+#: the whole run (``Constant``), so each member's density is the model's mean + kappa x
+#: the model's sigma (for NRLMSIS the 15 % model-error floor plus the drivers') for all
+#: of its remaining life. The model's error is a bias over days (the observed/model
+#: density ratios behind the 15 % are daily and orbit means, Emmert et al. 2021); the
+#: 18-minute ``GaussMarkov()`` of the paper, used here until 2026-12-03, averages it away
+#: over a multi-day decay (about 2 % left after 3 days) and left the Cd*A/m floor as the
+#: only spread of the window. Measured on the 49 real decays of benches/reentry.py:
+#: 55 % -> 76 % of 95 % windows hold the decay day, median width 36 % -> 61 % of the
+#: remaining life (docs/catalog-realism.md, "Reentry windows").
+DEFAULT_KAPPA: KappaProcess = Constant()
 
 
 @dataclass(frozen=True)
@@ -162,7 +175,9 @@ def reentry(
         groups: Cd*A/m values per object (stratified; 1 turns Cd*A/m uncertainty off).
         drag_sigma: relative (log) 1-sigma of Cd*A/m for every object; default: the
             fit's (at least :data:`DEFAULT_DRAG_RELATIVE_SIGMA`) or that default.
-        kappa: density perturbation process (default ``GaussMarkov()``).
+        kappa: density perturbation process (default :data:`DEFAULT_KAPPA`, the model's
+            density error held over the whole run; ``GaussMarkov()`` was the default
+            until 2026-12-03).
         seed: object i group g uses seed ``seed + 1000 * i + g``.
         floor_altitude: the decay altitude, m (default 120 km).
         threads: objects run at once (default: CPU count).
@@ -177,9 +192,12 @@ def reentry(
             fitting is what makes the windows hold (benches/reentry.py).
         history: what to do with several element sets of one NORAD id (a history, as
             catalogs publish them): ``"newest"`` (default) predicts the object once, from
-            its newest element set, and ``element_sets`` counts them; ``"each"`` predicts
-            every element set on its own (one row each, ``element_sets`` still > 1).
-            They are never silently separate objects.
+            its newest element set, and ``element_sets`` counts them; ``"fit"`` predicts
+            it once from the newest element set with the fit taking the older ones
+            (within :data:`~rhoprop.catalog.elements.HISTORY_DAYS`) too
+            (:func:`~rhoprop.catalog.fit_objects` ``history=``; needs ``fit``); ``"each"``
+            predicts every element set on its own (one row each, ``element_sets`` still
+            > 1). They are never silently separate objects.
 
     Returns:
         :class:`ReentryResult`.
@@ -203,7 +221,7 @@ def reentry(
         duration = horizon
     span = _seconds(duration)
     objs, notes, counts = _histories_and_fits(objs, model, fit, history, threads)
-    process = kappa or GaussMarkov()
+    process = kappa or DEFAULT_KAPPA
     probabilities = (np.arange(groups) + 0.5) / groups
 
     stop = threading.Event()
@@ -266,19 +284,27 @@ def _histories_and_fits(
     ``fit``; a note per object where its fit failed; the element sets per NORAD id."""
     if not isinstance(fit, bool):
         raise TypeError(f"fit must be True or False, got {type(fit).__name__}")
-    if history not in ("newest", "each"):
-        raise ValueError(f"history must be 'newest' or 'each', got {history!r}")
+    if history not in ("newest", "fit", "each"):
+        raise ValueError(f"history must be 'newest', 'fit' or 'each', got {history!r}")
+    if history == "fit" and not fit:
+        raise ValueError("history='fit' fits the element sets together: it needs fit=True")
     counts = Counter(o.norad_id for o in objs)
-    if history == "newest" and len(counts) < len(objs):
+    older: dict[int, list[CatalogObject]] = {}
+    if history in ("newest", "fit") and len(counts) < len(objs):
         newest: dict[int, CatalogObject] = {}
         for o in objs:
             if o.norad_id not in newest or o.state.epoch > newest[o.norad_id].state.epoch:
                 newest[o.norad_id] = o
+        if history == "fit":
+            for o in objs:
+                keep = newest[o.norad_id]
+                if o is not keep and o.state.epoch < keep.state.epoch:
+                    older.setdefault(o.norad_id, []).append(o)
         objs = [o for o in objs if newest[o.norad_id] is o]
     notes = ["" for _ in objs]
     if fit:
         todo = [k for k, o in enumerate(objs) if o.fit is None]
-        fits = fit_objects([objs[k] for k in todo], model, threads=threads)
+        fits = fit_objects([objs[k] for k in todo], model, threads=threads, history=older)
         for k, res in zip(todo, fits, strict=True):
             if isinstance(res, CatalogObject):
                 objs[k] = res
