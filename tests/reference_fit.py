@@ -13,7 +13,7 @@ import numpy as np
 from rhoprop.catalog import fit as fit_module
 from rhoprop.constants import DEFAULT_FLOOR_ALTITUDE
 from rhoprop.propagation import OrbitState
-from rhoprop.propagation.propagate import DEFAULT_STEP, core_propagate, run_in_field
+from rhoprop.propagation.propagate import core_propagate, run_in_field
 
 
 def grid_states(
@@ -35,7 +35,7 @@ def grid_states(
                 drag,
                 times,
                 integrator="rk8",
-                step=DEFAULT_STEP["rk8"],
+                step=fit_module.FIT_STEP,
                 floor_altitude=DEFAULT_FLOOR_ALTITUDE,
                 zonal_degree=zonal,
             )

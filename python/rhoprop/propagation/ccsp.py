@@ -78,8 +78,8 @@ def ccsp(
     with the state is carried whole from update to update (kappa's shrinks by 1 / l2):
     the factor is S = [[Chol(A), C / sqrt(l2), a sqrt(l2) D], [0, diag(sqrt(l2),
     a sqrt(l2))]] with A = l1 (P - D D^T) - C C^T / l2 and a = 0.001 (one c point, a
-    one-sided difference in the tangent-linear limit), and P = P_set1 + C C^T + D D^T after each update
-    (derivation: docs/conventions.md). This is the covariance linearised in c: a Monte
+    one-sided difference in the tangent-linear limit), and P = P_set1 + C C^T + D D^T after
+    each update (derivation: docs/conventions.md). This is the covariance linearised in c: a Monte
     Carlo over the same log-normal Cd*A/m samples spreads about 1 + 3 drag_sigma^2 / 4
     times as much (0.75 % more at 10 %), whatever the update interval.
 
