@@ -42,8 +42,19 @@ k-sigma probability: 68.3 / 95.4 / 99.7 %). Goals (issue 24, every week): median
 SGP4's (with a history <= 0.7 x SGP4's); along-track inside 2 sigma 85-98 %, inside
 3 sigma >= 95 %; RTN Mahalanobis inside 2 sigma >= 85 %.
 
+Diagnosis (issue 24's 08-07 week): ``--per-object`` also writes
+``catalog_realism_objects.json``: per week, configuration and object the signed RTN errors
+of rhoprop's mean and of SGP4 at the truth epoch (along-track > 0: ahead of the truth, as
+too much drag puts it), perigee, span, the Cd*A/m run and the fit's over its prior, the
+element sets' decay (SGP4's mean motion, its along-track drag displacement) and NRLMSIS
+2.1's mean density along the orbit in the fit window and over the prediction.
+``--fit-span START,END`` (days) sets the fit and history configurations' span;
+``--space-weather FILE`` drives NRLMSIS 2.1 with another CelesTrak record. None of them
+changes the default run or its output.
+
 Run:  python benches/catalog_realism.py [--objects 150] [--weeks 2023-08-13,...]
-          [--configs default,fit,history]
+          [--configs default,fit,history] [--per-object] [--fit-span -1,0]
+          [--space-weather FILE]
 """
 
 from __future__ import annotations
@@ -149,17 +160,27 @@ def run_config(
     model: Any,
     truth: dict[int, dict[str, Any]],
     threads: int,
+    span: tuple[float, float] | None = None,
 ) -> tuple[dict[int, dict[str, Any]], float, float, list[Any]]:
     """Predicted mean and covariance at each object's truth epoch with the library's
-    defaults; the load (and fit) time, the propagation time (s) and the loaded objects."""
+    defaults (``span``: the fit's, s from the epoch; None the library's); the load (and
+    fit) time, the propagation time (s) and the loaded objects."""
     t0 = time.perf_counter()
     if config == "default":
         cat = catalog.load(paths[-1], errors="record")
     elif config == "fit":
-        cat = catalog.load(paths[-1], fit=True, model=model, errors="record", threads=threads)
+        cat = catalog.load(
+            paths[-1], fit=True, model=model, errors="record", threads=threads, span=span
+        )
     else:
         cat = catalog.load(
-            paths, fit=True, model=model, errors="record", threads=threads, history="fit"
+            paths,
+            fit=True,
+            model=model,
+            errors="record",
+            threads=threads,
+            history="fit",
+            span=span,
         )
     t_load = time.perf_counter() - t0
     objects = [o for o in cat.objects if o.norad_id in truth]
@@ -173,10 +194,20 @@ def run_config(
             progress=False,
             errors="record",
         )
+        ran = res.objects[0]
+        fitted = ran.fit if ran.fit is not None else obj.fit
         return obj.norad_id, {
             "mean": res.mean[0, -1],
             "cov": res.covariance[0, -1],
             "status": str(res.status[0]),
+            "drag_parameter": float(ran.drag_parameter),
+            "fit": None
+            if fitted is None
+            else {
+                "drag_parameter": float(fitted.drag_parameter),
+                "prior": float(fitted.prior),
+                "drag_sigma": float(fitted.drag_sigma),
+            },
         }
 
     t0 = time.perf_counter()
@@ -309,12 +340,17 @@ def run_week(
             "state": sgp4_state(s2, s2.jdsatepoch, s2.jdsatepochF),
             "sgp4": sgp4_state(s1, s2.jdsatepoch, s2.jdsatepochF),
         }
+        if args.per_object:
+            truth[norad].update(decay(first[norad], s1, s2))
     print(
         f"\n=== week {start} -> {stop}: {len(ids)} objects; history: "
         f"{', '.join(p.name for p in paths[:-1]) or 'none'}"
     )
     figs: dict[str, Any] = {}
     raw: dict[str, dict[int, dict[str, Any]]] = {}
+    if args.per_object:
+        sats = {n: Satrec.twoline2rv(*first[n][1:]) for n in ids}
+        density_ratios(truth, sats, model.space_weather)
     with tempfile.TemporaryDirectory() as tmp:
         # Only the selected objects, from every snapshot up to the start.
         chosen = []
@@ -326,7 +362,12 @@ def run_week(
             )
             chosen.append(out)
         for config in args.configs.split(","):
-            pred, t_load, t_run, objects = run_config(config, chosen, model, truth, args.threads)
+            span = None
+            if args.fit_span:
+                span = tuple(86400.0 * float(x) for x in args.fit_span.split(","))
+            pred, t_load, t_run, objects = run_config(
+                config, chosen, model, truth, args.threads, span
+            )
             figs[config] = figures(pred, truth, args.truth_covariance == "tle")
             figs[config]["seconds"] = {"load": t_load, "propagation": t_run}
             if config == "fit":
@@ -340,8 +381,166 @@ def run_week(
                 used = [len(o.fit.element_sets) if o.fit is not None else 1 for o in objects]
                 figs[config]["element_sets_used_mean"] = float(np.mean(used)) if used else 0.0
             raw[config] = pred
+            if args.per_object:
+                figs[config]["per_object"] = per_object(pred, truth)
             show(f"{start} {config}", figs[config], t_load, t_run)
     return figs, raw, truth
+
+
+def _without_drag(sat: Any) -> Any:
+    """The element set ``sat`` with B* = 0 (SGP4's drag-free orbit)."""
+    free = Satrec()
+    free.sgp4init(
+        0,  # WGS72, as twoline2rv
+        "i",
+        sat.satnum,
+        sat.jdsatepoch + sat.jdsatepochF - 2433281.5,
+        0.0,
+        sat.ndot,
+        sat.nddot,
+        sat.ecco,
+        sat.argpo,
+        sat.inclo,
+        sat.mo,
+        sat.no_kozai,
+        sat.nodeo,
+    )
+    return free
+
+
+def decay(entry: tuple[str, str, str], s1: Any, s2: Any) -> dict[str, Any]:
+    """What the element sets say about one object's drag between the start epoch and the
+    truth epoch (``--per-object``): perigee/apogee of the start set, the span, B*, the
+    secular mean motion (SGP4's ``nm``, rad/min) of each set at its own epoch and of the
+    start set at the truth epoch, and SGP4's along-track drag displacement there (the
+    start set with its B* minus the same set with B* = 0, m, in the truth's RTN frame).
+    ``1 - SGP4's along-track error / displacement`` is then the drag the truth saw over
+    the drag SGP4 assumed, ``1 + (rhoprop's - SGP4's error) / displacement`` rhoprop's
+    (:func:`signed_summary`)."""
+    lo, hi = altitudes_km(s1)
+    jd, jdf = s2.jdsatepoch, s2.jdsatepochF
+    state = sgp4_state(s2, jd, jdf)
+    basis = rtn_basis(state[:3], state[3:])
+    with_drag = sgp4_state(s1, jd, jdf)
+    # SGP4's secular mean motion (``nm``, rad/min) is the one of the last call
+    mean_motion_sgp4 = float(s1.nm)
+    sgp4_state(s1, s1.jdsatepoch, s1.jdsatepochF)
+    mean_motion_start = float(s1.nm)
+    mean_motion_truth = float(s2.nm)  # after sgp4_state(s2) at its epoch above
+    free = sgp4_state(_without_drag(s1), jd, jdf)
+    return {
+        "name": entry[0],
+        "perigee_km": lo,
+        "apogee_km": hi,
+        "span_days": (s2.jdsatepoch - s1.jdsatepoch) + (s2.jdsatepochF - s1.jdsatepochF),
+        "start_epoch": str(rp.time.from_jd(s1.jdsatepoch, s1.jdsatepochF)),
+        "bstar": float(s1.bstar),
+        "mean_motion_start": mean_motion_start,
+        "mean_motion_truth": mean_motion_truth,
+        "mean_motion_sgp4_at_truth": mean_motion_sgp4,
+        "sgp4_drag_displacement_m": (basis @ (with_drag[:3] - free[:3])).tolist(),
+    }
+
+
+#: Windows of the NRLMSIS mean density along each orbit (``--per-object``), days from the
+#: start epoch: the fit's span (``fit.DEFAULT_SPAN``) and the three days before the epoch
+#: (where the element set's B* was fitted by its owner); the prediction runs from the
+#: start epoch to the truth epoch.
+DENSITY_WINDOWS = {"fit": (-1.0, 1.0), "before": (-3.0, 0.0)}
+
+
+def density_ratios(
+    truth: dict[int, dict[str, Any]], sats: dict[int, Any], space_weather: Any
+) -> None:
+    """Adds to each truth entry NRLMSIS 2.1's mean density (``space_weather``, no driver
+    variance) along the start element set's SGP4 orbit, every 10 min, over the
+    prediction (start epoch -> truth epoch) and over :data:`DENSITY_WINDOWS`, kg/m^3."""
+    from rhoprop.density.msis import RelativeSigma
+    from rhoprop.frames import geodetic, inertial_to_fixed
+
+    msis = Msis("2.1", space_weather=space_weather, uncertainty=RelativeSigma(0.0))
+    for norad, t in truth.items():
+        sat = sats[norad]
+        windows = dict(DENSITY_WINDOWS, prediction=(0.0, t["span_days"]))
+        densities = {}
+        for key, (a, b) in windows.items():
+            days = np.arange(a, b, 600.0 / 86400.0)
+            jd = sat.jdsatepoch + np.zeros_like(days)
+            err, r, _ = sat.sgp4_array(jd, sat.jdsatepochF + days)
+            ok = err == 0
+            times = rp.time.offsets_to_epochs(
+                rp.time.from_jd(sat.jdsatepoch, sat.jdsatepochF), days[ok] * 86400.0
+            )
+            lla = geodetic(inertial_to_fixed(times, r[ok] * 1e3))
+            mean = msis.mean_std(times, lla[:, 0], lla[:, 1], lla[:, 2])[0]
+            densities[key] = float(np.mean(mean))
+        t["msis21_mean_density"] = densities
+
+
+def per_object(pred: dict[int, dict[str, Any]], truth: dict[int, dict[str, Any]]) -> list[dict]:
+    """One row per object (``--per-object``): the signed RTN errors (m) of rhoprop's mean
+    and of SGP4 at the truth epoch (positive along-track: ahead of the truth, as too much
+    drag puts it), the Cd*A/m run (m^2/kg) and the fit's (over its prior), with
+    :func:`decay`'s and :func:`density_ratios`' figures."""
+    rows = []
+    for norad, p in pred.items():
+        t = truth[norad]
+        basis = rtn_basis(t["state"][:3], t["state"][3:])
+        row = {
+            "norad": norad,
+            "status": p["status"],
+            "rhoprop_rtn_error_m": (basis @ (p["mean"][:3] - t["state"][:3])).tolist(),
+            "sgp4_rtn_error_m": (basis @ (t["sgp4"][:3] - t["state"][:3])).tolist(),
+            "drag_parameter": p["drag_parameter"],
+            "fit": p["fit"],
+        }
+        row.update({k: v for k, v in t.items() if k not in ("epoch", "state", "sgp4")})
+        row["truth_epoch"] = str(t["epoch"])
+        rows.append(row)
+    return rows
+
+
+#: Perigee bands (km) of :func:`signed_summary`.
+BANDS = ((200, 700), (200, 400), (400, 500), (500, 600), (600, 700))
+
+
+def signed_summary(rows: dict[str, dict[str, list[dict]]]) -> None:
+    """Prints, per week, configuration and perigee band, from the ``--per-object`` rows:
+    the median signed along-track error (km) of rhoprop and SGP4 and the share ahead of
+    the truth (too much drag), and the drag over the prediction relative to SGP4's as the
+    truth implies it (``obs``), as rhoprop's error implies it (``rhoprop``; medians of
+    :func:`decay`'s ratios, objects with a drag displacement over 1 km) and as NRLMSIS
+    2.1's mean density along the orbit changes from the fit window (-1..+1 d) to the
+    prediction (``msis``)."""
+    print(
+        "\n| week | config | perigee km | objects | signed along-track median km "
+        "rhoprop (% ahead) | SGP4 (% ahead) | drag / SGP4's: obs | rhoprop | msis |"
+    )
+    print("| --- | --- | --- | ---: | --- | --- | ---: | ---: | ---: |")
+    for week, by_config in rows.items():
+        for config, objs in by_config.items():
+            for lo, hi in BANDS:
+                sel = [
+                    r
+                    for r in objs
+                    if lo <= r["perigee_km"] < hi and np.isfinite(r["rhoprop_rtn_error_m"][1])
+                ]
+                if not sel:
+                    continue
+                rho = np.array([r["rhoprop_rtn_error_m"][1] for r in sel]) / 1e3
+                sgp = np.array([r["sgp4_rtn_error_m"][1] for r in sel]) / 1e3
+                disp = np.array([r["sgp4_drag_displacement_m"][1] for r in sel]) / 1e3
+                seen = disp > 1.0
+                dens = [r["msis21_mean_density"] for r in sel]
+                msis = np.median([d["prediction"] / d["fit"] for d in dens])
+                k_obs = np.median(1 - sgp[seen] / disp[seen]) if seen.any() else np.nan
+                k_rho = np.median(1 + (rho - sgp)[seen] / disp[seen]) if seen.any() else np.nan
+                band = "all" if (lo, hi) == BANDS[0] else f"{lo}-{hi}"
+                print(
+                    f"| {week} | {config} | {band} | {len(sel)} | {np.median(rho):+.2f} "
+                    f"({100 * np.mean(rho > 0):.0f}) | {np.median(sgp):+.2f} "
+                    f"({100 * np.mean(sgp > 0):.0f}) | {k_obs:.3f} | {k_rho:.3f} | {msis:.3f} |"
+                )
 
 
 def prior_scatter(objects: list[Any]) -> dict[str, Any]:
@@ -397,6 +596,27 @@ def main() -> None:
         "set's state) to the predicted covariance before comparing (default), or not",
     )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    parser.add_argument(
+        "--fit-span",
+        default=None,
+        help="START,END days from the epoch: the span of the fit and history "
+        "configurations' pseudo-observations (default: the library's, -1,1); the default "
+        "configuration fits inside propagate_catalog with the library's span",
+    )
+    parser.add_argument(
+        "--space-weather",
+        default=None,
+        help="a CelesTrak space-weather file for NRLMSIS 2.1 instead of the bundled record "
+        "(to try other drivers)",
+    )
+    parser.add_argument(
+        "--per-object",
+        action="store_true",
+        help="also write catalog_realism_objects.json in --out: per week, configuration "
+        "and object the signed RTN errors of rhoprop and SGP4, perigee, span, Cd*A/m "
+        "fitted and its prior, the element sets' decay and NRLMSIS 2.1's mean density "
+        "along the orbit in the fit window and the prediction (issue 24's diagnosis)",
+    )
     args = parser.parse_args()
     for c in args.configs.split(","):
         if c not in CONFIGS:
@@ -407,7 +627,7 @@ def main() -> None:
     weeks = [w for w in WEEKS if w[0] in args.weeks.split(",")]
     if not weeks:
         parser.error(f"no development week starts on {args.weeks}")
-    model = Msis("2.1")
+    model = Msis("2.1", space_weather=args.space_weather)
     results: dict[str, Any] = {}
     pooled: dict[str, tuple[dict, dict]] = {c: ({}, {}) for c in args.configs.split(",")}
     for start, stop in weeks:
@@ -432,6 +652,15 @@ def main() -> None:
     summary(results, [w[0] for w in weeks], args.configs.split(","))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.per_object:
+        rows = {
+            w: {c: results[w][c].pop("per_object") for c in args.configs.split(",")}
+            for w, _ in weeks
+        }
+        signed_summary(rows)
+        (out / "catalog_realism_objects.json").write_text(
+            json.dumps({"machine": info(), "weeks": rows}, indent=1)
+        )
     (out / "catalog_realism_weeks.json").write_text(
         json.dumps(
             {
