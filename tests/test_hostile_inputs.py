@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import rhoprop as rp
@@ -186,6 +186,9 @@ numbers = st.one_of(
 
 @PROPERTY
 @given(st.lists(numbers, min_size=0, max_size=4), st.lists(numbers, min_size=3, max_size=3))
+# Found by this test on 2026-12-03: |r| overflowed in np.linalg.norm (a RuntimeWarning).
+@example([0.0, 0.0, 1.3407807929942597e154], [0.0, 0.0, 0.0])
+@example([7e6, 0.0, 0.0], [0.0, 1e200, 0.0])
 def test_orbit_state_takes_a_state_or_names_the_argument(position, velocity):
     try:
         state = rp.OrbitState(PAPER.epoch, position, velocity)

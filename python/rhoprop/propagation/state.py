@@ -110,8 +110,15 @@ def _check_orbit(r: np.ndarray, v: np.ndarray) -> None:
     """ValueError unless ``r`` (m) and ``v`` (m/s) look like an Earth orbit in SI units.
     Inside the WGS-84 ellipsoid is exact without an epoch: it is symmetric about z, the
     axis that the inertial and Earth-fixed frames share."""
-    rn = float(np.linalg.norm(r))
+    # hypot: no overflow for huge components (np.linalg.norm of 1e154 overflowed).
+    rn = math.hypot(*(float(c) for c in r))
     top = MAX_RADII * R_EARTH
+    if rn > top:
+        raise ValueError(
+            f"position is {rn / R_EARTH:.3g} Earth radii from the centre (|r| = {rn:.4g} m); "
+            f"rhoprop takes Earth orbits within {MAX_RADII:g} Earth radii ({top:.4g} m), "
+            "positions in metres"
+        )
     inside = (r[0] ** 2 + r[1] ** 2) / R_EARTH**2 + r[2] ** 2 / R_POLE**2 < 1.0
     if inside:
         if R_POLE <= 1e3 * rn <= top:
@@ -124,13 +131,7 @@ def _check_orbit(r: np.ndarray, v: np.ndarray) -> None:
             f"ellipsoid ({R_POLE:.0f} to {R_EARTH:.0f} m from the centre); positions are "
             "inertial, in metres"
         )
-    if rn > top:
-        raise ValueError(
-            f"position is {rn / R_EARTH:.3g} Earth radii from the centre (|r| = {rn:.4g} m); "
-            f"rhoprop takes Earth orbits within {MAX_RADII:g} Earth radii ({top:.4g} m), "
-            "positions in metres"
-        )
-    speed = float(np.linalg.norm(v))
+    speed = math.hypot(*(float(c) for c in v))
     circular = math.sqrt(MU / rn)
     low, high = SPEED_RANGE
     if not low * circular <= speed <= high * circular:
