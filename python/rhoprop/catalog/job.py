@@ -314,8 +314,9 @@ def run_reentry_file(
     decay epochs in UTC, empty beyond the horizon, decayed fraction, Cd*A/m and its
     relative sigma, whether it was fitted and the fit's RMS residual) with
     ``out/manifest.json``. ``fit`` (default True): states and Cd*A/m fitted to the element
-    sets first; ``history``: "newest" or "each" element set of an object given several
-    times (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
+    sets first; ``history``: for an object given several times, "newest" predicts from its
+    newest element set, "fit" from it fitted together with the earlier ones, "each" from
+    every one (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
     import csv
     import io
 
@@ -359,10 +360,14 @@ def run_reentry_file(
         if row["fit_note"]:
             print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
         if row["element_sets"] > 1:
-            which = "the newest predicted" if history == "newest" else "each predicted"
+            which = {"newest": "the newest predicted", "fit": "fitted together"}.get(
+                history, "each predicted"
+            )
             print(f"       {row['element_sets']} element sets of this object: {which}")
+    sets = f" ({len(cat)} element sets)" if len(cat) != len(rows) else ""
     print(
-        f"{len(cat)} objects, {result.members} members each, horizon {horizon_days:g} days: "
+        f"{len(rows)} objects{sets}, {result.members} members each, "
+        f"horizon {horizon_days:g} days: "
         f"{wall:.1f} s; wrote {path} and {manifest}"
     )
     print(atlas_line())
