@@ -461,6 +461,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
         }
         let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, drag);
         dynamics.zonal_degree = problem.zonal_degree;
+        dynamics.third_body = crate::dynamics::deep_space(&problem.y0);
         dynamics.perturbation = cfg.perturbation;
         dynamics.kappa = kappa;
         let mut watch = FloorWatch {

@@ -6,6 +6,7 @@
 
 use crate::constants::{J2, J3, J4, J5, J6, MU, OMEGA_EARTH, R_EARTH};
 use crate::density::{Atmosphere, LaneMemory};
+use crate::ephemeris::ThirdBodies;
 use crate::error::CoreError;
 use crate::frames::{EarthRotation, RotationCache};
 use crate::kappa::KappaLanes;
@@ -53,6 +54,41 @@ impl Perturbation {
     }
 }
 
+/// Orbital period (s) from which an orbit is "deep space" and feels the Sun and the Moon
+/// ([`Dynamics::third_body`]): 225 minutes, SGP4's own switch to SDP4 (Hoots & Roehrich,
+/// Spacetrack Report No. 3).
+pub const DEEP_SPACE_PERIOD: f64 = 225.0 * 60.0;
+
+/// Whether the two-body orbit of `y0` (inertial position m, velocity m/s) has a period of
+/// at least [`DEEP_SPACE_PERIOD`] (an unbound orbit counts as deep space).
+pub fn deep_space(y0: &[f64; 6]) -> bool {
+    let r = (y0[0] * y0[0] + y0[1] * y0[1] + y0[2] * y0[2]).sqrt();
+    let v2 = y0[3] * y0[3] + y0[4] * y0[4] + y0[5] * y0[5];
+    let inv_a = 2.0 / r - v2 / MU;
+    inv_a <= 0.0 || 2.0 * std::f64::consts::PI * (inv_a.powi(-3) / MU).sqrt() >= DEEP_SPACE_PERIOD
+}
+
+/// Unnormalised degree-2 order-2 coefficients of EGM2008 (tide-free).
+pub const C22: f64 = 2.439_383_573_283_13e-6;
+pub const S22: f64 = -1.400_273_703_859_34e-6;
+
+/// Acceleration (m/s^2, Earth-fixed) of the degree-2 order-2 potential
+/// U = 3 mu Re^2 r^-5 (C22 (x^2 - y^2) + 2 S22 x y) at Earth-fixed `p` (m).
+#[inline(always)]
+pub fn sectoral(p: [f64; 3]) -> [f64; 3] {
+    let [x, y, z] = p;
+    let r2 = x * x + y * y + z * z;
+    let inv_r2 = 1.0 / r2;
+    let k = 3.0 * MU * R_EARTH * R_EARTH * inv_r2 * inv_r2 / r2.sqrt(); // 3 mu Re^2 / r^5
+    let q = C22 * (x * x - y * y) + 2.0 * S22 * x * y;
+    let f = -5.0 * q * inv_r2;
+    [
+        k * (2.0 * (C22 * x + S22 * y) + f * x),
+        k * (2.0 * (S22 * x - C22 * y) + f * y),
+        k * f * z,
+    ]
+}
+
 /// Highest zonal degree the dynamics can include (J2..J6).
 pub const MAX_ZONAL_DEGREE: u8 = 6;
 /// Unnormalised zonal coefficients by degree (0 and 1 unused).
@@ -78,6 +114,9 @@ pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     /// Highest zonal harmonic in the gravity field: 2 (J2 only, the paper's model and the
     /// default) up to [`MAX_ZONAL_DEGREE`]; validated in [`crate::problem::Problem`].
     pub zonal_degree: u8,
+    /// Whether the Sun's and the Moon's pull is included ([`crate::ephemeris`]): on for
+    /// deep-space orbits ([`deep_space`]), as SGP4 switches to SDP4.
+    pub third_body: bool,
     pub perturbation: Perturbation,
     /// Number of batch RHS evaluations.
     pub evaluations: u64,
@@ -98,6 +137,7 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             atmosphere,
             epoch,
             zonal_degree: 2,
+            third_body: false,
             drag,
             kappa: KappaLanes::zero(),
             perturbation: Perturbation::Additive,
@@ -286,6 +326,22 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             dy[4][l] += f * vr[1];
             dy[5][l] += f * vr[2];
         }
+        // Deep-space orbits: the Sun's and the Moon's pull (both bodies once per
+        // evaluation) and the Earth's ellipticity of the equator (C22, S22), whose
+        // longitude-dependent pull drifts a geostationary orbit along-track by tens of km
+        // a week (SDP4's resonance terms).
+        if self.third_body {
+            let bodies = ThirdBodies::at(ut1);
+            let rot = self.rotation.at(ut1);
+            for l in 0..W {
+                let r = [y[0][l], y[1][l], y[2][l]];
+                let a = bodies.acceleration(r);
+                let s = rot.to_inertial(sectoral(rot.to_fixed(r)));
+                for c in 0..3 {
+                    dy[3 + c][l] += a[c] + s[c];
+                }
+            }
+        }
         // Higher zonals only on request, decided once per call after the rest, so that the
         // J2-only path is unchanged.
         if self.zonal_degree > 2 {
@@ -307,6 +363,37 @@ mod tests {
 
     fn one(state: [f64; 6]) -> State<1> {
         state.map(|c| [c])
+    }
+
+    #[test]
+    fn sectoral_term_is_the_gradient_of_its_spherical_potential() {
+        // U22 = mu Re^2 / r^3 * 3 cos^2(lat) (C22 cos 2 lon + S22 sin 2 lon), the textbook
+        // spherical form (Montenbruck & Gill eq. 3.30 with P22 = 3 cos^2), against the
+        // Cartesian gradient by central differences; at GEO radius and in LEO.
+        let u = |q: [f64; 3]| {
+            let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+            let lat = (q[2] / r).asin();
+            let lon = q[1].atan2(q[0]);
+            MU * R_EARTH * R_EARTH / (r * r * r)
+                * 3.0
+                * lat.cos().powi(2)
+                * (C22 * (2.0 * lon).cos() + S22 * (2.0 * lon).sin())
+        };
+        for p in [[3.0e7, 2.9e7, 2.0e6], [4.0e6, -5.0e6, 2.5e6]] {
+            let a = sectoral(p);
+            for i in 0..3 {
+                let h = 10.0;
+                let (mut qp, mut qm) = (p, p);
+                qp[i] += h;
+                qm[i] -= h;
+                let g = (u(qp) - u(qm)) / (2.0 * h);
+                assert!(
+                    (a[i] - g).abs() < 1e-6 * a.iter().map(|v| v.abs()).fold(0.0, f64::max),
+                    "{i}: {} vs {g}",
+                    a[i]
+                );
+            }
+        }
     }
 
     #[test]

@@ -343,6 +343,7 @@ fn trial<A: Atmosphere + ?Sized>(
         let mut dynamics =
             Dynamics::<A, LANES>::new(atmosphere, job.epoch, std::array::from_fn(|l| lanes[l][6]));
         dynamics.zonal_degree = s.zonal_degree;
+        dynamics.third_body = crate::dynamics::deep_space(&std::array::from_fn(|i| job.p0[i]));
         let mut y = Aligned::<State<LANES>>(std::array::from_fn(|c| {
             std::array::from_fn(|l| lanes[l][c])
         }));

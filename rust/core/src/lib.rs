@@ -11,6 +11,7 @@
 //! - [`decay`]: where an orbit crosses the decay floor within a step;
 //! - [`kappa`], [`rng`]: the stochastic density offset and its per-member streams;
 //! - [`dynamics`]: the one right-hand side every integrator, member and sigma point uses;
+//! - [`ephemeris`]: low-precision Sun and Moon, their pull on deep-space orbits;
 //! - [`integrators`]: fixed-step RK4/RK8 through one step loop, adaptive DOP853;
 //! - [`simd`]: the batch lane width and the runtime instruction-set dispatch;
 //! - [`progress`]: progress and cancellation of long calls;
@@ -30,6 +31,7 @@ pub mod constants;
 pub mod decay;
 pub mod density;
 pub mod dynamics;
+pub mod ephemeris;
 pub mod error;
 pub mod fit;
 pub mod frames;

@@ -288,6 +288,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
         let mut dynamics = Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, drag);
         dynamics.perturbation = cfg.perturbation;
         dynamics.zonal_degree = cfg.problem.zonal_degree;
+        dynamics.third_body = crate::dynamics::deep_space(&cfg.problem.y0);
         let spacing = cfg.kappa.node_spacing();
         let mut kappa = KappaLanes::<W> {
             t0: 0.0,
