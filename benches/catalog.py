@@ -132,8 +132,9 @@ def on_dask(objs, model, end, **options):
 
 def whole(snapshot: Path, days: float, dask: bool) -> None:
     """Every element set of a snapshot as published, with the defaults (near-Earth objects
-    below 700 km fitted, CCSP, NRLMSIS 2.1), ``days`` after the newest epoch: the time of
-    each stage and the peak memory; with ``dask`` the same on a 2-worker LocalCluster."""
+    below 700 km and deep-space objects fitted, CCSP, NRLMSIS 2.1), ``days`` after the
+    newest epoch: the time of each stage and the peak memory; with ``dask`` the same on a
+    2-worker LocalCluster."""
     from rhoprop.catalog.objects import fit_catalog_objects
     from rhoprop.io import write_oem, write_summary
 
