@@ -267,7 +267,8 @@ def propagate(
     method: str | None = None,
 ) -> Trajectory:
     """Propagates one orbit with two-body + J2 (optionally up to J6) + drag at the mean
-    density.
+    density; a deep-space orbit (period of 225 min or more) also feels the Sun, the Moon
+    and C22/S22 (docs/conventions.md, "Frames and dynamics").
 
     Args:
         state: initial :class:`OrbitState`.
