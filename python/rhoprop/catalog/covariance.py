@@ -30,9 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..constants import MU, R_EARTH
+from ..constants import R_EARTH
 from ..frames import rtn_basis
 from ..propagation import DEFAULT_INITIAL_COVARIANCE, OrbitState
+from ..propagation.propagate import axis_and_eccentricity
 
 #: What ``initial_covariance`` of :func:`~rhoprop.catalog.propagate_catalog` and the
 #: ``--initial-covariance`` option accept as names.
@@ -73,12 +74,7 @@ REGIMES = (
 def tle_accuracy(state: OrbitState) -> TleAccuracy:
     """The :class:`TleAccuracy` of the regime of ``state`` (perigee altitude above the
     equatorial radius and eccentricity of its osculating orbit)."""
-    r, v = state.position, state.velocity
-    rn = float(np.linalg.norm(r))
-    energy = float(v @ v) / 2 - MU / rn
-    a = -MU / (2 * energy) if energy < 0 else np.inf
-    e_vec = ((float(v @ v) - MU / rn) * r - float(r @ v) * v) / MU
-    e = float(np.linalg.norm(e_vec))
+    a, e = axis_and_eccentricity(state)
     perigee = a * (1 - e) - R_EARTH
     for max_perigee, max_e, accuracy in REGIMES:
         if perigee <= max_perigee and e <= max_e:

@@ -28,7 +28,7 @@ from ..propagation import (
 from ..propagation.ccsp import ccsp_many
 from ..propagation.kappa import KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
-from ..propagation.propagate import DEFAULT_STEP
+from ..propagation.propagate import DEFAULT_STEP, axis_and_eccentricity
 from ..propagation.results import (
     CcspResult,
 )
@@ -258,13 +258,9 @@ def catalog_step(state: OrbitState) -> float:
     through NRLMSIS 2.1 against RK8 at 30 s: GEO 1,800 s 0.6 mm, MEO (20,000 km) 900 s
     0.6 mm, against 1 m at 550 km and 9 m at 310 km for the 180 s every LEO object keeps
     (docs/performance.md). An unbound state keeps 180 s."""
-    r, v = state.position, state.velocity
-    rn = float(np.linalg.norm(r))
-    energy = float(v @ v) / 2.0 - MU / rn
-    if energy >= 0:
+    a, e = axis_and_eccentricity(state)
+    if not np.isfinite(a):
         return DEFAULT_STEP["rk8"]
-    a = -MU / (2.0 * energy)
-    e = float(np.linalg.norm(((float(v @ v) - MU / rn) * r - float(r @ v) * v) / MU))
     perigee_period = 2.0 * np.pi * np.sqrt((a * (1.0 - e)) ** 3 / MU)
     h = perigee_period / (STEPS_PER_PERIGEE_PERIOD * np.sqrt(1.0 + e))
     return float(max(DEFAULT_STEP["rk8"], h))

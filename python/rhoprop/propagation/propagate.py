@@ -131,6 +131,18 @@ def check_model(model: ModelLike) -> None:
     )
 
 
+def axis_and_eccentricity(state: OrbitState) -> tuple[float, float]:
+    """Osculating two-body semi-major axis (m; inf for an unbound orbit) and eccentricity
+    of ``state``."""
+    r, v = state.position, state.velocity
+    rn = float(np.linalg.norm(r))
+    v2 = float(v @ v)
+    energy = v2 / 2 - MU / rn
+    a = -MU / (2 * energy) if energy < 0 else math.inf
+    e = float(np.linalg.norm(((v2 - MU / rn) * r - float(r @ v) * v) / MU))
+    return a, e
+
+
 def orbital_period(state: OrbitState) -> float:
     """Osculating two-body period of ``state``, s (inf for an unbound orbit)."""
     r = float(np.linalg.norm(state.position))

@@ -254,9 +254,9 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
     fn eval(&mut self, t: f64, y: &State<W>, dy: &mut State<W>) -> Result<(), CoreError> {
         self.evaluations += 1;
         let ut1 = self.epoch + t;
-        // One Earth-rotation angle per stage, shared by all lanes (skipped when the
-        // atmosphere does not need it).
-        let rot = if self.atmosphere.uses_earth_rotation() {
+        // One Earth-rotation angle per stage, shared by all lanes (skipped when neither the
+        // atmosphere nor the deep-space C22/S22 term needs it).
+        let rot = if self.atmosphere.uses_earth_rotation() || self.third_body {
             self.rotation.at(ut1)
         } else {
             EarthRotation::IDENTITY
@@ -332,7 +332,6 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
         // a week (SDP4's resonance terms).
         if self.third_body {
             let bodies = ThirdBodies::at(ut1);
-            let rot = self.rotation.at(ut1);
             for l in 0..W {
                 let r = [y[0][l], y[1][l], y[2][l]];
                 let a = bodies.acceleration(r);

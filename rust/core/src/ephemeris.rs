@@ -140,6 +140,7 @@ impl ThirdBodies {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frames::{dot, norm};
 
     /// Seconds since J2000 (2000-01-01T12:00) of a UTC calendar instant, UT1 taken as UTC.
     fn since_j2000(days_from_j2000: f64) -> f64 {
@@ -147,14 +148,7 @@ mod tests {
     }
 
     fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
-        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let na = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        let nb = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
-        (dot / (na * nb)).clamp(-1.0, 1.0).acos()
-    }
-
-    fn norm(a: [f64; 3]) -> f64 {
-        (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+        (dot(a, b) / (norm(a) * norm(b))).clamp(-1.0, 1.0).acos()
     }
 
     // Reference: astropy 8.0.2 `get_body(name, Time(..., scale="utc"),
