@@ -460,6 +460,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
             drag[l] = problem.drag * drag_factor(cfg.drag_sigma, pt[7]);
         }
         let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, drag);
+        dynamics.floor_altitude = problem.floor_altitude;
         dynamics.zonal_degree = problem.zonal_degree;
         dynamics.third_body = crate::dynamics::deep_space(&problem.y0);
         dynamics.perturbation = cfg.perturbation;

@@ -4,7 +4,7 @@
 //! One trajectory is a batch of one. This is the one RHS that every integrator, member and
 //! sigma point uses.
 
-use crate::constants::{J2, J3, J4, J5, J6, MU, OMEGA_EARTH, R_EARTH};
+use crate::constants::{J2, J3, J4, J5, J6, MU, OMEGA_EARTH, R_EARTH, WGS84_F};
 use crate::density::{Atmosphere, LaneMemory};
 use crate::ephemeris::ThirdBodies;
 use crate::error::CoreError;
@@ -94,6 +94,11 @@ pub const MAX_ZONAL_DEGREE: u8 = 6;
 /// Unnormalised zonal coefficients by degree (0 and 1 unused).
 const ZONALS: [f64; 7] = [0.0, 0.0, J2, J3, J4, J5, J6];
 
+/// How far below the decay floor a stage position must be to lose its drag, m: above the
+/// error of the first-order altitude r - a (1 - f sin^2 psi) the test uses (< 100 m), so a
+/// position at or above the floor always keeps it.
+pub const FLOOR_MARGIN: f64 = 1_000.0;
+
 /// Two-body + J2 (+ J3..J6 on request) + drag for a batch of members sharing one epoch
 /// and atmosphere.
 ///
@@ -120,6 +125,13 @@ pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     pub perturbation: Perturbation,
     /// Number of batch RHS evaluations.
     pub evaluations: u64,
+    /// The run's decay floor, m of geodetic altitude (`-inf`: none). A stage position more
+    /// than [`FLOOR_MARGIN`] below it sees no drag: the object is down there, and only the
+    /// step that crosses the floor evaluates such points (its crossing is then located
+    /// on the step's ends). With the real density a light object's stage 50 km down
+    /// decelerates by 1e6 m/s^2, the step's later stages fly off to infinity and the
+    /// run stops on a NaN position instead of dating its decay.
+    pub floor_altitude: f64,
     /// Bumped by whoever changes `kappa` or `drag` discontinuously (see
     /// [`BatchRhs::generation`]).
     pub generation: u64,
@@ -143,6 +155,7 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             perturbation: Perturbation::Additive,
             clipped: [0; W],
             evaluations: 0,
+            floor_altitude: f64::NEG_INFINITY,
             generation: 0,
             rotation: RotationCache::default(),
             memory: Box::default(),
@@ -262,6 +275,11 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             EarthRotation::IDENTITY
         };
         let kj2 = -1.5 * J2 * MU * R_EARTH * R_EARTH;
+        // Per lane: its Cd*A/m where drag applies (0 more than FLOOR_MARGIN below the
+        // floor, by the first-order geodetic altitude), so that the density lookup neither
+        // needs nor checks a point the object cannot be alive at.
+        let mut live = [0.0; W];
+        let (af, lowest) = (R_EARTH * WGS84_F, self.floor_altitude - FLOOR_MARGIN);
         for l in 0..W {
             let (x, yy, z) = (y[0][l], y[1][l], y[2][l]);
             let r2 = x * x + yy * yy + z * z;
@@ -269,6 +287,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             let inv_r2 = 1.0 / r2;
             let inv_r3 = inv_r2 / r;
             let zz = 5.0 * z * z * inv_r2;
+            let height = r - R_EARTH + af * (z * z * inv_r2);
+            live[l] = if height >= lowest { self.drag[l] } else { 0.0 };
             let j2f = kj2 * inv_r3 * inv_r2;
             dy[0][l] = y[3][l];
             dy[1][l] = y[4][l];
@@ -285,7 +305,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             &y[0],
             &y[1],
             &y[2],
-            &self.drag,
+            &live,
             &rot,
             &mut mean,
             &mut sigma,
@@ -298,7 +318,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
                 // Straight-line so that it vectorises: clip at zero and count the clips.
                 for l in 0..W {
                     let value = mean[l] + self.kappa.at_weight(l, w) * sigma[l];
-                    let active = self.drag[l] != 0.0;
+                    let active = live[l] != 0.0;
                     let clipped = value < 0.0 && active;
                     rho[l] = if value < 0.0 || !active { 0.0 } else { value };
                     self.clipped[l] += u64::from(clipped);
@@ -306,7 +326,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             }
             Perturbation::Lognormal => {
                 for l in 0..W {
-                    if self.drag[l] != 0.0 {
+                    if live[l] != 0.0 {
                         let kappa = self.kappa.at_weight(l, w);
                         rho[l] = perturb(mean[l], sigma[l], kappa, self.perturbation).0;
                     }
@@ -321,7 +341,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
                 y[5][l],
             ];
             let vn = (vr[0] * vr[0] + vr[1] * vr[1] + vr[2] * vr[2]).sqrt();
-            let f = -0.5 * rho[l] * self.drag[l] * vn;
+            let f = -0.5 * rho[l] * live[l] * vn;
             dy[3][l] += f * vr[0];
             dy[4][l] += f * vr[1];
             dy[5][l] += f * vr[2];

@@ -157,24 +157,23 @@ pub fn geodetic(r: [f64; 3]) -> Geodetic {
     }
 }
 
-/// atan of `u` in [-tan(pi/8), tan(pi/8)]: an odd polynomial of degree 11, a weighted
-/// Chebyshev fit of atan(u)/u in u^2, good to 1.2e-10 rad (8 mm on the Earth's surface;
-/// the degree-15 fit it replaced was good to 3e-13, more than a density lookup whose
-/// latitude is good to 4e-8 rad can use, at a tenth of a field Monte Carlo's time).
+/// atan of `u` in [-tan(pi/8), tan(pi/8)], single precision: an odd polynomial of
+/// degree 9, a weighted Chebyshev fit of atan(u)/u in u^2 (3.5e-9 rad; f32 rounding,
+/// 3e-8 rad there, dominates). The angles of a density lookup need no more: a grid cell
+/// spans 0.1 rad, and 2e-7 rad is 1.3 m on the ground.
 #[inline(always)]
-fn atan_core(u: f64) -> f64 {
-    const ATAN: [f64; 6] = [
-        0.999_999_996_307_095_2,
-        -0.333_332_713_974_155_76,
-        0.199_970_307_470_136_06,
-        -0.142_242_493_521_615_22,
-        0.104_810_733_941_170_45,
-        -0.058_387_612_019_421_17,
+fn atan_core(u: f32) -> f32 {
+    const ATAN: [f32; 5] = [
+        0.999_999_9,
+        -0.333_322_04,
+        0.199_619_67,
+        -0.137_548_2,
+        0.077_345_78,
     ];
     let u2 = u * u;
-    let mut p = ATAN[5];
-    for &c in ATAN[..5].iter().rev() {
-        p = p * u2 + c;
+    let mut p = ATAN[4];
+    for &c in ATAN[..4].iter().rev() {
+        p = p.mul_add(u2, c);
     }
     u * p
 }
@@ -183,18 +182,19 @@ fn atan_core(u: f64) -> f64 {
 /// tangent-subtraction step, so that atan2 is [`atan_unfold`] of atan(num / den). The
 /// division is left to the caller (one division can serve several reciprocals).
 #[inline(always)]
-fn atan_fold(y: f64, x: f64) -> (f64, f64, bool, bool) {
+fn atan_fold(y: f32, x: f32) -> (f32, f32, bool, bool) {
     let (ax, ay) = (x.abs(), y.abs());
-    let (lo, hi) = (ax.min(ay), ax.max(ay));
-    let fold = lo > (std::f64::consts::SQRT_2 - 1.0) * hi;
+    // Selects, not f32::min/max: those add a NaN blend each (one vminps/vmaxps here).
+    let (lo, hi) = (if ax < ay { ax } else { ay }, if ax < ay { ay } else { ax });
+    let fold = lo > (std::f32::consts::SQRT_2 - 1.0) * hi;
     let (num, den) = if fold { (lo - hi, lo + hi) } else { (lo, hi) };
     (num, if den > 0.0 { den } else { 1.0 }, fold, ay > ax)
 }
 
 /// atan2(y, x) from `t` = atan(num / den) of [`atan_fold`]'s `fold` and `swap`.
 #[inline(always)]
-fn atan_unfold(t: f64, fold: bool, swap: bool, y: f64, x: f64) -> f64 {
-    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+fn atan_unfold(t: f32, fold: bool, swap: bool, y: f32, x: f32) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     let mut a = t + if fold { FRAC_PI_4 } else { 0.0 };
     a = if swap { FRAC_PI_2 - a } else { a };
     a = if x < 0.0 { PI - a } else { a };
@@ -205,46 +205,75 @@ fn atan_unfold(t: f64, fold: bool, swap: bool, y: f64, x: f64) -> f64 {
     }
 }
 
-/// atan2(y, x) in (-pi, pi] to 1.2e-10 rad, without branches so that lane loops
-/// vectorise: the argument folded to [-tan(pi/8), tan(pi/8)] (octant symmetry and one
-/// tangent-subtraction step, together one division), then [`atan_core`].
+/// atan2(y, x) in (-pi, pi] to 3e-7 rad, single precision and without branches so that
+/// lane loops vectorise: the argument folded to [-tan(pi/8), tan(pi/8)] (octant symmetry
+/// and one tangent-subtraction step, together one division), then [`atan_core`].
 #[inline(always)]
-pub fn atan2_lanes(y: f64, x: f64) -> f64 {
+pub fn atan2_lanes(y: f32, x: f32) -> f32 {
     let (num, den, fold, swap) = atan_fold(y, x);
     atan_unfold(atan_core(num / den), fold, swap, y, x)
 }
 
-/// Geodetic WGS-84 latitude (rad), longitude (rad) and altitude (m) of an Earth-fixed
-/// position (of an inertial one: latitude and altitude are the same, the longitude is then
+/// Geodetic WGS-84 latitude (rad), longitude (rad) and altitude (m) of `W` Earth-fixed
+/// positions (of inertial ones: latitude and altitude are the same, the longitude is then
 /// the right ascension), for the lane lookup of a density grid: geocentric radius r and
 /// latitude psi, then the series in the flattening f to second order,
 /// lat = psi + f u sin(2 psi) + f^2 u (u - 1/4) sin(4 psi) and
 /// h = r - a (1 - f sin^2 psi - f^2/2 sin^2(2 psi) (u - 1/4)) with u = a / r
-/// (e.g. Jones 2002, J. Geodesy 76; checked against [`geodetic`]: within 4e-8 rad and
+/// (e.g. Jones 2002, J. Geodesy 76; checked against [`geodetic`]: within 3e-7 rad and
 /// 7 cm from 100 km below the surface to 3,000 km up, better above: a density error
-/// below 3e-6 of its value, where a grid cell's interpolation error is ~1e-2). Two square
-/// roots and one division (for 1/r and both atan2 arguments at once), no branch: the
-/// exact closed forms' chain of roots and divisions was a quarter of a field Monte Carlo.
+/// below 3e-6 of its value, where a grid cell's interpolation error is ~1e-2).
+///
+/// Only r - a, which needs millimetres of 7,000 km, is in double precision; the angles
+/// and the series' correction (at most 21 km) run in single precision, twice the lanes
+/// per register and shorter chains of square roots, divisions and polynomials: the
+/// conversion was a quarter of a field Monte Carlo. One division (for 1/r and both atan2
+/// arguments at once), no branch.
 #[inline(always)]
-pub fn geodetic_lanes(x: f64, y: f64, z: f64) -> (f64, f64, f64) {
-    let (a, f) = (R_EARTH, WGS84_F);
-    let rho2 = x * x + y * y;
-    let r = (rho2 + z * z).sqrt();
-    let p = rho2.sqrt();
-    let (n1, d1, fold1, swap1) = atan_fold(z, p);
-    let (n2, d2, fold2, swap2) = atan_fold(y, x);
-    // 1/r, 1/d1 and 1/d2 from one division (products of m-sized values: far from overflow).
-    let inv = 1.0 / (r * (d1 * d2));
-    let inv_r = (d1 * d2) * inv;
-    let psi = atan_unfold(atan_core(n1 * ((r * d2) * inv)), fold1, swap1, z, p);
-    let ra = atan_unfold(atan_core(n2 * ((r * d1) * inv)), fold2, swap2, y, x);
-    let (s, c, u) = (z * inv_r, p * inv_r, a * inv_r);
-    let s2 = 2.0 * s * c;
-    let s4 = 2.0 * s2 * (c * c - s * s);
-    let k = u - 0.25;
-    let lat = psi + f * u * (s2 + f * k * s4);
-    let alt = r - a + a * f * (s * s + 0.5 * f * k * (s2 * s2));
-    (lat, ra, alt)
+pub fn geodetic_lanes<const W: usize>(
+    x: &[f64; W],
+    y: &[f64; W],
+    z: &[f64; W],
+    lat: &mut [f64; W],
+    ra: &mut [f64; W],
+    alt: &mut [f64; W],
+) {
+    let (a, f) = (R_EARTH as f32, WGS84_F as f32);
+    // Double precision: the radius. Single: the inputs of the angles.
+    let mut r = [0.0f64; W];
+    let (mut xs, mut ys, mut zs, mut ps, mut rs) =
+        ([0f32; W], [0f32; W], [0f32; W], [0f32; W], [0f32; W]);
+    for l in 0..W {
+        let rho2 = x[l] * x[l] + y[l] * y[l];
+        r[l] = (rho2 + z[l] * z[l]).sqrt();
+        (xs[l], ys[l], zs[l]) = (x[l] as f32, y[l] as f32, z[l] as f32);
+        ps[l] = (rho2 as f32).sqrt();
+        rs[l] = r[l] as f32;
+    }
+    let (mut psi, mut dlat, mut dalt) = ([0f32; W], [0f32; W], [0f32; W]);
+    let mut ra_s = [0f32; W];
+    for l in 0..W {
+        let (p, z, r) = (ps[l], zs[l], rs[l]);
+        let (n1, d1, fold1, swap1) = atan_fold(z, p);
+        let (n2, d2, fold2, swap2) = atan_fold(ys[l], xs[l]);
+        // 1/r, 1/d1 and 1/d2 from one division (r d1 d2 <= 4 r^3: no overflow below
+        // 4e12 m).
+        let inv = 1.0 / (r * (d1 * d2));
+        let inv_r = (d1 * d2) * inv;
+        psi[l] = atan_unfold(atan_core(n1 * ((r * d2) * inv)), fold1, swap1, z, p);
+        ra_s[l] = atan_unfold(atan_core(n2 * ((r * d1) * inv)), fold2, swap2, ys[l], xs[l]);
+        let (s, c, u) = (z * inv_r, p * inv_r, a * inv_r);
+        let s2 = 2.0 * s * c;
+        let s4 = 2.0 * s2 * (c * c - s * s);
+        let k = u - 0.25;
+        dlat[l] = (f * u) * (f * k).mul_add(s4, s2);
+        dalt[l] = (a * f) * (0.5 * f * k).mul_add(s2 * s2, s * s);
+    }
+    for l in 0..W {
+        lat[l] = f64::from(psi[l]) + f64::from(dlat[l]);
+        ra[l] = f64::from(ra_s[l]);
+        alt[l] = (r[l] - R_EARTH) + f64::from(dalt[l]);
+    }
 }
 
 /// Geodetic altitude (m) of an inertial position `r` (m) at `ut1` seconds since J2000:
@@ -338,7 +367,9 @@ mod tests {
                     let lon = (-180.0 + 9.0 * j as f64).to_radians();
                     let r = geodetic_to_fixed(Geodetic { lat, lon, alt: h });
                     let exact = geodetic(r);
-                    let (la, lo, al) = geodetic_lanes(r[0], r[1], r[2]);
+                    let (mut la, mut lo, mut al) = ([0.0], [0.0], [0.0]);
+                    geodetic_lanes(&[r[0]], &[r[1]], &[r[2]], &mut la, &mut lo, &mut al);
+                    let (la, lo, al) = (la[0], lo[0], al[0]);
                     let dlon = (lo - exact.lon).abs();
                     let dlon = dlon.min((dlon - std::f64::consts::TAU).abs());
                     worst.0 = worst.0.max((la - exact.lat).abs());
@@ -347,9 +378,10 @@ mod tests {
                 }
             }
         }
-        // The second-order series' own error (4e-8 rad, 7 cm; see `geodetic_lanes`).
+        // The second-order series' own error (4e-8 rad, 7 cm) and single precision's
+        // angles (3e-7 rad; see `geodetic_lanes`).
         assert!(
-            worst.0 < 4e-8 && worst.1 < 2e-10 && worst.2 < 0.07,
+            worst.0 < 3e-7 && worst.1 < 3e-7 && worst.2 < 0.07,
             "{worst:?}"
         );
         for (y, x) in [
@@ -360,9 +392,9 @@ mod tests {
             (-0.3, -0.7),
             (0.0, 0.0),
         ] {
-            let d: f64 = atan2_lanes(y, x) - f64::atan2(y, x);
+            let d = f64::from(atan2_lanes(y as f32, x as f32)) - f64::atan2(y, x);
             assert!(
-                d.abs() < 1.2e-10 || (d.abs() - std::f64::consts::TAU).abs() < 1.2e-10,
+                d.abs() < 3e-7 || (d.abs() - std::f64::consts::TAU).abs() < 3e-7,
                 "{y} {x}"
             );
         }
@@ -370,16 +402,18 @@ mod tests {
 
     #[test]
     fn lane_atan2_matches_the_library_on_a_dense_circle() {
-        // 1.2e-10 rad all round, across the octant and fold boundaries, at two radii.
+        // 3e-7 rad all round, across the octant and fold boundaries, at two radii
+        // (single precision: its rounding of the inputs and of pi is most of it).
         let mut worst = 0.0f64;
         for k in 0..200_000 {
             let theta = -std::f64::consts::PI + std::f64::consts::TAU * (k as f64 + 0.37) / 2e5;
             for r in [1.0, 6.9e6] {
                 let (y, x) = (r * theta.sin(), r * theta.cos());
-                worst = worst.max((atan2_lanes(y, x) - y.atan2(x)).abs());
+                let got = f64::from(atan2_lanes(y as f32, x as f32));
+                worst = worst.max((got - y.atan2(x)).abs());
             }
         }
-        assert!(worst < 1.2e-10, "{worst}");
+        assert!(worst < 3e-7, "{worst}");
     }
 
     #[test]

@@ -141,6 +141,7 @@ pub fn propagate<A: Atmosphere + ?Sized>(
 ) -> Result<Trajectory, CoreError> {
     problem.validate()?;
     let mut dynamics = Dynamics::<A, 1>::new(atmosphere, problem.epoch, [problem.drag]);
+    dynamics.floor_altitude = problem.floor_altitude;
     dynamics.zonal_degree = problem.zonal_degree;
     dynamics.third_body = crate::dynamics::deep_space(&problem.y0);
     let mut y: State<1> = problem.y0.map(|c| [c]);
@@ -340,6 +341,28 @@ mod tests {
         assert!(t < 259200.0);
         assert!(tr.states.len() < times.len());
         assert!(tr.states.iter().flatten().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn a_light_object_plunging_through_a_long_step_is_dated_not_lost() {
+        // 60 m^2/kg (an MLI fragment, as real ones of the 2022 reentries) at 130 km
+        // through an atmosphere with a 7 km scale height: a 180-s RK8 step's later stages
+        // dive tens of km below the 120 km floor, where the real density (1e-3 kg/m^3 at
+        // 50 km) decelerated them by 1e6 m/s^2 and the step ended on a NaN. Stage points
+        // more than FLOOR_MARGIN below the floor see no drag: the decay is dated, within
+        // 2 s of RK8 at 1 s (whose stages stay within metres of the floor).
+        let atm = Exponential::new(2.5e-8, 120e3, 7e3, 0.0).unwrap();
+        let r = R_EARTH + 130e3;
+        let y0 = [r, 0.0, 0.0, 0.0, (MU / r).sqrt(), 0.0];
+        let at = |step| {
+            let tr = run(&atm, 0.0, y0, 60.0, &[3600.0], Method::Rk8 { step }, 120e3);
+            tr.unwrap().decayed_at.expect("decays")
+        };
+        let (t, reference) = (at(180.0), at(1.0));
+        assert!(
+            t.is_finite() && (t - reference).abs() < 2.0,
+            "{t} s vs {reference} s"
+        );
     }
 
     #[test]

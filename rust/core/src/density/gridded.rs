@@ -506,7 +506,7 @@ impl Atmosphere for GriddedField {
     /// `memory` while the lane stays in the cell), nested linear interpolation and the lane
     /// `exp`. Every batch width gives a lane the same bits; agrees with the scalar
     /// [`Atmosphere::mean_sigma`] (exact geodetic conversion) to the lane conversion's
-    /// 7 cm and 4e-8 rad, a few 1e-6 of the density. A lane the lane conversion puts
+    /// 7 cm and 3e-7 rad, a few 1e-6 of the density. A lane the lane conversion puts
     /// outside the grid goes through the scalar lookup: its error names the axis, and a
     /// value it finds (a position within those centimetres of the edge) is the lane's.
     #[allow(clippy::too_many_arguments)]
@@ -551,9 +551,7 @@ impl Atmosphere for GriddedField {
         // from the inertial position, and the longitude is its right ascension minus the
         // rotation angle: the Earth rotation's sine and cosine stay off the critical path.
         let (mut lat, mut ra, mut alt) = ([0.0; W], [0.0; W], [0.0; W]);
-        for l in 0..W {
-            (lat[l], ra[l], alt[l]) = geodetic_lanes(x[l], y[l], z[l]);
-        }
+        geodetic_lanes(x, y, z, &mut lat, &mut ra, &mut alt);
         let lon_origin = rot.angle + self.lon0;
         // Per lane: the cell's first table index and the longitude neighbour's offset (as
         // floats until the end), the fractions along altitude, latitude and longitude.
@@ -620,15 +618,15 @@ impl Atmosphere for GriddedField {
             let mut v = [0.0; 4];
             for (q, vq) in v.iter_mut().enumerate() {
                 let c = |k: usize| corners[q * 8 + k][l];
-                let lerp = |x: f64, y: f64, f: f64| x + f * (y - x);
-                let e: [f64; 4] = std::array::from_fn(|k| c(2 * k) + o * c(2 * k + 1));
+                let lerp = |x: f64, y: f64, f: f64| f.mul_add(y - x, x);
+                let e: [f64; 4] = std::array::from_fn(|k| o.mul_add(c(2 * k + 1), c(2 * k)));
                 // Even q: ln(mean), odd: sigma/mean.
                 let a = if q % 2 == 0 { fm[l] } else { fa[l] };
                 *vq = lerp(lerp(e[0], e[1], b), lerp(e[2], e[3], b), a);
             }
             // q = 2 dt + value: v[0], v[1] at the first time node, v[2], v[3] at the next.
-            ln_m[l] = v[0] + ft * (v[2] - v[0]);
-            rs[l] = v[1] + ft * (v[3] - v[1]);
+            ln_m[l] = ft.mul_add(v[2] - v[0], v[0]);
+            rs[l] = ft.mul_add(v[3] - v[1], v[1]);
         }
         // Mean and sigma, zero outside the grid. The lane exp runs for every lane and an
         // AND with a bit mask zeroes the outside ones: a branch here left the exp scalar
@@ -653,7 +651,7 @@ impl Atmosphere for GriddedField {
 mod tests {
     use super::*;
 
-    /// Lane against scalar lookup, relative: the lane conversion's 7 cm and 4e-8 rad (see
+    /// Lane against scalar lookup, relative: the lane conversion's 7 cm and 3e-7 rad (see
     /// `geodetic_lanes`) times the test field's slopes (1 per 60 km, 0.01 per degree).
     const LANE_TOL: f64 = 3e-6;
 

@@ -1,0 +1,124 @@
+//! Field / exponential cost ratio of the Monte Carlo engine per SIMD path, timed in the
+//! thread's own CPU time (Linux `/proc/thread-self/schedstat`), so that other work on a
+//! shared machine inflates it far less than wall time: the A/B tool for the field lookup.
+//! The runs are the criterion bench's (`benches/core.rs`, "1 thread"): 64 members x 1 day,
+//! GaussMarkov 18 min, RK8 180 s, the exponential atmosphere and a synthetic field of the
+//! same shape as a sampled NRLMSIS one; rounds alternate the two, the minimum counts.
+//!
+//! Run: `cargo run --release -p rhoprop-core --example field_ratio [-- ROUNDS [PATH]]`
+//! (PATH: avx512f, avx2+fma or portable; default every path this CPU has).
+
+use rhoprop_core::density::{Atmosphere, Exponential, GriddedField};
+use rhoprop_core::dynamics::Perturbation;
+use rhoprop_core::integrators::FixedMethod;
+use rhoprop_core::kappa::KappaProcess;
+use rhoprop_core::montecarlo::{monte_carlo_on, MonteCarloConfig};
+use rhoprop_core::problem::Problem;
+use rhoprop_core::progress::Progress;
+use rhoprop_core::simd::SimdPath;
+
+/// CPU time of the calling thread, s (Linux).
+fn thread_cpu() -> f64 {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").expect("Linux schedstat");
+    let ns: f64 = s.split_whitespace().next().unwrap().parse().unwrap();
+    ns * 1e-9
+}
+
+/// The criterion bench's synthetic field (hourly nodes, every third repeated as a driver
+/// step; 25 km x 6 deg x 15 deg; exponential profile with a bulge; 20 % sigma).
+fn synthetic_field(epoch: f64) -> GriddedField {
+    let mut time = Vec::new();
+    for k in 0..=25 {
+        time.push(k as f64 * 3600.0 - 1800.0);
+        if k % 3 == 1 && k < 25 {
+            time.push(k as f64 * 3600.0 - 1800.0);
+        }
+    }
+    let (na, nl, no) = (9, 31, 24);
+    let mut ln_mean = Vec::new();
+    for it in 0..time.len() {
+        for ia in 0..na {
+            for il in 0..nl {
+                for io in 0..no {
+                    let h = 300e3 + 25e3 * ia as f64;
+                    let bulge = 0.3 * (io as f64 * 15f64.to_radians()).cos()
+                        + 0.1 * (il as f64 * 6f64.to_radians()).sin()
+                        + 1e-6 * it as f64;
+                    ln_mean.push((3.725e-12f64).ln() - (h - 400e3) / 58.515e3 + bulge);
+                }
+            }
+        }
+    }
+    let rel_sigma = vec![0.2; ln_mean.len()];
+    let (alt, lat) = ((300e3, 25e3, na), (-90.0, 6.0, nl));
+    GriddedField::new(epoch, time, alt, lat, 0.0, no, ln_mean, rel_sigma).unwrap()
+}
+
+/// Thread CPU time of one Monte Carlo (s), the mean of 10 runs (about 0.1 s).
+fn time<A: Atmosphere + Sync>(
+    pool: &rayon::ThreadPool,
+    path: SimdPath,
+    atm: &A,
+    mc: &MonteCarloConfig,
+) -> f64 {
+    const REPS: usize = 10;
+    pool.install(|| {
+        let t0 = thread_cpu();
+        for _ in 0..REPS {
+            std::hint::black_box(monte_carlo_on(path, atm, mc, &Progress::default()).unwrap());
+        }
+        (thread_cpu() - t0) / REPS as f64
+    })
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let rounds: usize = args.get(1).map_or(7, |a| a.parse().expect("ROUNDS"));
+    let paths: Vec<SimdPath> = SimdPath::available()
+        .into_iter()
+        .filter(|p| args.get(2).is_none_or(|want| want == p.name()))
+        .collect();
+    let epoch = 8.4e7;
+    let exponential = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+    let field = synthetic_field(epoch);
+    let mc = MonteCarloConfig {
+        problem: Problem {
+            epoch,
+            y0: rhoprop_core::constants::PAPER_STATE,
+            drag: 3.0912 * 0.0015,
+            floor_altitude: 120e3,
+            zonal_degree: 2,
+        },
+        initial_factor: None,
+        kappa: KappaProcess::GaussMarkov {
+            half_life: 1080.0,
+            interval: 180.0,
+        },
+        perturbation: Perturbation::Additive,
+        method: FixedMethod::Rk8,
+        max_step: 180.0,
+        output_times: (0..=24).map(|i| i as f64 * 3600.0).collect(),
+        members: 64,
+        seed: 1,
+        record_density: false,
+        drag_sigma: 0.0,
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for path in paths {
+        let (mut e, mut f) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..rounds {
+            e = e.min(time(&one, path, &exponential, &mc));
+            f = f.min(time(&one, path, &field, &mc));
+        }
+        println!(
+            "{:<9} exponential {:.3} ms  field {:.3} ms  field/exponential speed {:.3}",
+            path.name(),
+            e * 1e3,
+            f * 1e3,
+            e / f
+        );
+    }
+}
