@@ -56,20 +56,20 @@ METRICS: dict[str, tuple[str, Reader, bool]] = {
 }
 
 
-def current() -> tuple[str | None, dict[str, float]]:
-    """(SIMD path, {metric: value}) of the results present."""
-    path, found = None, {}
+def current() -> dict[str, dict[str, float]]:
+    """{SIMD path: {metric: value}} of the results present, each under the path its own
+    results file records (the benches may have run on different paths)."""
+    found: dict[str, dict[str, float]] = {}
     for metric, (file, read, _) in METRICS.items():
         f = RESULTS / file
         if not f.exists():
             continue
         data = json.loads(f.read_text())
         machine = data.get("machine", data)
-        path = path or machine.get("simd_path")
         value = read(data)
         if value is not None:
-            found[metric] = float(value)
-    return path, found
+            found.setdefault(machine.get("simd_path") or "unknown", {})[metric] = float(value)
+    return found
 
 
 def main() -> int:
@@ -77,28 +77,30 @@ def main() -> int:
     parser.add_argument("--tolerance", type=float, default=0.15)
     parser.add_argument("--record", action="store_true")
     args = parser.parse_args()
-    simd, found = current()
-    if not found:
+    by_path = current()
+    if not by_path:
         print(f"no results in {RESULTS}: run the benches first", file=sys.stderr)
         return 2
     baseline = json.loads(BASELINE.read_text()) if BASELINE.exists() else {}
-    recorded = baseline.get(simd or "unknown", {})
     worse = []
-    print(f"SIMD path {simd}; tolerance {100 * args.tolerance:.0f} %")
-    print(f"{'ratio':<50} {'now':>8} {'recorded':>9} {'change':>8}")
-    for metric, value in found.items():
-        old = recorded.get(metric)
-        higher = METRICS[metric][2]
-        if old is None:
-            print(f"{metric:<50} {value:>8.3g} {'-':>9} {'new':>8}")
-            continue
-        change = value / old - 1
-        bad = change < -args.tolerance if higher else change > args.tolerance
-        worse += [metric] if bad else []
-        flag = "  REGRESSION" if bad else ""
-        print(f"{metric:<50} {value:>8.3g} {old:>9.3g} {100 * change:>+7.0f}%{flag}")
+    for simd, found in sorted(by_path.items()):
+        recorded = baseline.get(simd, {})
+        print(f"SIMD path {simd}; tolerance {100 * args.tolerance:.0f} %")
+        print(f"{'ratio':<50} {'now':>8} {'recorded':>9} {'change':>8}")
+        for metric, value in found.items():
+            old = recorded.get(metric)
+            higher = METRICS[metric][2]
+            if old is None:
+                print(f"{metric:<50} {value:>8.3g} {'-':>9} {'new':>8}")
+                continue
+            change = value / old - 1
+            bad = change < -args.tolerance if higher else change > args.tolerance
+            worse += [metric] if bad else []
+            flag = "  REGRESSION" if bad else ""
+            print(f"{metric:<50} {value:>8.3g} {old:>9.3g} {100 * change:>+7.0f}%{flag}")
+        if args.record:
+            baseline[simd] = {**recorded, **found}
     if args.record:
-        baseline[simd or "unknown"] = {**recorded, **found}
         BASELINE.write_text(json.dumps(baseline, indent=1, sort_keys=True) + "\n")
         print(f"recorded in {BASELINE}")
         return 0
