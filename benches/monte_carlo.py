@@ -2,8 +2,8 @@
 all cores, GaussMarkov(18 min) and White(10 s); field sampling timed separately. The same
 GaussMarkov run through the benchmark exponential atmosphere (20 % sigma) gives the
 field / exponential speed ratio (the two runs alternate, ``--repeat`` pairs; the median of
-the pairs' ratios, in wall and in process CPU time), and through the single altitude-band field runs used
-before the atlas the tiles / band ratio.
+the pairs' ratios, in wall and in process CPU time), and through the single altitude-band
+field runs used before the atlas the tiles / band ratio.
 
 Run:  python benches/monte_carlo.py [--members 1000] [--repeat 3]
 Prints a table and writes benches/results/monte_carlo.json.
