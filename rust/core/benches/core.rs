@@ -4,7 +4,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rhoprop_core::ccsp::{ccsp, CcspConfig};
-use rhoprop_core::density::{Exponential, GriddedField};
+use rhoprop_core::density::Exponential;
 use rhoprop_core::dynamics::{BatchRhs, Dynamics, Perturbation, State};
 use rhoprop_core::integrators::{FixedMethod, FixedStepper};
 use rhoprop_core::kappa::KappaProcess;
@@ -13,6 +13,10 @@ use rhoprop_core::problem::Problem;
 use rhoprop_core::progress::Progress;
 use rhoprop_core::simd::SimdPath;
 use std::hint::black_box;
+
+#[path = "common/synthetic_field.rs"]
+mod synthetic;
+use synthetic::synthetic_field;
 
 const PAPER: [f64; 6] = rhoprop_core::constants::PAPER_STATE;
 
@@ -68,46 +72,6 @@ fn benches(c: &mut Criterion) {
             y = batch::<4>();
         })
     });
-}
-
-/// A field shaped like a sampled NRLMSIS one over a day (hourly nodes, every third one
-/// repeated as a driver step; 25 km x 6 deg x 15 deg): an exponential profile with a
-/// diurnal bulge, 20 % sigma.
-fn synthetic_field(epoch: f64) -> GriddedField {
-    let mut time = Vec::new();
-    for k in 0..=25 {
-        time.push(k as f64 * 3600.0 - 1800.0);
-        if k % 3 == 1 && k < 25 {
-            time.push(k as f64 * 3600.0 - 1800.0);
-        }
-    }
-    let (na, nl, no) = (9, 31, 24);
-    let mut ln_mean = Vec::new();
-    for it in 0..time.len() {
-        for ia in 0..na {
-            for il in 0..nl {
-                for io in 0..no {
-                    let h = 300e3 + 25e3 * ia as f64;
-                    let bulge = 0.3 * (io as f64 * 15f64.to_radians()).cos()
-                        + 0.1 * (il as f64 * 6f64.to_radians()).sin()
-                        + 1e-6 * it as f64;
-                    ln_mean.push((3.725e-12f64).ln() - (h - 400e3) / 58.515e3 + bulge);
-                }
-            }
-        }
-    }
-    let rel_sigma = vec![0.2; ln_mean.len()];
-    GriddedField::new(
-        epoch,
-        time,
-        (300e3, 25e3, na),
-        (-90.0, 6.0, nl),
-        0.0,
-        no,
-        ln_mean,
-        rel_sigma,
-    )
-    .unwrap()
 }
 
 /// Whole runs on the paper's orbit and the benchmark exponential atmosphere (20 % sigma).

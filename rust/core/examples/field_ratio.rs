@@ -8,7 +8,7 @@
 //! Run: `cargo run --release -p rhoprop-core --example field_ratio [-- ROUNDS [PATH]]`
 //! (PATH: avx512f, avx2+fma or portable; default every path this CPU has).
 
-use rhoprop_core::density::{Atmosphere, Exponential, GriddedField};
+use rhoprop_core::density::{Atmosphere, Exponential};
 use rhoprop_core::dynamics::Perturbation;
 use rhoprop_core::integrators::FixedMethod;
 use rhoprop_core::kappa::KappaProcess;
@@ -17,41 +17,15 @@ use rhoprop_core::problem::Problem;
 use rhoprop_core::progress::Progress;
 use rhoprop_core::simd::SimdPath;
 
+#[path = "../benches/common/synthetic_field.rs"]
+mod synthetic;
+use synthetic::synthetic_field;
+
 /// CPU time of the calling thread, s (Linux).
 fn thread_cpu() -> f64 {
     let s = std::fs::read_to_string("/proc/thread-self/schedstat").expect("Linux schedstat");
     let ns: f64 = s.split_whitespace().next().unwrap().parse().unwrap();
     ns * 1e-9
-}
-
-/// The criterion bench's synthetic field (hourly nodes, every third repeated as a driver
-/// step; 25 km x 6 deg x 15 deg; exponential profile with a bulge; 20 % sigma).
-fn synthetic_field(epoch: f64) -> GriddedField {
-    let mut time = Vec::new();
-    for k in 0..=25 {
-        time.push(k as f64 * 3600.0 - 1800.0);
-        if k % 3 == 1 && k < 25 {
-            time.push(k as f64 * 3600.0 - 1800.0);
-        }
-    }
-    let (na, nl, no) = (9, 31, 24);
-    let mut ln_mean = Vec::new();
-    for it in 0..time.len() {
-        for ia in 0..na {
-            for il in 0..nl {
-                for io in 0..no {
-                    let h = 300e3 + 25e3 * ia as f64;
-                    let bulge = 0.3 * (io as f64 * 15f64.to_radians()).cos()
-                        + 0.1 * (il as f64 * 6f64.to_radians()).sin()
-                        + 1e-6 * it as f64;
-                    ln_mean.push((3.725e-12f64).ln() - (h - 400e3) / 58.515e3 + bulge);
-                }
-            }
-        }
-    }
-    let rel_sigma = vec![0.2; ln_mean.len()];
-    let (alt, lat) = ((300e3, 25e3, na), (-90.0, 6.0, nl));
-    GriddedField::new(epoch, time, alt, lat, 0.0, no, ln_mean, rel_sigma).unwrap()
 }
 
 /// Thread CPU time of one Monte Carlo (s), the mean of 10 runs (about 0.1 s).
