@@ -179,6 +179,13 @@ def whole(snapshot: Path, days: float, dask: bool) -> None:
     local_wall = stages["propagation"]
     print(f"Dask LocalCluster, 2 workers: propagation {wall:.1f} s (local {local_wall:.1f} s); "
           f"identical to local: {same}")  # fmt: skip
+    import resource
+
+    # After the Dask run: this process (it now holds both results) and its largest
+    # finished child process (the LocalCluster's workers, once closed).
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+    main_mb = peak_rss_mb()
+    print(f"peak RSS after Dask: this process {main_mb:.0f} MB, largest worker {children:.0f} MB")
 
 
 def main() -> None:
