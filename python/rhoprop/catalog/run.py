@@ -36,7 +36,7 @@ from ..time import (
     to_datetime64,
     to_seconds,
 )
-from .backends import _run_local, _run_on_dask, by_epoch
+from .backends import Outcomes, _run_local, _run_on_dask, by_epoch
 from .elements import CatalogObject
 from .objects import (  # noqa: F401 - the names tests and older code import from here
     DragSigma,
@@ -360,27 +360,30 @@ def propagate_catalog(
         shown = ProgressBar(len(objs), "catalog", unit="objects") if progress else None
         bar = shown
     try:
+        results = Outcomes(len(objs), len(epochs))
         if client is None:
-            results = _run_local(plans, shipped, epochs, cfg, bar)
+            _run_local(plans, shipped, epochs, cfg, bar, results)
         else:
             indexed = by_epoch(plans)
             chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
-            results = _run_on_dask(client, shipped, chunks, epochs, cfg, bar)
+            _run_on_dask(client, shipped, chunks, epochs, cfg, bar, results)
     finally:
         if shown is not None:
             shown.close()
-    return _result(objs, epochs, method, [results[i] for i in range(len(objs))], plans, notes)
+    return _result(objs, epochs, method, results, plans, notes)
 
 
 def _result(
     objs: list[CatalogObject],
     epochs: np.ndarray,
     method: str,
-    order: list[ObjectOutcome],
+    results: Outcomes,
     plans: list[ObjectPlan],
     notes: list[str],
 ) -> CatalogResult:
-    """The :class:`CatalogResult` of the objects' outcomes, in catalog order."""
+    """The :class:`CatalogResult` of the objects' outcomes (their arrays already in
+    ``results``' catalog-ordered arrays)."""
+    order = [results[i] for i in range(len(objs))]
     decay = np.array(
         [
             np.datetime64("NaT", "ns") if r.decay is None else add_seconds(o.state.epoch, r.decay)
@@ -391,9 +394,9 @@ def _result(
     return CatalogResult(
         objects=[p.obj for p in plans],
         epochs=epochs,
-        mean=np.stack([r.mean for r in order]),
-        covariance=np.stack([r.cov for r in order]),
-        valid=np.stack([r.valid for r in order]),
+        mean=results.mean,
+        covariance=results.cov,
+        valid=results.valid,
         decay_epoch=decay,
         decay_fraction=np.array([r.fraction for r in order]),
         method=method,
