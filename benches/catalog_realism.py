@@ -446,7 +446,7 @@ def decay(entry: tuple[str, str, str], s1: Any, s2: Any) -> dict[str, Any]:
 #: start epoch: the fit's span (``fit.DEFAULT_SPAN``) and the three days before the epoch
 #: (where the element set's B* was fitted by its owner); the prediction runs from the
 #: start epoch to the truth epoch.
-DENSITY_WINDOWS = {"fit": (-1.0, 1.0), "before": (-3.0, 0.0)}
+DENSITY_WINDOWS = {"fit": (-1.0, 0.0), "before": (-3.0, 0.0)}
 
 
 def density_ratios(
@@ -510,7 +510,7 @@ def signed_summary(rows: dict[str, dict[str, list[dict]]]) -> None:
     the truth (too much drag), and the drag over the prediction relative to SGP4's as the
     truth implies it (``obs``), as rhoprop's error implies it (``rhoprop``; medians of
     :func:`decay`'s ratios, objects with a drag displacement over 1 km) and as NRLMSIS
-    2.1's mean density along the orbit changes from the fit window (-1..+1 d) to the
+    2.1's mean density along the orbit changes from the fit window (-1..0 d) to the
     prediction (``msis``)."""
     print(
         "\n| week | config | perigee km | objects | signed along-track median km "

@@ -1,11 +1,11 @@
 """Fit throughput (issue 28): states and Cd*A/m fitted to element sets
 (``rp.catalog.fit_objects``, what ``load(fit=True)`` runs) for LEO objects of the
-2023-11-13 CelesTrak snapshot through NRLMSIS 2.1's atlas, J2..J4, one day either side of
-each epoch. The batched core fit (8 lanes a trial, many objects a call) is timed against
-the Python Gauss-Newton it replaced (``tests/reference_fit.py``: one single-trajectory
-core propagation per Jacobian column) on a subset, in the same run, with the tiles warm;
-prints objects/s of each, their ratio and how far apart their solutions are in units of
-the fit's formal sigma. Writes ``benches/results/fit.json``.
+2023-11-13 CelesTrak snapshot through NRLMSIS 2.1's atlas, J2..J4, over the day before
+each epoch (``fit.DEFAULT_SPAN``). The batched core fit (8 lanes a trial, many objects a
+call) is timed against the Python Gauss-Newton it replaced (``tests/reference_fit.py``:
+one single-trajectory core propagation per Jacobian column) on a subset, in the same run,
+with the tiles warm; prints objects/s of each, their ratio and how far apart their
+solutions are in units of the fit's formal sigma. Writes ``benches/results/fit.json``.
 
 Run:  RHOPROP_TEST_DATA=../shared/data python benches/fit.py [--objects 300]
                                                              [--reference 12]
@@ -25,6 +25,7 @@ import numpy as np
 import rhoprop as rp
 from machine import describe, info, peak_rss_mb, perigee_altitude
 from rhoprop import catalog
+from rhoprop.catalog.fit import DEFAULT_SPAN
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from reference_fit import reference_fit
@@ -68,7 +69,7 @@ def main() -> None:
 
     sub = [i for i, f in enumerate(fitted) if not isinstance(f, Exception)][: args.reference]
     t0 = time.perf_counter()
-    refs = [reference_fit(objs[i].satrec(), model.atlas, zonal=4) for i in sub]
+    refs = [reference_fit(objs[i].satrec(), model.atlas, span=DEFAULT_SPAN, zonal=4) for i in sub]
     ref_wall = time.perf_counter() - t0
     ref_rate = len(sub) / ref_wall
     worst = 0.0

@@ -53,8 +53,10 @@ def test_fit_converges_and_reports_residuals(tle_file, atmosphere):
     f = fit_element_set(obj, atmosphere)
     assert f.converged and f.iterations <= 8
     assert f.state.epoch == obj.state.epoch
-    assert f.residuals.shape == (len(f.times), 3) and f.times[0] == -86400 and f.times[-1] == 86400
-    assert f.rms_total < 2000.0  # m: J2 numerical orbit vs SGP4 over two days
+    # The default span: the day before the epoch, every 600 s.
+    assert f.residuals.shape == (len(f.times), 3) and f.times[0] == -86400 and f.times[-1] == 0
+    assert len(f.times) == 145
+    assert f.rms_total < 2000.0  # m: J2 numerical orbit vs SGP4 over a day
     assert np.isclose(f.rms_total, np.sqrt(np.sum(f.rms**2)))
     assert f.drag_parameter > 0 and f.drag_sigma > 0
     assert f.covariance.shape == (7, 7)

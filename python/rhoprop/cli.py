@@ -335,8 +335,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_const",
         const=True,
         default="auto",
-        help="fit every object's state and Cd*A/m to its SGP4 positions over one day "
-        "either side of its epoch with rhoprop's dynamics and the model (over 100 objects/s "
+        help="fit every object's state and Cd*A/m to its SGP4 positions over the day "
+        "before its epoch with rhoprop's dynamics and the model (over 100 objects/s "
         "on 2 cores). Default: the near-Earth objects with perigee below 700 km and the "
         "deep-space ones (period of 225 min or more) whose drag comes from the element set",
     )

@@ -331,8 +331,8 @@ def load(
         model: density model for the fit (required with ``fit=True``): a sampled model
             is sampled once into one field covering every object's span and altitudes;
             a ``DensityField`` is used as given.
-        span: fit span, s from each epoch (default ``fit.DEFAULT_SPAN``, one day either
-            side).
+        span: fit span, s from each epoch (default :func:`~rhoprop.catalog.fit.default_span`:
+            the day before the epoch, one day either side for deep-space orbits).
         threads: objects fitted at once (default: CPU count).
         zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6 (default
             4, the degree of catalog runs, ``propagate_catalog``); fit with the degree the
@@ -355,8 +355,6 @@ def load(
             not the default because on the development weeks it does not predict better
             than the newest element set's fit (docs/catalog-realism.md, "History fits").
     """
-    from .fit import DEFAULT_SPAN
-
     if history not in ("newest", "fit", "each"):
         raise ValueError(f"history must be 'newest', 'fit' or 'each', got {history!r}")
     if history == "fit" and not fit:
@@ -412,7 +410,7 @@ def load(
         out.objects, older = _newest_of_each(out.objects)
     if fit and out.objects:
         together = older if history == "fit" else None
-        _fit_all(out, model, span or DEFAULT_SPAN, errors, threads, zonal_degree, together)
+        _fit_all(out, model, span, errors, threads, zonal_degree, together)
     if older and history == "newest":
         import dataclasses
 
@@ -490,9 +488,10 @@ def fit_objects(
 ) -> list[CatalogObject | Exception]:
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
-    one day either side; an orbit that comes down within the span's end is fitted to the
-    day before the epoch instead), in the core many objects per call
-    (:func:`~rhoprop.catalog.fit.fit_histories`; ``threads`` calls prepared at once), in
+    :func:`~rhoprop.catalog.fit.default_span`: the day before it, one day either side for
+    deep-space orbits; with a span reaching past the epoch, an orbit that comes down
+    within it is fitted to the part before the epoch instead), in the core many objects
+    per call (:func:`~rhoprop.catalog.fit.fit_histories`; ``threads`` calls at once), in
     epoch order so that the fits of a call share their day tiles. ``history``: {NORAD
     id: older element sets} fitted together with the object's (those within
     :data:`HISTORY_DAYS` of it). A fit that leaves an RMS residual above
@@ -500,10 +499,9 @@ def fit_objects(
     Returns, in input order, the fitted object (``fit`` set, covariance the TLE accuracy
     plus the fit's) or the exception of a fit that failed."""
     from ..density import SampledModel
-    from .fit import DEFAULT_SPAN, fit_histories
+    from .fit import DEFAULT_SPAN, default_span, fit_histories
 
     history = history or {}
-    first = DEFAULT_SPAN if span is None else span
     atmosphere = model.atlas if isinstance(model, SampledModel) else model
     histories = []
     for obj in objects:
@@ -511,20 +509,24 @@ def fit_objects(
         histories.append(
             [*(o for o in history.get(obj.norad_id, ()) if o.state.epoch >= oldest), obj]
         )
+    groups: dict[tuple[float, float], list[int]] = {}
+    for i, obj in enumerate(objects):
+        sat = obj.satrec()
+        first = span or (default_span(sat) if sat is not None else DEFAULT_SPAN)
+        groups.setdefault((float(first[0]), float(first[1])), []).append(i)
     out: list[Any] = [None] * len(objects)
-    todo = list(range(len(objects)))
-    tried = [first] if span is not None else [first, (first[0], 0.0)]
-    for k, window in enumerate(tried):
-        runs = fit_histories(
-            [histories[i] for i in todo],
-            atmosphere,
-            span=window,
-            zonal_degree=zonal_degree,
-            threads=threads,
-        )
-        for i, f in zip(todo, runs, strict=True):
-            out[i] = f if isinstance(f, Exception) else _fitted(objects[i], f, window)
-        if k < len(tried) - 1:
+    for first, todo in groups.items():
+        tried = [first] if first[1] <= 0.0 else [first, (first[0], 0.0)]
+        for window in tried:
+            runs = fit_histories(
+                [histories[i] for i in todo],
+                atmosphere,
+                span=window,
+                zonal_degree=zonal_degree,
+                threads=threads,
+            )
+            for i, f in zip(todo, runs, strict=True):
+                out[i] = f if isinstance(f, Exception) else _fitted(objects[i], f, window)
             todo = [i for i in todo if isinstance(out[i], Exception)]
             if not todo:
                 break
@@ -565,7 +567,7 @@ def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogO
 def _fit_all(
     cat: Catalog,
     model: Any,
-    span: tuple[float, float],
+    span: tuple[float, float] | None,
     errors: str,
     threads: int | None,
     zonal_degree: int = 2,
