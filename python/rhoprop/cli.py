@@ -336,9 +336,10 @@ def build_parser() -> argparse.ArgumentParser:
         const=True,
         default="auto",
         help="fit every object's state and Cd*A/m to its SGP4 positions over the day "
-        "before its epoch with rhoprop's dynamics and the model (over 100 objects/s "
-        "on 2 cores). Default: the near-Earth objects with perigee below 700 km and the "
-        "deep-space ones (period of 225 min or more) whose drag comes from the element set",
+        "before its epoch (one day either side for deep-space orbits) with rhoprop's "
+        "dynamics and the model (over 100 objects/s on 2 cores). Default: the near-Earth "
+        "objects with perigee below 700 km and the deep-space ones (period of 225 min or "
+        "more) whose drag comes from the element set",
     )
     cat.add_argument(
         "--no-fit",
