@@ -7,16 +7,14 @@ use rhoprop_core::ccsp::{ccsp, CcspConfig};
 use rhoprop_core::density::Exponential;
 use rhoprop_core::dynamics::{BatchRhs, Dynamics, Perturbation, State};
 use rhoprop_core::integrators::{FixedMethod, FixedStepper};
-use rhoprop_core::kappa::KappaProcess;
-use rhoprop_core::montecarlo::{monte_carlo, monte_carlo_on, MonteCarloConfig};
-use rhoprop_core::problem::Problem;
+use rhoprop_core::montecarlo::{monte_carlo, monte_carlo_on};
 use rhoprop_core::progress::Progress;
 use rhoprop_core::simd::SimdPath;
 use std::hint::black_box;
 
-#[path = "common/synthetic_field.rs"]
-mod synthetic;
-use synthetic::synthetic_field;
+#[path = "common/one_thread.rs"]
+mod one_thread;
+use one_thread::{one_day_monte_carlo, paper_problem, synthetic_field};
 
 const PAPER: [f64; 6] = rhoprop_core::constants::PAPER_STATE;
 
@@ -77,32 +75,11 @@ fn benches(c: &mut Criterion) {
 /// Whole runs on the paper's orbit and the benchmark exponential atmosphere (20 % sigma).
 fn runs(c: &mut Criterion) {
     let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
-    let problem = Problem {
-        epoch: 8.4e7,
-        y0: PAPER,
-        drag: 3.0912 * 0.0015,
-        floor_altitude: 120e3,
-        zonal_degree: 2,
-    };
+    let problem = paper_problem();
 
     let mut group = c.benchmark_group("monte_carlo");
     group.sample_size(20);
-    let mc = MonteCarloConfig {
-        problem,
-        initial_factor: None,
-        kappa: KappaProcess::GaussMarkov {
-            half_life: 1080.0,
-            interval: 180.0,
-        },
-        perturbation: Perturbation::Additive,
-        method: FixedMethod::Rk8,
-        max_step: 180.0,
-        output_times: (0..=24).map(|i| i as f64 * 3600.0).collect(),
-        members: 64,
-        seed: 1,
-        record_density: false,
-        drag_sigma: 0.0,
-    };
+    let mc = one_day_monte_carlo(problem);
     group.bench_function("exponential/64 members x 1 day", |b| {
         b.iter(|| monte_carlo(&atm, black_box(&mc), &Progress::default()).unwrap())
     });

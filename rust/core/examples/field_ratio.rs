@@ -9,17 +9,13 @@
 //! (PATH: avx512f, avx2+fma or portable; default every path this CPU has).
 
 use rhoprop_core::density::{Atmosphere, Exponential};
-use rhoprop_core::dynamics::Perturbation;
-use rhoprop_core::integrators::FixedMethod;
-use rhoprop_core::kappa::KappaProcess;
 use rhoprop_core::montecarlo::{monte_carlo_on, MonteCarloConfig};
-use rhoprop_core::problem::Problem;
 use rhoprop_core::progress::Progress;
 use rhoprop_core::simd::SimdPath;
 
-#[path = "../benches/common/synthetic_field.rs"]
-mod synthetic;
-use synthetic::synthetic_field;
+#[path = "../benches/common/one_thread.rs"]
+mod one_thread;
+use one_thread::{one_day_monte_carlo, paper_problem, synthetic_field};
 
 /// CPU time of the calling thread, s (Linux).
 fn thread_cpu() -> f64 {
@@ -52,31 +48,9 @@ fn main() {
         .into_iter()
         .filter(|p| args.get(2).is_none_or(|want| want == p.name()))
         .collect();
-    let epoch = 8.4e7;
+    let mc = one_day_monte_carlo(paper_problem());
     let exponential = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
-    let field = synthetic_field(epoch);
-    let mc = MonteCarloConfig {
-        problem: Problem {
-            epoch,
-            y0: rhoprop_core::constants::PAPER_STATE,
-            drag: 3.0912 * 0.0015,
-            floor_altitude: 120e3,
-            zonal_degree: 2,
-        },
-        initial_factor: None,
-        kappa: KappaProcess::GaussMarkov {
-            half_life: 1080.0,
-            interval: 180.0,
-        },
-        perturbation: Perturbation::Additive,
-        method: FixedMethod::Rk8,
-        max_step: 180.0,
-        output_times: (0..=24).map(|i| i as f64 * 3600.0).collect(),
-        members: 64,
-        seed: 1,
-        record_density: false,
-        drag_sigma: 0.0,
-    };
+    let field = synthetic_field(mc.problem.epoch);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()

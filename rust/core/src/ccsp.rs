@@ -459,10 +459,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
             kappa.k0[l] = pt[6];
             drag[l] = problem.drag * drag_factor(cfg.drag_sigma, pt[7]);
         }
-        let mut dynamics = Dynamics::<A, W>::new(atmosphere, problem.epoch, drag);
-        dynamics.floor_altitude = problem.floor_altitude;
-        dynamics.zonal_degree = problem.zonal_degree;
-        dynamics.third_body = crate::dynamics::deep_space(&problem.y0);
+        let mut dynamics = Dynamics::<A, W>::for_problem(atmosphere, problem, drag);
         dynamics.perturbation = cfg.perturbation;
         dynamics.kappa = kappa;
         let mut watch = FloorWatch {

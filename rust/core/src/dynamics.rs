@@ -10,6 +10,7 @@ use crate::ephemeris::ThirdBodies;
 use crate::error::CoreError;
 use crate::frames::{EarthRotation, RotationCache};
 use crate::kappa::KappaLanes;
+use crate::problem::Problem;
 
 /// Batch state: `[x, y, z, vx, vy, vz][lane]`, m and m/s, inertial.
 pub type State<const W: usize> = [[f64; W]; 6];
@@ -160,6 +161,17 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             rotation: RotationCache::default(),
             memory: Box::default(),
         }
+    }
+
+    /// The dynamics of a run of `problem` with the given drag parameters: its epoch, decay
+    /// floor and zonal degree, and the deep-space terms when its initial state calls for
+    /// them. Every propagator builds its dynamics here, so none forgets the floor.
+    pub fn for_problem(atmosphere: &'a A, problem: &Problem, drag: [f64; W]) -> Self {
+        let mut dynamics = Self::new(atmosphere, problem.epoch, drag);
+        dynamics.floor_altitude = problem.floor_altitude;
+        dynamics.zonal_degree = problem.zonal_degree;
+        dynamics.third_body = deep_space(&problem.y0);
+        dynamics
     }
 }
 

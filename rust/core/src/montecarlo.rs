@@ -285,11 +285,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
 
         let drag: [f64; W] =
             std::array::from_fn(|l| cfg.problem.drag * drag_factors[l.min(lanes - 1)]);
-        let mut dynamics = Dynamics::<A, W>::new(atmosphere, cfg.problem.epoch, drag);
+        let mut dynamics = Dynamics::<A, W>::for_problem(atmosphere, &cfg.problem, drag);
         dynamics.perturbation = cfg.perturbation;
-        dynamics.floor_altitude = cfg.problem.floor_altitude;
-        dynamics.zonal_degree = cfg.problem.zonal_degree;
-        dynamics.third_body = crate::dynamics::deep_space(&cfg.problem.y0);
         let spacing = cfg.kappa.node_spacing();
         let mut kappa = KappaLanes::<W> {
             t0: 0.0,

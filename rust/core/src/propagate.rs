@@ -140,10 +140,7 @@ pub fn propagate<A: Atmosphere + ?Sized>(
     progress: &Progress,
 ) -> Result<Trajectory, CoreError> {
     problem.validate()?;
-    let mut dynamics = Dynamics::<A, 1>::new(atmosphere, problem.epoch, [problem.drag]);
-    dynamics.floor_altitude = problem.floor_altitude;
-    dynamics.zonal_degree = problem.zonal_degree;
-    dynamics.third_body = crate::dynamics::deep_space(&problem.y0);
+    let mut dynamics = Dynamics::<A, 1>::for_problem(atmosphere, problem, [problem.drag]);
     let mut y: State<1> = problem.y0.map(|c| [c]);
     let mut observer = Observer {
         epoch: problem.epoch,
