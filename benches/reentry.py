@@ -209,8 +209,9 @@ def main() -> None:
             def short(t: np.datetime64) -> str:
                 return "-" if np.isnat(t) else str(t.astype("datetime64[m]"))
 
+            fit = f"{res.fit_rms[k]:6.0f} m" if res.fitted[k] else "no"
             line += (
-                f" | {'':8} {short(res.epoch_q025[k]):16} {short(res.epoch_median[k]):16} "
+                f" | {fit:>8} {short(res.epoch_q025[k]):16} {short(res.epoch_median[k]):16} "
                 f"{short(res.epoch_q975[k]):16} {'yes' if sc['per_object'][k] else 'no'}"
             )
         print(line)

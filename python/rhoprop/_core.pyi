@@ -177,14 +177,16 @@ def ccsp(
     floor_altitude: float,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
+    output_times: _F64 | None = None,
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
-    Cd*A/m carried as the second consider parameter."""
+    Cd*A/m carried as the second consider parameter; output_times are further outputs
+    between updates (the sigma points' moments in flight, not re-drawn)."""
 
 def ccsp_many(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
-    objects: list[tuple[float, _F64, float, _F64, _F64, float, float]],
+    objects: list[tuple[float, _F64, float, _F64, _F64, float, float, _F64]],
     scaling: tuple[float, float],
     perturbation: str,
     floor_altitude: float,
@@ -192,8 +194,8 @@ def ccsp_many(
     progress: Callable[[int], object] | None = None,
 ) -> list[_CcspOutput | Exception]:
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
-    update_times, step, drag_sigma), in one call: per object the dict of ``ccsp`` or the
-    exception its run raised."""
+    update_times, step, drag_sigma, output_times (empty: none)), in one call: per object
+    the dict of ``ccsp`` or the exception its run raised."""
 
 def fit_orbits(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,

@@ -56,6 +56,7 @@ def ccsp(
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
     dynamics: Dynamics | None = None,
+    output_times: npt.ArrayLike | None = None,
 ) -> CcspResult:
     """Propagates mean and covariance with the CCSP filter.
 
@@ -111,6 +112,12 @@ def ccsp(
         dynamics: a :class:`~rhoprop.Dynamics` holding ``step``, ``floor_altitude`` and
             ``zonal_degree`` at once (its integrator must be None or "rk8": the filter
             integrates its sigma points with RK8).
+        output_times: further outputs, s from the epoch (increasing, between 0 and the
+            end): the moments of the sigma points in flight, not re-drawn there. Default
+            None: an output at each update only. Eccentric orbits need this: sigma points
+            re-drawn in Cartesian coordinates near perigee leave the orbit's energy
+            (docs/catalog-realism.md, "Eccentric orbits"), so catalog runs update them
+            once per revolution, at apogee, and output hourly in between.
 
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -139,6 +146,7 @@ def ccsp(
         update_times=update_times,
         zonal_degree=zonal_degree,
         drag_sigma=drag_sigma,
+        output_times=output_times,
     )
 
     def run(atmosphere: AtmosphereLike) -> _CcspOutput:
@@ -155,6 +163,7 @@ def ccsp(
             args.floor,
             args.degree,
             args.drag_sigma,
+            args.outputs if len(args.outputs) else None,
         )
 
     out = run_in_field(model, state, span, args.floor, run)
@@ -173,6 +182,7 @@ class _Arguments:
     floor: float
     degree: int
     drag_sigma: float
+    outputs: np.ndarray  # output times between updates, s (may be empty)
 
 
 def _arguments(
@@ -189,6 +199,7 @@ def _arguments(
     update_times: Any,
     zonal_degree: int,
     drag_sigma: float,
+    output_times: Any = None,
 ) -> tuple[_Arguments, float]:
     """Checks the arguments of :func:`ccsp`; returns them for the core and the span, s."""
     if not isinstance(state, OrbitState):
@@ -207,7 +218,17 @@ def _arguments(
         span = span_of(duration, times, "update_times")
     h = fixed_step("rk8", step, state)
     check_steps(span, h, "step")
-    check_memory((len(times) + 1) * OUTPUT_BYTES, DEFAULT_MAX_MEMORY, "the CCSP outputs")
+    outputs = np.empty(0)
+    if output_times is not None:
+        outputs = explicit_times("output_times", output_times, allow_zero=False)
+        if len(outputs) and outputs[-1] >= times[-1]:
+            raise ValueError(
+                f"output_times must lie before the end ({times[-1]:g} s), got {outputs[-1]:g}"
+            )
+        outputs = np.setdiff1d(outputs, times)
+    check_memory(
+        (len(times) + len(outputs) + 1) * OUTPUT_BYTES, DEFAULT_MAX_MEMORY, "the CCSP outputs"
+    )
     l1 = _validate.positive("scaling[0]", scaling[0])
     l2 = _validate.positive("scaling[1]", scaling[1])
     p0 = DEFAULT_INITIAL_COVARIANCE if initial_covariance is None else initial_covariance
@@ -223,6 +244,7 @@ def _arguments(
         floor=_validate.real("floor_altitude", floor_altitude),
         degree=zonal_degree_argument(zonal_degree),
         drag_sigma=drag_sigma_argument(drag_sigma),
+        outputs=outputs,
     )
     return args, span
 
@@ -258,9 +280,9 @@ def ccsp_many(
     """The CCSP of several objects in one core call (a catalog chunk): each entry of
     ``runs`` holds the keywords of :func:`ccsp` that differ per object (``state``,
     ``spacecraft``, ``update_times``, ``initial_covariance``, ``drag_sigma``; optional
-    ``step``; scaling and perturbation are the defaults). Objects run in parallel, each
-    object's sigma points in one SIMD batch, and every result equals (bit for bit)
-    :func:`ccsp` of that object alone. Objects whose
+    ``step`` and ``output_times``; scaling and perturbation are the defaults). Objects
+    run in parallel, each object's sigma points in one SIMD batch, and every result
+    equals (bit for bit) :func:`ccsp` of that object alone. Objects whose
     core atmosphere differs (a model sampled per object) go in separate calls. Returns,
     per object, its :class:`CcspResult` or the exception its run raised there (not
     raised: the caller decides, e.g. repeats the object with :func:`ccsp`, which widens
@@ -282,6 +304,7 @@ def ccsp_many(
             update_times=run["update_times"],
             zonal_degree=zonal_degree,
             drag_sigma=run.get("drag_sigma", 0.0),
+            output_times=run.get("output_times"),
         )
         prepared.append((state, run["spacecraft"], args, as_atmosphere(model, state, span)))
     results: list[CcspResult | Exception] = [RuntimeError("not run")] * len(prepared)
@@ -292,7 +315,7 @@ def ccsp_many(
         atmosphere = prepared[members[0]][3]
         first = prepared[members[0]][2]
         objects = [
-            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, a.drag_sigma)
+            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, a.drag_sigma, a.outputs)
             for s, c, a, _ in (prepared[i] for i in members)
         ]
         outs = _core.ccsp_many(

@@ -128,6 +128,7 @@ fn runs(c: &mut Criterion) {
         problem,
         p0,
         update_times: (1..=72).map(|i| i as f64 * 3600.0).collect(),
+        output_times: vec![],
         scaling: (3.0, 3.0),
         perturbation: Perturbation::Additive,
         method: FixedMethod::Rk8,

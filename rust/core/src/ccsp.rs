@@ -43,6 +43,13 @@ pub struct CcspConfig {
     pub p0: [[f64; 6]; 6],
     /// Update times, s from the epoch: increasing, > 0; the last is the end.
     pub update_times: Vec<f64>,
+    /// Further output times, s from the epoch (increasing, within (0, end); empty: the
+    /// updates only): the moments of the sigma points in flight, without re-drawing them.
+    /// Re-drawn in Cartesian coordinates near the perigee of an eccentric orbit, where the
+    /// spread bends along the orbit within minutes, the points leave the orbit's energy
+    /// and the covariance grows tenfold over a few revolutions (docs/catalog-realism.md,
+    /// "Eccentric orbits"); such runs update once per revolution and output here.
+    pub output_times: Vec<f64>,
     /// (lambda1 + n, lambda2 + p), both > 0; the paper uses (3, 3).
     pub scaling: (f64, f64),
     pub perturbation: Perturbation,
@@ -198,6 +205,22 @@ fn run<A: Atmosphere + ?Sized>(
             "must increase strictly from > 0",
         ));
     }
+    let end = cfg.update_times[cfg.update_times.len() - 1];
+    if !cfg.output_times.is_empty() {
+        crate::integrators::check_times("output times", 0.0, &cfg.output_times)?;
+        let last = cfg.output_times[cfg.output_times.len() - 1];
+        if cfg.output_times[0] <= 0.0 || last >= end {
+            return Err(CoreError::invalid(
+                "output times",
+                if last >= end {
+                    last
+                } else {
+                    cfg.output_times[0]
+                },
+                "must lie within (0, the last update time)",
+            ));
+        }
+    }
     positive("step", cfg.max_step)?;
     positive("scaling[0] (lambda1 + n)", cfg.scaling.0)?;
     positive("scaling[1] (lambda2 + p)", cfg.scaling.1)?;
@@ -233,8 +256,16 @@ fn run<A: Atmosphere + ?Sized>(
         drag_cross: vec![[0.0; 6]],
         decayed_at: None,
     };
+    if cfg.output_times.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(CoreError::rejected(
+            "output times",
+            "must increase strictly",
+        ));
+    }
     let npoints = if drag_on { POINTS_DRAG } else { POINTS_KAPPA };
+    let weights = Weights { w0, wi, v0, vi };
     let mut t = 0.0;
+    let mut next_output = 0;
     for &t1 in &cfg.update_times {
         progress.check()?;
         let s = factor(&pc, &c, &d, l1, l2, DRAG_ALPHA, t)?;
@@ -254,32 +285,47 @@ fn run<A: Atmosphere + ?Sized>(
                 pt[i] = base + col.map_or(0.0, |j| sign * s[(i, j)]);
             }
         }
-        let (ends, decayed_at) =
-            propagate_points(atmosphere, cfg, &points, t, t1, progress, grouping)?;
+        // The output times inside this update's interval, then the update itself.
+        let mut stops = Vec::new();
+        while next_output < cfg.output_times.len() && cfg.output_times[next_output] <= t1 {
+            let to = cfg.output_times[next_output];
+            if to > t && to < t1 {
+                stops.push(to);
+            }
+            next_output += 1;
+        }
+        stops.push(t1);
+        let (ends_at, decayed_at) =
+            propagate_points(atmosphere, cfg, &points, t, &stops, progress, grouping)?;
+        // The outputs in flight (before any floor crossing): the points' moments.
+        for (k, ends) in ends_at.iter().enumerate().take(stops.len() - 1) {
+            if decayed_at.is_some_and(|td| stops[k] >= td) {
+                break;
+            }
+            let (mean_k, pc_k, c_k) = state_moments(&points, ends, weights);
+            let d_k = if drag_on {
+                drag_cross(&points, ends)
+            } else {
+                d
+            };
+            let p_k = pc_k + d_k * d_k.transpose();
+            out.push(
+                stops[k],
+                &mean_k,
+                &((p_k + p_k.transpose()) * 0.5),
+                &c_k,
+                &d_k,
+            );
+        }
         if decayed_at.is_some() {
             out.decayed_at = decayed_at;
             break;
         }
-        // Set 1 (state points): mean and covariance.
-        let m1: Vector6<f64> = (0..KAPPA).map(|k| weight(k, w0, wi) * ends[k]).sum();
-        let mut p1 = Matrix6::zeros();
-        for (k, e) in ends.iter().enumerate().take(KAPPA) {
-            let d = e - m1;
-            p1 += weight(k, w0, wi) * d * d.transpose();
-        }
-        // Set 2 (consider points, centred on point 0): cross-covariance between state and
-        // kappa. Summed in the order of the layout that flew the centre twice (same bits).
-        let consider = [0, KAPPA, KAPPA + 1];
-        let m2: Vector6<f64> = (0..3).map(|k| weight(k, v0, vi) * ends[consider[k]]).sum();
-        let mut cross = Vector6::zeros();
-        for k in 0..3 {
-            let kappa = points[consider[k]][6];
-            cross += weight(k, v0, vi) * (ends[consider[k]] - m2) * kappa;
-        }
+        let ends = &ends_at[stops.len() - 1];
+        let (m1, pc1, cross) = state_moments(&points, ends, weights);
         mean = m1;
         c = cross;
-        pc = p1 + c * c.transpose();
-        pc = (pc + pc.transpose()) * 0.5;
+        pc = (pc1 + pc1.transpose()) * 0.5;
         if Cholesky::new(pc).is_none() {
             return Err(CoreError::NotPositiveDefinite {
                 what: "CCSP covariance",
@@ -290,24 +336,78 @@ fn run<A: Atmosphere + ?Sized>(
         }
         let mut p = pc;
         if drag_on {
-            // Set 2, c point: the cross-covariance with the ballistic-coefficient error,
-            // carried whole: a one-sided difference from the centre (point 0) at
-            // c = alpha sqrt(l2).
-            let k = KAPPA + 2;
-            d = (ends[k] - ends[0]) / points[k][7];
+            d = drag_cross(&points, ends);
             p = pc + d * d.transpose();
             p = (p + p.transpose()) * 0.5;
         }
         t = t1;
-        out.times.push(t);
-        out.means.push(std::array::from_fn(|i| mean[i]));
-        out.covariances
-            .push(std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])));
-        out.cross.push(std::array::from_fn(|i| c[i]));
-        out.drag_cross.push(std::array::from_fn(|i| d[i]));
+        out.push(t, &mean, &p, &c, &d);
         progress.add(1);
     }
     Ok(out)
+}
+
+impl CcspOutput {
+    fn push(
+        &mut self,
+        t: f64,
+        mean: &Vector6<f64>,
+        p: &Matrix6<f64>,
+        c: &Vector6<f64>,
+        d: &Vector6<f64>,
+    ) {
+        self.times.push(t);
+        self.means.push(std::array::from_fn(|i| mean[i]));
+        self.covariances
+            .push(std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])));
+        self.cross.push(std::array::from_fn(|i| c[i]));
+        self.drag_cross.push(std::array::from_fn(|i| d[i]));
+    }
+}
+
+/// UKF weights of the state set (w0, wi) and of the consider set (v0, vi).
+#[derive(Debug, Clone, Copy)]
+struct Weights {
+    w0: f64,
+    wi: f64,
+    v0: f64,
+    vi: f64,
+}
+
+/// The state set's mean and covariance with kappa's part, P + C C^T, and the
+/// cross-covariance C with kappa from the consider set (centred on point 0), of the
+/// sigma points `points` flown to `ends`.
+fn state_moments(
+    points: &[Point],
+    ends: &[Vector6<f64>],
+    w: Weights,
+) -> (Vector6<f64>, Matrix6<f64>, Vector6<f64>) {
+    // Set 1 (state points): mean and covariance.
+    let m1: Vector6<f64> = (0..KAPPA).map(|k| weight(k, w.w0, w.wi) * ends[k]).sum();
+    let mut p1 = Matrix6::zeros();
+    for (k, e) in ends.iter().enumerate().take(KAPPA) {
+        let d = e - m1;
+        p1 += weight(k, w.w0, w.wi) * d * d.transpose();
+    }
+    // Set 2 (consider points, centred on point 0): cross-covariance between state and
+    // kappa. Summed in the order of the layout that flew the centre twice (same bits).
+    let consider = [0, KAPPA, KAPPA + 1];
+    let m2: Vector6<f64> = (0..3)
+        .map(|k| weight(k, w.v0, w.vi) * ends[consider[k]])
+        .sum();
+    let mut cross = Vector6::zeros();
+    for k in 0..3 {
+        let kappa = points[consider[k]][6];
+        cross += weight(k, w.v0, w.vi) * (ends[consider[k]] - m2) * kappa;
+    }
+    (m1, p1 + cross * cross.transpose(), cross)
+}
+
+/// Set 2, c point: the cross-covariance with the ballistic-coefficient error, carried
+/// whole: a one-sided difference from the centre (point 0) at c = alpha sqrt(l2).
+fn drag_cross(points: &[Point], ends: &[Vector6<f64>]) -> Vector6<f64> {
+    let k = KAPPA + 2;
+    (ends[k] - ends[0]) / points[k][7]
 }
 
 fn weight(k: usize, w0: f64, wi: f64) -> f64 {
@@ -318,8 +418,8 @@ fn weight(k: usize, w0: f64, wi: f64) -> f64 {
     }
 }
 
-/// The sigma points at t1, and the earliest floor crossing of any of them.
-type PointEnds = (Vec<Vector6<f64>>, Option<f64>);
+/// The sigma points at each stop reached, and the earliest floor crossing of any of them.
+type PointEnds = (Vec<Vec<Vector6<f64>>>, Option<f64>);
 
 /// Propagates the sigma points from t0 to t1, each with its kappa held, in parallel
 /// batches of the SIMD path's lane count (or, [`Grouping::Whole`], in one batch of all
@@ -329,17 +429,17 @@ fn propagate_points<A: Atmosphere + ?Sized>(
     cfg: &CcspConfig,
     points: &[Point],
     t0: f64,
-    t1: f64,
+    stops: &[f64],
     progress: &Progress,
     grouping: Grouping,
 ) -> Result<PointEnds, CoreError> {
     let path = SimdPath::detect();
     if grouping == Grouping::Whole {
         progress.check()?;
-        let plan = StepPlan::equal_steps(t0, &[t1], cfg.max_step)?;
+        let plan = StepPlan::equal_steps(t0, stops, cfg.max_step)?;
         return whole_batch::<A, LANES>(path, atmosphere, cfg, points, &plan);
     }
-    propagate_points_in::<A, 8>(path, atmosphere, cfg, points, t0, t1, progress)
+    propagate_points_in::<A, 8>(path, atmosphere, cfg, points, t0, stops, progress)
 }
 
 fn propagate_points_in<A: Atmosphere + ?Sized, const W: usize>(
@@ -348,10 +448,10 @@ fn propagate_points_in<A: Atmosphere + ?Sized, const W: usize>(
     cfg: &CcspConfig,
     points: &[Point],
     t0: f64,
-    t1: f64,
+    stops: &[f64],
     progress: &Progress,
 ) -> Result<PointEnds, CoreError> {
-    let plan = StepPlan::equal_steps(t0, &[t1], cfg.max_step)?;
+    let plan = StepPlan::equal_steps(t0, stops, cfg.max_step)?;
     let batches: Vec<PointEnds> = points
         .par_chunks(W)
         .map(|chunk| {
@@ -371,7 +471,17 @@ fn propagate_points_in<A: Atmosphere + ?Sized, const W: usize>(
         .iter()
         .filter_map(|b| b.1)
         .min_by(|a, b| a.total_cmp(b));
-    Ok((batches.into_iter().flat_map(|b| b.0).collect(), decayed_at))
+    // Per stop, the points of every batch in order (as far as every batch got).
+    let reached = batches.iter().map(|b| b.0.len()).min().unwrap_or(0);
+    let ends = (0..reached)
+        .map(|k| {
+            batches
+                .iter()
+                .flat_map(|b| b.0[k].iter().copied())
+                .collect()
+        })
+        .collect();
+    Ok((ends, decayed_at))
 }
 
 /// All sigma points in one batch of `W` lanes (`W` = their count).
@@ -400,9 +510,17 @@ struct FloorWatch<const W: usize> {
     lanes: usize,
     last: (f64, State<W>),
     decayed_at: Option<f64>,
+    /// The batch's state at each stop of the plan reached.
+    at_stops: Vec<State<W>>,
 }
 
 impl<R, const W: usize> StepHooks<W, R> for FloorWatch<W> {
+    #[inline(always)]
+    fn on_output(&mut self, _: usize, _: f64, y: &State<W>, _: &R) -> Result<(), CoreError> {
+        self.at_stops.push(*y);
+        Ok(())
+    }
+
     #[inline(always)]
     fn after_step(&mut self, t: f64, y: &mut State<W>, _: &mut R) -> Result<Control, CoreError> {
         let (t0, prev) = self.last;
@@ -468,11 +586,18 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
             lanes,
             last: (plan.start(), *y),
             decayed_at: None,
+            at_stops: Vec::new(),
         };
         drive(cfg.method, &mut dynamics, y, plan, &mut watch)?;
         Ok((
-            (0..lanes)
-                .map(|l| Vector6::from_fn(|c, _| y[c][l]))
+            watch
+                .at_stops
+                .iter()
+                .map(|ys| {
+                    (0..lanes)
+                        .map(|l| Vector6::from_fn(|c, _| ys[c][l]))
+                        .collect()
+                })
                 .collect(),
             watch.decayed_at,
         ))
@@ -555,6 +680,7 @@ mod tests {
             problem,
             p0,
             update_times: vec![600.0, 1200.0, 3600.0, 7200.0],
+            output_times: vec![],
             scaling: (3.0, 3.0),
             perturbation: Perturbation::Additive,
             method: FixedMethod::Rk8,
@@ -576,6 +702,35 @@ mod tests {
         // Sigma points 1 m / 1 mm/s apart cross within a fraction of a second of the mean.
         assert!((td - mean).abs() < 2.0, "{td} s vs {mean} s");
         assert_eq!(out.times, vec![0.0, 600.0, 1200.0]);
+    }
+
+    #[test]
+    fn outputs_between_updates_are_the_moments_of_the_points_in_flight() {
+        use crate::density::Exponential;
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        // One update at 2 h with outputs at 1 h and 1.5 h: the 1-hour output is the first
+        // update of a run that updates at 1 h (same points, same 180-s steps: same bits),
+        // and the 2-hour output is that of a run without the extra outputs.
+        let mut cfg = paper_config(vec![7200.0], 0.3);
+        cfg.output_times = vec![3600.0, 5400.0];
+        let out = ccsp(&atm, &cfg, &Progress::default()).unwrap();
+        assert_eq!(out.times, vec![0.0, 3600.0, 5400.0, 7200.0]);
+        let hourly = ccsp(&atm, &paper_config(vec![3600.0], 0.3), &Progress::default()).unwrap();
+        assert_eq!(out.means[1], hourly.means[1]);
+        assert_eq!(out.covariances[1], hourly.covariances[1]);
+        assert_eq!(out.drag_cross[1], hourly.drag_cross[1]);
+        let plain = ccsp(&atm, &paper_config(vec![7200.0], 0.3), &Progress::default()).unwrap();
+        assert_eq!(out.means[3], plain.means[1]);
+        assert_eq!(out.covariances[3], plain.covariances[1]);
+        // An output time on an update is that update's; outside (0, end) an error.
+        cfg.output_times = vec![3600.0, 7200.0];
+        assert!(ccsp(&atm, &cfg, &Progress::default()).is_err());
+        let mut two = paper_config(vec![3600.0, 7200.0], 0.0);
+        two.output_times = vec![3600.0];
+        let out = ccsp(&atm, &two, &Progress::default()).unwrap();
+        assert_eq!(out.times, vec![0.0, 3600.0, 7200.0]);
+        two.output_times = vec![1800.0, 1800.0];
+        assert!(ccsp(&atm, &two, &Progress::default()).is_err());
     }
 
     #[test]
@@ -610,6 +765,7 @@ mod tests {
             },
             p0,
             update_times,
+            output_times: vec![],
             scaling: (3.0, 3.0),
             perturbation: Perturbation::Additive,
             method: FixedMethod::Rk8,

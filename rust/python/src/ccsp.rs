@@ -12,10 +12,11 @@ use rhoprop_core::integrators::FixedMethod;
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
 /// decayed_at (s, or None: when a sigma point crossed the floor; the outputs end before it),
 /// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6),
-/// nt = updates + 1.
+/// nt = 1 + the updates + the output times between them.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
-    scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0))]
+    scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0,
+    output_times = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -31,6 +32,7 @@ pub fn ccsp<'py>(
     floor_altitude: f64,
     zonal_degree: u8,
     drag_sigma: f64,
+    output_times: Option<PyReadonlyArray1<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
@@ -39,6 +41,10 @@ pub fn ccsp<'py>(
         problem: crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree)?,
         p0,
         update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),
+        output_times: match &output_times {
+            Some(times) => crate::arrays::vector("output_times", times)?.to_vec(),
+            None => Vec::new(),
+        },
         scaling,
         perturbation,
         method: FixedMethod::Rk8,
@@ -52,7 +58,7 @@ pub fn ccsp<'py>(
 }
 
 /// One object of `ccsp_many`: (epoch, state (6,), drag, initial_covariance (6, 6),
-/// update_times (k,), step, drag_sigma).
+/// update_times (k,), step, drag_sigma, output_times (m,), empty for none).
 type ObjectArgs<'py> = (
     f64,
     PyReadonlyArray1<'py, f64>,
@@ -61,12 +67,14 @@ type ObjectArgs<'py> = (
     PyReadonlyArray1<'py, f64>,
     f64,
     f64,
+    PyReadonlyArray1<'py, f64>,
 );
 
 /// Runs the CCSP filter of several objects through one atmosphere in one call, objects in
 /// parallel with the GIL released (each object's sigma points in one batch); every
 /// result equals `ccsp` of that object alone. `objects` holds one tuple per object
-/// (epoch, state, drag, initial_covariance, update_times, step, drag_sigma); the other
+/// (epoch, state, drag, initial_covariance, update_times, step, drag_sigma, output_times);
+/// the other
 /// settings are shared. Returns a list with, per object, the dict of `ccsp` or the
 /// exception its run raised (not raised here). `progress(done)` is called about every
 /// 50 ms with the updates done over all objects; an exception from it (or Ctrl-C) stops
@@ -89,24 +97,31 @@ pub fn ccsp_many<'py>(
     let perturbation = crate::arrays::perturbation(perturbation)?;
     let cfgs = objects
         .iter()
-        .map(|(epoch, state, drag, p0, times, step, drag_sigma)| {
-            Ok(CcspConfig {
-                problem: crate::arrays::problem(
-                    *epoch,
-                    state,
-                    *drag,
-                    floor_altitude,
-                    zonal_degree,
-                )?,
-                p0: crate::arrays::matrix6("initial_covariance", p0)?,
-                update_times: crate::arrays::vector("update_times", times)?.to_vec(),
-                scaling,
-                perturbation,
-                method: FixedMethod::Rk8,
-                max_step: *step,
-                drag_sigma: *drag_sigma,
-            })
-        })
+        .map(
+            |(epoch, state, drag, p0, times, step, drag_sigma, outputs)| {
+                Ok(CcspConfig {
+                    problem: crate::arrays::problem(
+                        *epoch,
+                        state,
+                        *drag,
+                        floor_altitude,
+                        zonal_degree,
+                    )?,
+                    p0: crate::arrays::matrix6("initial_covariance", p0)?,
+                    update_times: crate::arrays::vector("update_times", times)?.to_vec(),
+                    output_times: if outputs.as_array().is_empty() {
+                        Vec::new()
+                    } else {
+                        crate::arrays::vector("output_times", outputs)?.to_vec()
+                    },
+                    scaling,
+                    perturbation,
+                    method: FixedMethod::Rk8,
+                    max_step: *step,
+                    drag_sigma: *drag_sigma,
+                })
+            },
+        )
         .collect::<PyResult<Vec<_>>>()?;
     let outs = long_call(py, progress, |progress| {
         with_atmosphere!(&atm, |a| core_ccsp_many(a, &cfgs, progress))
