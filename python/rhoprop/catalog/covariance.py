@@ -167,9 +167,9 @@ def element_covariance(state: OrbitState, accuracy: TleAccuracy) -> np.ndarray:
     that the RMS errors at epoch along the velocity and across it in the plane are the
     regime's along-track and radial ones (on a circular orbit these are T and R; on an
     eccentric one a timing error lies along the velocity, which away from the apsides
-    is not T) where the orbit's phase allows it (:func:`_positive_fit`); the drift takes at most half of either, as the
-    near-circular model holds it to half the radial variance, so the matrix keeps full
-    rank."""
+    is not T) where the orbit's phase allows it (:func:`_positive_fit`); the drift takes
+    at most half of either, as the near-circular model holds it to half the radial
+    variance, so the matrix keeps full rank."""
     r, v = state.position, state.velocity
     h = np.cross(r, v)
     rn = float(np.linalg.norm(r))
