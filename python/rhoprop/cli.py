@@ -283,7 +283,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--update-interval",
         type=float,
         default=3600.0,
-        help="CCSP update interval, s (default 3600, the paper's tuning)",
+        help="CCSP update interval, s (default 3600, the paper's tuning); eccentric "
+        "orbits (e >= 0.1) update once per revolution, at apogee",
     )
     _seed(cat)
     cat.add_argument(

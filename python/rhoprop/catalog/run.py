@@ -250,9 +250,11 @@ def propagate_catalog(
             50 km below the floor) or a :class:`~rhoprop.density.DensityField` /
             ``Exponential``.
         end: common end epoch, after every object's epoch.
-        method: ``"ccsp"`` (default; ``update_interval`` s) or ``"monte_carlo"`` (``n``
-            members, ``kappa`` process, object i seeded with ``seed + i``; statistics over
-            the members still flying at each output).
+        method: ``"ccsp"`` (default; updates every ``update_interval`` s, for an
+            eccentric orbit, e >= 0.1, once per revolution at apogee with the outputs in
+            between) or ``"monte_carlo"`` (``n`` members, ``kappa`` process, object i
+            seeded with ``seed + i``; statistics over the members still flying at each
+            output).
         output_step: spacing of the common output epochs, s, counted back from ``end``.
         client: a ``dask.distributed.Client``: objects are split into chunks of
             ``chunk_size``, the atmosphere is sent once and replicated to every worker
