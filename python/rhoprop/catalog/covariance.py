@@ -186,7 +186,7 @@ def element_covariance(state: OrbitState, accuracy: TleAccuracy) -> np.ndarray:
         # Central difference of the state over the element change (da, de, dw, dm) x step.
         hi = _in_plane_state(frame, a + da * step, e + de * step, dw * step, m + dm * step)
         lo = _in_plane_state(frame, a - da * step, e - de * step, -dw * step, m - dm * step)
-        return (hi - lo) / (2.0 * step)
+        return np.asarray((hi - lo) / (2.0 * step), dtype=float)
 
     eps = 1e-6
     cols = {
@@ -233,7 +233,9 @@ def element_covariance(state: OrbitState, accuracy: TleAccuracy) -> np.ndarray:
         (plane[0], var_turn),
         (plane[1], var_turn),
     ]
-    cov = sum(var * np.outer(col, col) for col, var in modes)
+    cov = np.zeros((6, 6))
+    for col, var in modes:
+        cov += var * np.outer(col, col)
     return (cov + cov.T) / 2
 
 

@@ -576,13 +576,15 @@ def _ccsp_chunk(
         offsets = to_seconds(epochs, obj.state.epoch)
         if offsets[-1] <= 0:
             continue
+        updates, outputs = _ccsp_times(obj.state, offsets, cfg.update_interval)
         # Optimistically over every output: the mean orbit (one lane, for its decay time)
         # is needed only if the CCSP comes near the floor (checked below).
         runs.append(
             {
                 "state": obj.state,
                 "spacecraft": craft,
-                **_ccsp_times(obj.state, offsets, cfg.update_interval),
+                "update_times": updates,
+                "output_times": outputs,
                 "initial_covariance": plan.initial,
                 "drag_sigma": plan.drag_sigma,
                 "step": plan.step,
@@ -654,11 +656,13 @@ def _ccsp_outputs(
     def run(k: int) -> Any:
         if offsets[k - 1] <= 0:  # every output at the object's own epoch
             return None
+        updates, outputs = _ccsp_times(state, offsets[:k], cfg.update_interval)
         return ccsp(
             state,
             craft,
             model,
-            **_ccsp_times(state, offsets[:k], cfg.update_interval),
+            update_times=updates,
+            output_times=outputs,
             initial_covariance=initial,
             floor_altitude=cfg.floor_altitude,
             zonal_degree=cfg.zonal_degree,
@@ -698,8 +702,10 @@ def _ccsp_outputs(
     return r.mean[pick], r.covariance[pick], why
 
 
-def _ccsp_times(state: Any, offsets: np.ndarray, interval: float) -> dict[str, np.ndarray]:
-    """The CCSP's ``update_times`` (and ``output_times``) for outputs at ``offsets`` (s
+def _ccsp_times(
+    state: Any, offsets: np.ndarray, interval: float
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """The CCSP's ``update_times`` and ``output_times`` for outputs at ``offsets`` (s
     from the epoch of ``state``): every ``interval`` and every output (:func:`_update_times`)
     for a near-circular orbit; for an eccentric one (eccentricity from
     :data:`~rhoprop.catalog.covariance.ELEMENT_MODEL_ECCENTRICITY`) once per revolution,
@@ -714,7 +720,7 @@ def _ccsp_times(state: Any, offsets: np.ndarray, interval: float) -> dict[str, n
     a, e = axis_and_eccentricity(state)
     end = float(offsets[-1])
     if e < ELEMENT_MODEL_ECCENTRICITY or not 0.0 < a or end <= 0.0:
-        return {"update_times": _update_times(offsets, interval)}
+        return _update_times(offsets, interval), None
     period = 2.0 * np.pi * np.sqrt(a**3 / MU)
     r, v = state.position, state.velocity
     big_e = np.arctan2(float(r @ v) / np.sqrt(MU * a), 1.0 - float(np.linalg.norm(r)) / a)
@@ -723,7 +729,7 @@ def _ccsp_times(state: Any, offsets: np.ndarray, interval: float) -> dict[str, n
     apogees = first + period * np.arange(max(int(np.ceil((end - first) / period)), 0))
     updates = np.append(apogees[(apogees > 0.0) & (apogees < end)], end)
     outputs = offsets[(offsets > 0.0) & (offsets < end)]
-    return {"update_times": updates, "output_times": outputs}
+    return updates, outputs
 
 
 def _update_times(offsets: np.ndarray, interval: float) -> np.ndarray:
