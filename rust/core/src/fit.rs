@@ -344,6 +344,10 @@ fn trial<A: Atmosphere + ?Sized>(
             Dynamics::<A, LANES>::new(atmosphere, job.epoch, std::array::from_fn(|l| lanes[l][6]));
         dynamics.zonal_degree = s.zonal_degree;
         dynamics.third_body = crate::dynamics::deep_space(&std::array::from_fn(|i| job.p0[i]));
+        // As every propagator (`Dynamics::for_problem`): stage points far below the floor
+        // see no drag, so a trial step across it ends on a position, not on a NaN, and the
+        // trial is rejected as decayed.
+        dynamics.floor_altitude = s.floor_altitude;
         let mut y = Aligned::<State<LANES>>(std::array::from_fn(|c| {
             std::array::from_fn(|l| lanes[l][c])
         }));
