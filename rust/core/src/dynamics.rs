@@ -69,9 +69,15 @@ pub fn deep_space(y0: &[f64; 6]) -> bool {
     inv_a <= 0.0 || 2.0 * std::f64::consts::PI * (inv_a.powi(-3) / MU).sqrt() >= DEEP_SPACE_PERIOD
 }
 
-/// Unnormalised degree-2 order-2 coefficients of EGM2008 (tide-free).
-pub const C22: f64 = 2.439_383_573_283_13e-6;
-pub const S22: f64 = -1.400_273_703_859_34e-6;
+/// Unnormalised degree-2 order-2 coefficients of EGM2008 (tide-free): the fully
+/// normalised C22 = 2.43938357328313e-6, S22 = -1.40027370385934e-6 of the EGM2008 file
+/// times N22 = sqrt(2 (2n + 1) (n - m)! / (n + m)!) = sqrt(5 / 12). Until 2026-12-03 the
+/// normalised values stood here, in the unnormalised formula of [`sectoral`]: the
+/// equator's ellipticity pulled 1.55 times too hard (`geo_drift_matches_the_published_figure`).
+pub const C22: f64 = 2.439_383_573_283_13e-6 * N22;
+pub const S22: f64 = -1.400_273_703_859_34e-6 * N22;
+/// sqrt(5 / 12), the normalisation factor of degree 2, order 2.
+const N22: f64 = 0.645_497_224_367_902_8;
 
 /// Acceleration (m/s^2, Earth-fixed) of the degree-2 order-2 potential
 /// U = 3 mu Re^2 r^-5 (C22 (x^2 - y^2) + 2 S22 x y) at Earth-fixed `p` (m).
@@ -425,6 +431,44 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn geo_drift_matches_the_published_figure() {
+        // The normalisation: N22^2 = 2 x 5 x 0! / 4!.
+        assert!((N22 * N22 - 10.0 / 24.0).abs() < 1e-16);
+        // On the geostationary ring the C22/S22 pull along the orbit is
+        // -6 mu Re^2 J22 / r^4 sin 2 (lon - lon22), J22 = sqrt(C22^2 + S22^2): at most
+        // 5.6e-8 m/s^2, i.e. a longitude acceleration 3 a_T / r of 0.0017 deg/day^2 (Soop,
+        // Handbook of Geostationary Orbits, 1994: 0.00168 deg/day^2 at 45 deg from the
+        // stable points), with stable points near 75 E and 105 W.
+        let r = 42_164.2e3;
+        let east = |lon: f64| {
+            let a = sectoral([r * lon.cos(), r * lon.sin(), 0.0]);
+            -a[0] * lon.sin() + a[1] * lon.cos()
+        };
+        let (mut peak, mut stable) = (0.0f64, Vec::new());
+        for k in 0..3600 {
+            let lon = (k as f64 / 10.0).to_radians();
+            peak = peak.max(east(lon).abs());
+            let next = ((k + 1) as f64 / 10.0).to_radians();
+            // A westward pull lowers the orbit and speeds it up eastward (longitude
+            // acceleration -3 a_T / r): stable where the pull turns from west to east.
+            if east(lon) < 0.0 && east(next) >= 0.0 {
+                stable.push(lon.to_degrees());
+            }
+        }
+        let deg_per_day2 = 3.0 * peak / r * 86400.0f64.powi(2) * 180.0 / std::f64::consts::PI;
+        assert!(
+            (deg_per_day2 - 0.00168).abs() < 0.00005,
+            "{deg_per_day2} deg/day^2"
+        );
+        // Stable near 75 E and 105 W (255 E).
+        assert_eq!(stable.len(), 2, "{stable:?}");
+        assert!(
+            (stable[0] - 75.1).abs() < 1.0 && (stable[1] - 255.1).abs() < 1.0,
+            "{stable:?}"
+        );
     }
 
     #[test]
