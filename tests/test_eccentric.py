@@ -11,6 +11,7 @@ import pytest
 import rhoprop as rp
 from rhoprop.catalog import CatalogObject, propagate_catalog
 from rhoprop.catalog.covariance import element_covariance, tle_accuracy, tle_covariance
+from rhoprop.catalog.objects import _ccsp_times
 from rhoprop.constants import MU, R_EARTH
 from rhoprop.frames import rtn_basis
 
@@ -105,3 +106,50 @@ def test_eccentric_catalog_run_follows_a_monte_carlo_of_its_initial_covariance()
     mc_sigma = d.std(axis=0, ddof=1)
     np.testing.assert_allclose(ccsp_sigma[1], mc_sigma[1], rtol=0.2)
     np.testing.assert_allclose(ccsp_sigma[0], mc_sigma[0], rtol=0.2)
+
+
+def test_covariances_between_updates_are_positive_definite():
+    # A GTO-like orbit (600 x 39,000 km) from perigee, 5 days, Cd*A/m sigma 0.1: outputs
+    # between updates are the moments of the points in flight, with a negative centre
+    # weight; 1-4 a run had eigenvalues down to -1.2e-4 m^2 and failed a Cholesky
+    # factorisation before they were lifted to positive definite.
+    a = (2 * R_EARTH + 600e3 + 39_000e3) / 2
+    state = kepler_state(a, (39_000e3 - 600e3) / (2 * a), 0.0)
+    offsets = np.arange(3600.0, 5 * 86400.0 + 1.0, 3600.0)
+    updates, outputs = _ccsp_times(state, offsets, 3600.0)
+    assert outputs is not None and len(updates) < 12  # once per revolution (10.7 h)
+    run = rp.ccsp(
+        state,
+        rp.Spacecraft(1.0, 0.01),
+        rp.scenarios.benchmark_exponential(0.2),
+        update_times=updates,
+        output_times=outputs,
+        initial_covariance=tle_covariance(state),
+        drag_sigma=0.1,
+    )
+    assert np.isin(offsets, run.times).all()
+    for cov in run.covariance:
+        np.linalg.cholesky(cov)
+
+
+def test_update_times_at_edges_and_unbound_states():
+    # An apogee a rounding away from an output is that output (no two outputs 4e-12 s
+    # apart); an object with one output runs; an unbound state keeps the near-circular
+    # covariance and the hourly updates.
+    a, e = 26_600e3, 0.7
+    state = kepler_state(a, e, 0.0)
+    period = 2 * np.pi * np.sqrt(a**3 / MU)
+    updates, outputs = _ccsp_times(state, np.array([period / 2, period, 1.5 * period]), 3600.0)
+    assert np.diff(np.union1d(updates, outputs)).min() > 1.0
+    cov = tle_covariance(state)
+    obj = CatalogObject("MOLNIYA-LIKE", 99001, state, 0.01, 0.0, "test", cov, "element model")
+    atm = rp.scenarios.benchmark_exponential(0.2)
+    res = propagate_catalog(
+        [obj], atm, EPOCH + np.timedelta64(7200, "s"), output_step=86400.0, progress=False
+    )
+    assert list(res.status) == ["propagated"]
+    r = 7e6
+    unbound = rp.OrbitState(EPOCH, [r, 0.0, 0.0], [0.0, 1.45 * np.sqrt(MU / r), 0.0])
+    assert np.isfinite(tle_covariance(unbound)).all()
+    updates, outputs = _ccsp_times(unbound, np.array([3600.0, 7200.0]), 3600.0)
+    assert outputs is None and list(updates) == [3600.0, 7200.0]

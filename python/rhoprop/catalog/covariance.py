@@ -92,9 +92,11 @@ def tle_covariance(state: OrbitState, accuracy: TleAccuracy | None = None) -> np
     """6x6 inertial covariance (m^2, m^2/s, m^2/s^2) of a TLE-derived ``state`` with the
     RMS errors of ``accuracy`` (default: :func:`tle_accuracy` of the state): by the
     Clohessy-Wiltshire model of the module docstring for near-circular orbits, by
-    :func:`element_covariance` from eccentricity :data:`ELEMENT_MODEL_ECCENTRICITY`."""
+    :func:`element_covariance` from eccentricity :data:`ELEMENT_MODEL_ECCENTRICITY`
+    (below 1: an unbound orbit keeps the near-circular model)."""
     acc = accuracy or tle_accuracy(state)
-    if axis_and_eccentricity(state)[1] >= ELEMENT_MODEL_ECCENTRICITY:
+    a, e = axis_and_eccentricity(state)
+    if ELEMENT_MODEL_ECCENTRICITY <= e < 1.0 and np.isfinite(a) and a > 0.0:
         return element_covariance(state, acc)
     r, v = state.position, state.velocity
     n = float(np.linalg.norm(np.cross(r, v))) / float(r @ r)  # orbital rate, rad/s
@@ -135,7 +137,7 @@ def _in_plane_state(
     eccentricity ``e``, perigee turned by ``dw`` (rad) from the unit vector ``frame[0]``
     towards ``frame[1]`` (in the orbit's plane, in the direction of motion) and mean
     anomaly ``m`` (rad)."""
-    big_e = m
+    big_e = np.pi if e > 0.8 else m  # a start from which Newton converges for any m
     for _ in range(50):  # Newton on Kepler's equation; converges in a few steps
         step = (big_e - e * np.sin(big_e) - m) / (1.0 - e * np.cos(big_e))
         big_e -= step

@@ -719,7 +719,8 @@ def _ccsp_times(
 
     a, e = axis_and_eccentricity(state)
     end = float(offsets[-1])
-    if e < ELEMENT_MODEL_ECCENTRICITY or not 0.0 < a or end <= 0.0:
+    bound = np.isfinite(a) and 0.0 < a and e < 1.0
+    if e < ELEMENT_MODEL_ECCENTRICITY or not bound or end <= 0.0:
         return _update_times(offsets, interval), None
     period = 2.0 * np.pi * np.sqrt(a**3 / MU)
     r, v = state.position, state.velocity
@@ -727,9 +728,17 @@ def _ccsp_times(
     mean_anomaly = float(big_e - e * np.sin(big_e))
     first = ((np.pi - mean_anomaly) % (2.0 * np.pi)) / (2.0 * np.pi) * period
     apogees = first + period * np.arange(max(int(np.ceil((end - first) / period)), 0))
-    updates = np.append(apogees[(apogees > 0.0) & (apogees < end)], end)
     outputs = offsets[(offsets > 0.0) & (offsets < end)]
-    return updates, outputs
+    # An apogee within a second of the epoch or the end is dropped, one within a second
+    # of an output moves onto it (no sliver of a step, no two outputs a rounding apart).
+    apogees = apogees[(apogees >= 1.0) & (apogees <= end - 1.0)]
+    if len(outputs) and len(apogees):
+        nearest = np.abs(apogees[:, None] - outputs[None, :]).argmin(axis=1)
+        close = np.abs(apogees - outputs[nearest]) < 1.0
+        apogees = np.unique(np.where(close, outputs[nearest], apogees))
+    updates = np.append(apogees, end)
+    outputs = np.setdiff1d(outputs, updates)
+    return updates, outputs if len(outputs) else None
 
 
 def _update_times(offsets: np.ndarray, interval: float) -> np.ndarray:

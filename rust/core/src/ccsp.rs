@@ -309,13 +309,8 @@ fn run<A: Atmosphere + ?Sized>(
                 d
             };
             let p_k = pc_k + d_k * d_k.transpose();
-            out.push(
-                stops[k],
-                &mean_k,
-                &((p_k + p_k.transpose()) * 0.5),
-                &c_k,
-                &d_k,
-            );
+            let p_k = positive_definite((p_k + p_k.transpose()) * 0.5);
+            out.push(stops[k], &mean_k, &p_k, &c_k, &d_k);
         }
         if decayed_at.is_some() {
             out.decayed_at = decayed_at;
@@ -401,6 +396,25 @@ fn state_moments(
         cross += weight(k, w.v0, w.vi) * (ends[consider[k]] - m2) * kappa;
     }
     (m1, p1 + cross * cross.transpose(), cross)
+}
+
+/// `p`, or where it is not positive definite its eigenvalues raised to 1e-12 of the
+/// largest. Only outputs between updates need it: their moments come from the points in
+/// flight with the unscented weights, the centre's negative (1 - n / l1 = -1 at the
+/// paper's l1 = 3), and over an eccentric orbit's perigee pass the covariance is so
+/// elongated that this left eigenvalues of -1e-4 m^2 (-7e-7 of the correlation matrix)
+/// in a few outputs a revolution; a covariance to sample or factor must be positive
+/// definite, and the change is of that size. At updates an indefinite covariance stops
+/// the run as before (a sign of decay).
+fn positive_definite(p: Matrix6<f64>) -> Matrix6<f64> {
+    if Cholesky::new(p).is_some() {
+        return p;
+    }
+    let eig = p.symmetric_eigen();
+    let floor = 1e-12 * eig.eigenvalues.max().max(0.0);
+    let lifted = eig.eigenvalues.map(|l| l.max(floor));
+    let q = eig.eigenvectors * Matrix6::from_diagonal(&lifted) * eig.eigenvectors.transpose();
+    (q + q.transpose()) * 0.5
 }
 
 /// Set 2, c point: the cross-covariance with the ballistic-coefficient error, carried
