@@ -33,7 +33,7 @@ import numpy as np
 from ..constants import MU, R_EARTH
 from ..frames import rtn_basis
 from ..propagation import DEFAULT_INITIAL_COVARIANCE, OrbitState
-from ..propagation.propagate import axis_and_eccentricity
+from ..propagation.propagate import axis_and_eccentricity, mean_anomaly
 
 #: What ``initial_covariance`` of :func:`~rhoprop.catalog.propagate_catalog` and the
 #: ``--initial-covariance`` option accept as names.
@@ -181,8 +181,7 @@ def element_covariance(state: OrbitState, accuracy: TleAccuracy) -> np.ndarray:
     n = np.sqrt(MU / a**3)
     w_hat = h / np.linalg.norm(h)
     frame = (e_vec / e, np.cross(w_hat, e_vec / e))
-    big_e = np.arctan2(float(r @ v) / np.sqrt(MU * a), 1.0 - rn / a)
-    m = float(big_e - e * np.sin(big_e))
+    m = mean_anomaly(state)
 
     def column(da: float, de: float, dw: float, dm: float, step: float) -> np.ndarray:
         # Central difference of the state over the element change (da, de, dw, dm) x step.

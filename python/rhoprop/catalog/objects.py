@@ -28,7 +28,12 @@ from ..propagation import (
 from ..propagation.ccsp import ccsp_many
 from ..propagation.kappa import KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
-from ..propagation.propagate import DEFAULT_STEP, axis_and_eccentricity
+from ..propagation.propagate import (
+    DEFAULT_STEP,
+    axis_and_eccentricity,
+    mean_anomaly,
+    orbital_period,
+)
 from ..propagation.results import (
     CcspResult,
 )
@@ -722,11 +727,8 @@ def _ccsp_times(
     bound = np.isfinite(a) and 0.0 < a and e < 1.0
     if e < ELEMENT_MODEL_ECCENTRICITY or not bound or end <= 0.0:
         return _update_times(offsets, interval), None
-    period = 2.0 * np.pi * np.sqrt(a**3 / MU)
-    r, v = state.position, state.velocity
-    big_e = np.arctan2(float(r @ v) / np.sqrt(MU * a), 1.0 - float(np.linalg.norm(r)) / a)
-    mean_anomaly = float(big_e - e * np.sin(big_e))
-    first = ((np.pi - mean_anomaly) % (2.0 * np.pi)) / (2.0 * np.pi) * period
+    period = orbital_period(state)
+    first = ((np.pi - mean_anomaly(state)) % (2.0 * np.pi)) / (2.0 * np.pi) * period
     apogees = first + period * np.arange(max(int(np.ceil((end - first) / period)), 0))
     outputs = offsets[(offsets > 0.0) & (offsets < end)]
     # An apogee within a second of the epoch or the end is dropped, one within a second

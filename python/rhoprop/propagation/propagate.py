@@ -143,6 +143,17 @@ def axis_and_eccentricity(state: OrbitState) -> tuple[float, float]:
     return a, e
 
 
+def mean_anomaly(state: OrbitState) -> float:
+    """Osculating mean anomaly of a bound ``state``, rad in (-pi, pi] (ValueError for an
+    unbound or circular one)."""
+    a, e = axis_and_eccentricity(state)
+    if not (math.isfinite(a) and 0.0 < e < 1.0):
+        raise ValueError(f"no mean anomaly: semi-major axis {a:g} m, eccentricity {e:g}")
+    r, v = state.position, state.velocity
+    big_e = math.atan2(float(r @ v) / math.sqrt(MU * a), 1.0 - float(np.linalg.norm(r)) / a)
+    return big_e - e * math.sin(big_e)
+
+
 def orbital_period(state: OrbitState) -> float:
     """Osculating two-body period of ``state``, s (inf for an unbound orbit)."""
     r = float(np.linalg.norm(state.position))
