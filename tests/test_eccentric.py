@@ -11,9 +11,9 @@ import pytest
 import rhoprop as rp
 from rhoprop.catalog import CatalogObject, propagate_catalog
 from rhoprop.catalog.covariance import element_covariance, tle_accuracy, tle_covariance
-from rhoprop.catalog.objects import _ccsp_times
 from rhoprop.constants import MU, R_EARTH
 from rhoprop.frames import rtn_basis
+from rhoprop.propagation.ccsp import update_schedule
 
 EPOCH = np.datetime64("2023-11-14T00:00:00", "ns")
 
@@ -116,7 +116,7 @@ def test_covariances_between_updates_are_positive_definite():
     a = (2 * R_EARTH + 600e3 + 39_000e3) / 2
     state = kepler_state(a, (39_000e3 - 600e3) / (2 * a), 0.0)
     offsets = np.arange(3600.0, 5 * 86400.0 + 1.0, 3600.0)
-    updates, outputs = _ccsp_times(state, offsets, 3600.0)
+    updates, outputs = update_schedule(state, offsets, 3600.0)
     assert outputs is not None and len(updates) < 12  # once per revolution (10.7 h)
     run = rp.ccsp(
         state,
@@ -139,7 +139,7 @@ def test_update_times_at_edges_and_unbound_states():
     a, e = 26_600e3, 0.7
     state = kepler_state(a, e, 0.0)
     period = 2 * np.pi * np.sqrt(a**3 / MU)
-    updates, outputs = _ccsp_times(state, np.array([period / 2, period, 1.5 * period]), 3600.0)
+    updates, outputs = update_schedule(state, np.array([period / 2, period, 1.5 * period]), 3600.0)
     assert np.diff(np.union1d(updates, outputs)).min() > 1.0
     cov = tle_covariance(state)
     obj = CatalogObject("MOLNIYA-LIKE", 99001, state, 0.01, 0.0, "test", cov, "element model")
@@ -151,5 +151,39 @@ def test_update_times_at_edges_and_unbound_states():
     r = 7e6
     unbound = rp.OrbitState(EPOCH, [r, 0.0, 0.0], [0.0, 1.45 * np.sqrt(MU / r), 0.0])
     assert np.isfinite(tle_covariance(unbound)).all()
-    updates, outputs = _ccsp_times(unbound, np.array([3600.0, 7200.0]), 3600.0)
+    updates, outputs = update_schedule(unbound, np.array([3600.0, 7200.0]), 3600.0)
     assert outputs is None and list(updates) == [3600.0, 7200.0]
+
+
+def test_ccsp_default_schedule_updates_eccentric_orbits_at_apogee():
+    # rp.ccsp with no update_interval: the same run as the catalog's schedule passed
+    # explicitly (bit for bit), outputs every hour and at the apogees. An explicit 3600 s
+    # interval re-draws the sigma points hourly and, on this Molniya orbit (1,600 km
+    # perigee), grows the along-track sigma fourfold in 3 days (78 km against 19 km; the
+    # Monte Carlo of the catalog test above is within 20 % of the apogee schedule's).
+    state = kepler_state(26_600e3, 0.7, 0.0)
+    craft = rp.Spacecraft(1.0, 0.01)
+    atm = rp.scenarios.benchmark_exponential(0.2)
+    cov = tle_covariance(state)
+    day = 3 * 86400.0
+    default = rp.ccsp(state, craft, atm, day, initial_covariance=cov)
+    updates, outputs = update_schedule(state, np.arange(3600.0, day + 1.0, 3600.0), 3600.0)
+    assert outputs is not None and len(updates) == 7  # an apogee every 12 h from 6 h, the end
+    explicit = rp.ccsp(
+        state, craft, atm, update_times=updates, output_times=outputs, initial_covariance=cov
+    )
+    assert np.isin(np.arange(3600.0, day + 1.0, 3600.0), default.times).all()
+    np.testing.assert_array_equal(default.times, explicit.times)
+    np.testing.assert_array_equal(default.covariance, explicit.covariance)
+    hourly = rp.ccsp(state, craft, atm, day, update_interval=3600.0, initial_covariance=cov)
+    assert hourly.along_track_std[-1] > 3 * default.along_track_std[-1]  # 78 km, 19 km
+
+
+def test_ccsp_default_schedule_is_hourly_on_near_circular_orbits():
+    state = kepler_state(R_EARTH + 500e3, 0.001, 0.3)
+    craft = rp.Spacecraft(1.0, 0.01)
+    atm = rp.scenarios.benchmark_exponential(0.2)
+    default = rp.ccsp(state, craft, atm, 5000.0)
+    hourly = rp.ccsp(state, craft, atm, 5000.0, update_interval=3600.0)
+    np.testing.assert_array_equal(default.times, [0.0, 3600.0, 5000.0])
+    np.testing.assert_array_equal(default.covariance, hourly.covariance)

@@ -25,14 +25,12 @@ from ..propagation import (
     monte_carlo,
     propagate,
 )
-from ..propagation.ccsp import ccsp_many
+from ..propagation.ccsp import ccsp_many, update_schedule
 from ..propagation.kappa import KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
 from ..propagation.propagate import (
     DEFAULT_STEP,
     axis_and_eccentricity,
-    mean_anomaly,
-    orbital_period,
 )
 from ..propagation.results import (
     CcspResult,
@@ -581,7 +579,7 @@ def _ccsp_chunk(
         offsets = to_seconds(epochs, obj.state.epoch)
         if offsets[-1] <= 0:
             continue
-        updates, outputs = _ccsp_times(obj.state, offsets, cfg.update_interval)
+        updates, outputs = update_schedule(obj.state, offsets, cfg.update_interval)
         # Optimistically over every output: the mean orbit (one lane, for its decay time)
         # is needed only if the CCSP comes near the floor (checked below).
         runs.append(
@@ -661,7 +659,7 @@ def _ccsp_outputs(
     def run(k: int) -> Any:
         if offsets[k - 1] <= 0:  # every output at the object's own epoch
             return None
-        updates, outputs = _ccsp_times(state, offsets[:k], cfg.update_interval)
+        updates, outputs = update_schedule(state, offsets[:k], cfg.update_interval)
         return ccsp(
             state,
             craft,
@@ -705,46 +703,3 @@ def _ccsp_outputs(
         )
     pick = np.searchsorted(r.times, offsets[:reached] * (1 - 1e-12))
     return r.mean[pick], r.covariance[pick], why
-
-
-def _ccsp_times(
-    state: Any, offsets: np.ndarray, interval: float
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """The CCSP's ``update_times`` and ``output_times`` for outputs at ``offsets`` (s
-    from the epoch of ``state``): every ``interval`` and every output (:func:`_update_times`)
-    for a near-circular orbit; for an eccentric one (eccentricity from
-    :data:`~rhoprop.catalog.covariance.ELEMENT_MODEL_ECCENTRICITY`) once per revolution,
-    at each apogee, and at the end, with the outputs between them as ``output_times``.
-    Sigma points re-drawn in Cartesian coordinates near perigee leave the orbit's energy:
-    hourly updates grew the along-track sigma of CXO (e = 0.90) tenfold in 5 days against
-    a Monte Carlo of its initial covariance, and brought sigma points of 12-hour Molniya
-    orbits down from 1,500-2,500 km perigees (docs/catalog-realism.md, "Eccentric
-    orbits"). Drag, where it matters, acts near perigee: one kappa per perigee pass."""
-    from .covariance import ELEMENT_MODEL_ECCENTRICITY
-
-    a, e = axis_and_eccentricity(state)
-    end = float(offsets[-1])
-    bound = np.isfinite(a) and 0.0 < a and e < 1.0
-    if e < ELEMENT_MODEL_ECCENTRICITY or not bound or end <= 0.0:
-        return _update_times(offsets, interval), None
-    period = orbital_period(state)
-    first = ((np.pi - mean_anomaly(state)) % (2.0 * np.pi)) / (2.0 * np.pi) * period
-    apogees = first + period * np.arange(max(int(np.ceil((end - first) / period)), 0))
-    outputs = offsets[(offsets > 0.0) & (offsets < end)]
-    # An apogee within a second of the epoch or the end is dropped, one within a second
-    # of an output moves onto it (no sliver of a step, no two outputs a rounding apart).
-    apogees = apogees[(apogees >= 1.0) & (apogees <= end - 1.0)]
-    if len(outputs) and len(apogees):
-        nearest = np.abs(apogees[:, None] - outputs[None, :]).argmin(axis=1)
-        close = np.abs(apogees - outputs[nearest]) < 1.0
-        apogees = np.unique(np.where(close, outputs[nearest], apogees))
-    updates = np.append(apogees, end)
-    outputs = np.setdiff1d(outputs, updates)
-    return updates, outputs if len(outputs) else None
-
-
-def _update_times(offsets: np.ndarray, interval: float) -> np.ndarray:
-    """CCSP update times: every ``interval`` s, plus every output offset (> 0)."""
-    grid = np.arange(interval, offsets[-1], interval)
-    times = np.unique(np.concatenate([grid, offsets[offsets > 0]]))
-    return times if len(times) else np.array([offsets[-1]])

@@ -216,7 +216,7 @@ def _method_options(me: dict[str, Any], kind: str) -> dict[str, Any]:
         "drag_sigma": _get(table, where, "drag_sigma", float, 0.0),
     }
     if kind == "ccsp":
-        options["update_interval"] = _get(table, where, "update_interval", float, 3600.0)
+        options["update_interval"] = _get(table, where, "update_interval", float, None)
         return options
     options["n"] = _get(table, where, "members", int, 1000)
     options["seed"] = _get(table, where, "seed", int, 0)
