@@ -3,7 +3,7 @@ CelesTrak snapshot of 2023-11-13 predicted to the epoch of their element set of
 2023-11-19 (``$RHOPROP_TEST_DATA/catalogs``), truth = that element set's SGP4 state.
 
 1. Fitted states (``fit_objects``, the library's deep-space span) propagated with the
-   deep-space dynamics (Sun, Moon, C22/S22, J2..J4), per class: GEO (0.99-1.01 rev/day),
+   deep-space dynamics (Sun, Moon, tesserals to degree 8, J2..J4), per class: GEO (0.99-1.01 rev/day),
    GPS (1.9-2.1) and other MEO (2.1-6), near-circular (e < 0.02), the first ``--per-class``
    of each in NORAD order: median |position error| against SGP4's own prediction of the
    earlier element set (docs/catalog-realism.md, "Deep space").
@@ -14,6 +14,7 @@ CelesTrak snapshot of 2023-11-13 predicted to the epoch of their element set of
    (docs/catalog-realism.md, "Eccentric orbits").
 
 Run:  RHOPROP_TEST_DATA=../shared/data python benches/deep_space.py [--per-class 40]
+        [--weeks all|2023-07-04,...] (default 2023-11-13, the pair the earlier figures used)
 """
 
 from __future__ import annotations
@@ -147,17 +148,33 @@ def eccentric(first: dict, second: dict, folder: Path) -> None:
         )
 
 
+#: The development pairs of docs/catalog-realism.md (start snapshot, later snapshot).
+PAIRS = {
+    "2023-07-04": ("history/celestrak_active_20230704", "history/celestrak_active_20230707"),
+    "2023-08-07": ("history/celestrak_active_20230807", "history/celestrak_active_20230813"),
+    "2023-08-13": ("history/celestrak_active_20230813", "history/celestrak_active_20230820"),
+    "2023-11-13": ("celestrak_active_20231113", "celestrak_active_20231119"),
+}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--per-class", type=int, default=40)
+    parser.add_argument(
+        "--weeks", default="2023-11-13", help=f"comma-separated, or 'all' ({', '.join(PAIRS)})"
+    )
     args = parser.parse_args()
+    weeks = list(PAIRS) if args.weeks == "all" else args.weeks.split(",")
     data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data")) / "catalogs"
-    first = snapshot(data / "celestrak_active_20231113.txt.gz")
-    second = snapshot(data / "celestrak_active_20231119.txt.gz")
     print(describe())
-    with tempfile.TemporaryDirectory() as tmp:
-        deep_space_classes(first, second, args.per_class, Path(tmp))
-        eccentric(first, second, Path(tmp))
+    for week in weeks:
+        a, b = PAIRS[week]
+        first = snapshot(data / f"{a}.txt.gz")
+        second = snapshot(data / f"{b}.txt.gz")
+        print(f"-- {week}: {a} -> {b}")
+        with tempfile.TemporaryDirectory() as tmp:
+            deep_space_classes(first, second, args.per_class, Path(tmp))
+            eccentric(first, second, Path(tmp))
 
 
 if __name__ == "__main__":

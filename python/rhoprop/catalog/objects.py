@@ -333,7 +333,7 @@ def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
 #: orbit over a day and the fit was not measured; those objects keep B* scaled to the model.
 AUTO_FIT_PERIGEE_KM = 700.0
 #: SGP4's near-Earth limit of the period, min. Deep-space orbits (period at least this)
-#: are fitted too: their dynamics carry the Sun, the Moon and C22/S22 (as SDP4 does), and
+#: are fitted too: their dynamics carry the Sun, the Moon and the tesseral field (as SDP4 does), and
 #: an SGP4 state (mean in those terms) started under them drifts along-track by km a day;
 #: fitted, 40 objects of 2023-11-13 each came 6 days later within a median 15 km of their
 #: 2023-11-19 element sets (GEO), 2.3 km (GPS), 1.4 km (other MEO), against 25, 5.7 and

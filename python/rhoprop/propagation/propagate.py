@@ -291,7 +291,7 @@ def propagate(
 ) -> Trajectory:
     """Propagates one orbit with two-body + J2 (optionally up to J6) + drag at the mean
     density; a deep-space orbit (period of 225 min or more) also feels the Sun, the Moon
-    and C22/S22 (docs/conventions.md, "Frames and dynamics").
+    and the tesseral field to degree 8 (docs/conventions.md, "Frames and dynamics").
 
     Args:
         state: initial :class:`OrbitState`.

@@ -9,6 +9,7 @@ use crate::density::{Atmosphere, LaneMemory};
 use crate::ephemeris::ThirdBodies;
 use crate::error::CoreError;
 use crate::frames::{EarthRotation, RotationCache};
+use crate::geopotential::{tesseral_lanes, DEEP_SPACE_TESSERAL_DEGREE};
 use crate::kappa::KappaLanes;
 use crate::problem::Problem;
 
@@ -69,33 +70,6 @@ pub fn deep_space(y0: &[f64; 6]) -> bool {
     inv_a <= 0.0 || 2.0 * std::f64::consts::PI * (inv_a.powi(-3) / MU).sqrt() >= DEEP_SPACE_PERIOD
 }
 
-/// Unnormalised degree-2 order-2 coefficients of EGM2008 (tide-free): the fully
-/// normalised C22 = 2.43938357328313e-6, S22 = -1.40027370385934e-6 of the EGM2008 file
-/// times N22 = sqrt(2 (2n + 1) (n - m)! / (n + m)!) = sqrt(5 / 12). Until 2026-12-03 the
-/// normalised values stood here, in the unnormalised formula of [`sectoral`]: the
-/// equator's ellipticity pulled 1.55 times too hard (`geo_drift_matches_the_published_figure`).
-pub const C22: f64 = 2.439_383_573_283_13e-6 * N22;
-pub const S22: f64 = -1.400_273_703_859_34e-6 * N22;
-/// sqrt(5 / 12), the normalisation factor of degree 2, order 2.
-const N22: f64 = 0.645_497_224_367_902_8;
-
-/// Acceleration (m/s^2, Earth-fixed) of the degree-2 order-2 potential
-/// U = 3 mu Re^2 r^-5 (C22 (x^2 - y^2) + 2 S22 x y) at Earth-fixed `p` (m).
-#[inline(always)]
-pub fn sectoral(p: [f64; 3]) -> [f64; 3] {
-    let [x, y, z] = p;
-    let r2 = x * x + y * y + z * z;
-    let inv_r2 = 1.0 / r2;
-    let k = 3.0 * MU * R_EARTH * R_EARTH * inv_r2 * inv_r2 / r2.sqrt(); // 3 mu Re^2 / r^5
-    let q = C22 * (x * x - y * y) + 2.0 * S22 * x * y;
-    let f = -5.0 * q * inv_r2;
-    [
-        k * (2.0 * (C22 * x + S22 * y) + f * x),
-        k * (2.0 * (S22 * x - C22 * y) + f * y),
-        k * f * z,
-    ]
-}
-
 /// Highest zonal degree the dynamics can include (J2..J6).
 pub const MAX_ZONAL_DEGREE: u8 = 6;
 /// Unnormalised zonal coefficients by degree (0 and 1 unused).
@@ -126,7 +100,8 @@ pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     /// Highest zonal harmonic in the gravity field: 2 (J2 only, the paper's model and the
     /// default) up to [`MAX_ZONAL_DEGREE`]; validated in [`crate::problem::Problem`].
     pub zonal_degree: u8,
-    /// Whether the Sun's and the Moon's pull is included ([`crate::ephemeris`]): on for
+    /// Whether the Sun's and the Moon's pull ([`crate::ephemeris`]) and the tesseral field
+    /// ([`crate::geopotential`]) are included: on for
     /// deep-space orbits ([`deep_space`]), as SGP4 switches to SDP4.
     pub third_body: bool,
     pub perturbation: Perturbation,
@@ -286,7 +261,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
         self.evaluations += 1;
         let ut1 = self.epoch + t;
         // One Earth-rotation angle per stage, shared by all lanes (skipped when neither the
-        // atmosphere nor the deep-space C22/S22 term needs it).
+        // atmosphere nor the deep-space tesseral field needs it).
         let rot = if self.atmosphere.uses_earth_rotation() || self.third_body {
             self.rotation.at(ut1)
         } else {
@@ -365,15 +340,19 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             dy[5][l] += f * vr[2];
         }
         // Deep-space orbits: the Sun's and the Moon's pull (both bodies once per
-        // evaluation) and the Earth's ellipticity of the equator (C22, S22), whose
-        // longitude-dependent pull drifts a geostationary orbit along-track by tens of km
-        // a week (SDP4's resonance terms).
+        // evaluation) and the Earth's tesseral field to degree 8 (crate::geopotential),
+        // whose longitude-dependent pull drifts a geostationary orbit along-track by tens
+        // of km a week and resonates with 12-hour orbits (SDP4's resonance terms).
         if self.third_body {
             let bodies = ThirdBodies::at(ut1);
+            let (mut fx, mut fy) = ([0.0; W], [0.0; W]);
             for l in 0..W {
-                let r = [y[0][l], y[1][l], y[2][l]];
-                let a = bodies.acceleration(r);
-                let s = rot.to_inertial(sectoral(rot.to_fixed(r)));
+                [fx[l], fy[l], _] = rot.to_fixed([y[0][l], y[1][l], y[2][l]]);
+            }
+            let t = tesseral_lanes(&fx, &fy, &y[2], DEEP_SPACE_TESSERAL_DEGREE);
+            for l in 0..W {
+                let a = bodies.acceleration([y[0][l], y[1][l], y[2][l]]);
+                let s = rot.to_inertial([t[0][l], t[1][l], t[2][l]]);
                 for c in 0..3 {
                     dy[3 + c][l] += a[c] + s[c];
                 }
@@ -400,75 +379,6 @@ mod tests {
 
     fn one(state: [f64; 6]) -> State<1> {
         state.map(|c| [c])
-    }
-
-    #[test]
-    fn sectoral_term_is_the_gradient_of_its_spherical_potential() {
-        // U22 = mu Re^2 / r^3 * 3 cos^2(lat) (C22 cos 2 lon + S22 sin 2 lon), the textbook
-        // spherical form (Montenbruck & Gill eq. 3.30 with P22 = 3 cos^2), against the
-        // Cartesian gradient by central differences; at GEO radius and in LEO.
-        let u = |q: [f64; 3]| {
-            let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-            let lat = (q[2] / r).asin();
-            let lon = q[1].atan2(q[0]);
-            MU * R_EARTH * R_EARTH / (r * r * r)
-                * 3.0
-                * lat.cos().powi(2)
-                * (C22 * (2.0 * lon).cos() + S22 * (2.0 * lon).sin())
-        };
-        for p in [[3.0e7, 2.9e7, 2.0e6], [4.0e6, -5.0e6, 2.5e6]] {
-            let a = sectoral(p);
-            for i in 0..3 {
-                let h = 10.0;
-                let (mut qp, mut qm) = (p, p);
-                qp[i] += h;
-                qm[i] -= h;
-                let g = (u(qp) - u(qm)) / (2.0 * h);
-                assert!(
-                    (a[i] - g).abs() < 1e-6 * a.iter().map(|v| v.abs()).fold(0.0, f64::max),
-                    "{i}: {} vs {g}",
-                    a[i]
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn geo_drift_matches_the_published_figure() {
-        // The normalisation: N22^2 = 2 x 5 x 0! / 4!.
-        assert!((N22 * N22 - 10.0 / 24.0).abs() < 1e-16);
-        // On the geostationary ring the C22/S22 pull along the orbit is
-        // -6 mu Re^2 J22 / r^4 sin 2 (lon - lon22), J22 = sqrt(C22^2 + S22^2): at most
-        // 5.6e-8 m/s^2, i.e. a longitude acceleration 3 a_T / r of 0.0017 deg/day^2 (Soop,
-        // Handbook of Geostationary Orbits, 1994: 0.00168 deg/day^2 at 45 deg from the
-        // stable points), with stable points near 75 E and 105 W.
-        let r = 42_164.2e3;
-        let east = |lon: f64| {
-            let a = sectoral([r * lon.cos(), r * lon.sin(), 0.0]);
-            -a[0] * lon.sin() + a[1] * lon.cos()
-        };
-        let (mut peak, mut stable) = (0.0f64, Vec::new());
-        for k in 0..3600 {
-            let lon = (k as f64 / 10.0).to_radians();
-            peak = peak.max(east(lon).abs());
-            let next = ((k + 1) as f64 / 10.0).to_radians();
-            // A westward pull lowers the orbit and speeds it up eastward (longitude
-            // acceleration -3 a_T / r): stable where the pull turns from west to east.
-            if east(lon) < 0.0 && east(next) >= 0.0 {
-                stable.push(lon.to_degrees());
-            }
-        }
-        let deg_per_day2 = 3.0 * peak / r * 86400.0f64.powi(2) * 180.0 / std::f64::consts::PI;
-        assert!(
-            (deg_per_day2 - 0.00168).abs() < 0.00005,
-            "{deg_per_day2} deg/day^2"
-        );
-        // Stable near 75 E and 105 W (255 E).
-        assert_eq!(stable.len(), 2, "{stable:?}");
-        assert!(
-            (stable[0] - 75.1).abs() < 1.0 && (stable[1] - 255.1).abs() < 1.0,
-            "{stable:?}"
-        );
     }
 
     #[test]

@@ -12,6 +12,7 @@
 //! - [`kappa`], [`rng`]: the stochastic density offset and its per-member streams;
 //! - [`dynamics`]: the one right-hand side every integrator, member and sigma point uses;
 //! - [`ephemeris`]: low-precision Sun and Moon, their pull on deep-space orbits;
+//! - [`geopotential`]: the tesseral field to degree 8 that deep-space orbits feel;
 //! - [`integrators`]: fixed-step RK4/RK8 through one step loop, adaptive DOP853;
 //! - [`simd`]: the batch lane width and the runtime instruction-set dispatch;
 //! - [`progress`]: progress and cancellation of long calls;
@@ -35,6 +36,7 @@ pub mod ephemeris;
 pub mod error;
 pub mod fit;
 pub mod frames;
+pub mod geopotential;
 pub mod integrators;
 pub mod kappa;
 pub mod montecarlo;
