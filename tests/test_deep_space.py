@@ -1,5 +1,5 @@
-"""Deep-space orbits (period >= 225 min): the Sun's and the Moon's pull and the tesseral field in the
-dynamics, and their fit by default, judged against the next published element sets of
+"""Deep-space orbits (period >= 225 min): the Sun's and the Moon's pull and the tesseral
+field in the dynamics, and their fit by default, judged against the next published element sets of
 real GEO and GPS objects (CelesTrak 2023-11-13 -> 2023-11-19)."""
 
 from __future__ import annotations
