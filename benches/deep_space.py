@@ -5,8 +5,9 @@ CelesTrak snapshot of 2023-11-13 predicted to the epoch of their element set of
 1. Fitted states (``fit_objects``, the library's deep-space span) propagated with the
    deep-space dynamics (Sun, Moon, tesserals to degree 8, J2..J4), per class: GEO
    (0.99-1.01 rev/day), GPS (1.9-2.1) and other MEO (2.1-6), near-circular (e < 0.02),
-   the first ``--per-class`` of each in NORAD order: median |position error| against SGP4's own prediction of the
-   earlier element set (docs/catalog-realism.md, "Deep space").
+   the first ``--per-class`` of each in NORAD order: median |position error| against
+   SGP4's own prediction of the earlier element set (docs/catalog-realism.md,
+   "Deep space").
 2. Every eccentric object (e >= 0.1) in both snapshots through ``propagate_catalog`` with
    its defaults (NRLMSIS 2.1): position error, along-track error / sigma and the 3-D
    Mahalanobis distance with the truth's TLE covariance added; summaries over all and
