@@ -57,7 +57,9 @@ def sgp4_error_km(first, later) -> float:
     return float(np.linalg.norm(np.subtract(r0, r1)))
 
 
-def deep_space_classes(first: dict, second: dict, per_class: int, folder: Path) -> None:
+def deep_space_classes(
+    first: dict, second: dict, per_class: int, folder: Path, catalog_runs: bool = False
+) -> None:
     model = rp.density.Msis("2.1")
     for name, (lo, hi) in CLASSES.items():
         picked = []
@@ -96,10 +98,22 @@ def deep_space_classes(first: dict, second: dict, per_class: int, folder: Path) 
             f"{name}: {len(errors)} of {len(picked)} fitted; median |error| "
             f"{np.median(errors):.2f} km, SGP4 {np.median(sgp4):.2f} km"
         )
+        if catalog_runs:
+            ids = [p[0][3].satnum for p in picked]
+            realism(f"{name} through propagate_catalog", ids, first, second, folder)
 
 
 def eccentric(first: dict, second: dict, folder: Path) -> None:
     ids = [k for k, e in first.items() if k in second and e[3].ecco >= 0.1]
+    realism("eccentric", ids, first, second, folder, split=True)
+
+
+def realism(
+    label: str, ids: list[int], first: dict, second: dict, folder: Path, split: bool = False
+) -> None:
+    """``propagate_catalog`` with its defaults for each of ``ids`` to its later element
+    set's epoch: median error and the covariance's coverage of the truth (``split``: also
+    over the objects that SGP4 itself predicts within 100 km)."""
     start = {
         o.norad_id: o
         for o in rp.catalog.load(write([first[k] for k in ids], folder, "e1.tle"), errors="record")
@@ -135,14 +149,14 @@ def eccentric(first: dict, second: dict, folder: Path) -> None:
             )
         )
     table = np.array(rows)
-    for label, keep in (
-        ("all", np.ones(len(table), bool)),
-        ("SGP4 within 100 km", table[:, 1] < 100.0),
-    ):
+    groups = [("all", np.ones(len(table), bool))]
+    if split:
+        groups.append(("SGP4 within 100 km", table[:, 1] < 100.0))
+    for group, keep in groups:
         t = table[keep]
         inside = " / ".join(f"{100 * np.mean(t[:, 2] < k):.0f}" for k in (1, 2, 3))
         print(
-            f"eccentric, {label}: {len(t)} objects; median |error| {np.median(t[:, 0]):.1f} km "
+            f"{label}, {group}: {len(t)} objects; median |error| {np.median(t[:, 0]):.1f} km "
             f"(SGP4 {np.median(t[:, 1]):.1f} km); along-track inside 1/2/3 sigma "
             f"{inside} %; "
             f"3-D Mahalanobis inside 2 sigma {100 * np.mean(t[:, 3] < CHI2_3_2SIGMA):.0f} %"
@@ -164,6 +178,11 @@ def main() -> None:
     parser.add_argument(
         "--weeks", default="2023-11-13", help=f"comma-separated, or 'all' ({', '.join(PAIRS)})"
     )
+    parser.add_argument(
+        "--covariance",
+        action="store_true",
+        help="also run each class through propagate_catalog: coverage of the truth",
+    )
     args = parser.parse_args()
     weeks = list(PAIRS) if args.weeks == "all" else args.weeks.split(",")
     data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data")) / "catalogs"
@@ -174,7 +193,7 @@ def main() -> None:
         second = snapshot(data / f"{b}.txt.gz")
         print(f"-- {week}: {a} -> {b}")
         with tempfile.TemporaryDirectory() as tmp:
-            deep_space_classes(first, second, args.per_class, Path(tmp))
+            deep_space_classes(first, second, args.per_class, Path(tmp), args.covariance)
             eccentric(first, second, Path(tmp))
 
 

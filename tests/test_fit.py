@@ -91,6 +91,21 @@ def test_nonpositive_bstar_loads_with_a_guess_fitted_or_refused(tle_file, atmosp
     assert (r.status == "propagated").all()
 
 
+def test_regimes_above_leo_split_at_a_16_hour_period():
+    # Near-circular orbits above 2,000 km: MEO (GPS included) below a 16-hour period, GEO
+    # above; eccentric ones keep their own regime whatever the period.
+    def circular(radius_km: float, e: float = 0.0) -> rp.OrbitState:
+        r = radius_km * 1e3
+        v = np.sqrt(rp.constants.MU / r * (1 + e))  # at perigee
+        return rp.OrbitState("2023-11-13T00:00", [r, 0.0, 0.0], [0.0, v, 0.0])
+
+    assert tle_accuracy(circular(26_560)).regime == "MEO"  # GPS, 12 h
+    assert tle_accuracy(circular(8_500)).regime == "MEO"  # 2,100 km altitude
+    assert tle_accuracy(circular(42_164)).regime == "GEO"
+    assert tle_accuracy(circular(35_000)).regime == "GEO"  # 18 h
+    assert tle_accuracy(circular(7_000, 0.7)).regime == "eccentric"
+
+
 def test_tle_covariance_has_the_regime_rms_in_rtn(tle_file):
     obj = catalog.load(tle_file, errors="record")[0]
     acc = tle_accuracy(obj.state)

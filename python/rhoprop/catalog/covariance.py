@@ -61,25 +61,32 @@ class TleAccuracy:
 
 _KM_PER_DAY = 1e3 / 86400.0
 
-#: Regimes by perigee altitude (m) and eccentricity, first match wins.
+#: Regimes by perigee altitude (m), eccentricity and orbital period (s), first match
+#: wins. The two near-circular regimes above LEO were chosen on the four development
+#: weeks together (docs/catalog-realism.md, "Deep-space covariance"): the single "above
+#: LEO" regime before (500 m, 3 km, 500 m, 1 km/day) held 100 % of GPS and MEO errors
+#: inside 2 sigma and 30-55 % of GEO ones.
 REGIMES = (
-    # (max perigee altitude m, max eccentricity, accuracy)
-    (800e3, 0.1, TleAccuracy(200.0, 1000.0, 300.0, 1.0 * _KM_PER_DAY, "LEO below 800 km")),
-    (2000e3, 0.1, TleAccuracy(150.0, 600.0, 250.0, 0.5 * _KM_PER_DAY, "LEO 800-2000 km")),
-    (np.inf, 0.1, TleAccuracy(500.0, 3000.0, 500.0, 1.0 * _KM_PER_DAY, "above LEO")),
-    (np.inf, 1.0, TleAccuracy(1000.0, 5000.0, 1000.0, 3.0 * _KM_PER_DAY, "eccentric")),
+    # (max perigee altitude m, max eccentricity, max period s, accuracy)
+    (800e3, 0.1, np.inf, TleAccuracy(200.0, 1000.0, 300.0, 1.0 * _KM_PER_DAY, "LEO below 800 km")),
+    (2000e3, 0.1, np.inf, TleAccuracy(150.0, 600.0, 250.0, 0.5 * _KM_PER_DAY, "LEO 800-2000 km")),
+    (np.inf, 0.1, 16 * 3600.0, TleAccuracy(200.0, 1000.0, 150.0, 0.3 * _KM_PER_DAY, "MEO")),
+    (np.inf, 0.1, np.inf, TleAccuracy(2000.0, 5000.0, 2000.0, 6.0 * _KM_PER_DAY, "GEO")),
+    (np.inf, 1.0, np.inf, TleAccuracy(1000.0, 5000.0, 1000.0, 3.0 * _KM_PER_DAY, "eccentric")),
 )
 
 
 def tle_accuracy(state: OrbitState) -> TleAccuracy:
     """The :class:`TleAccuracy` of the regime of ``state`` (perigee altitude above the
-    equatorial radius and eccentricity of its osculating orbit)."""
+    equatorial radius, eccentricity and period of its osculating orbit; above LEO a
+    period under 16 hours is "MEO", GPS included, and a longer one "GEO")."""
     a, e = axis_and_eccentricity(state)
     perigee = a * (1 - e) - R_EARTH
-    for max_perigee, max_e, accuracy in REGIMES:
-        if perigee <= max_perigee and e <= max_e:
+    period = 2 * np.pi * np.sqrt(a**3 / MU) if np.isfinite(a) and a > 0 else np.inf
+    for max_perigee, max_e, max_period, accuracy in REGIMES:
+        if perigee <= max_perigee and e <= max_e and period <= max_period:
             return accuracy
-    return REGIMES[-1][2]
+    return REGIMES[-1][3]
 
 
 #: Eccentricity from which :func:`tle_covariance` uses the element model (the
