@@ -46,8 +46,9 @@ def _pairs(test_data, revs: tuple[float, float], count: int):
     ("revs", "limit_km"),
     # Measured on 40 objects each: GEO 8.6 km (13.4 with the single "above LEO" TLE
     # accuracy weighting the fit, 13.2 with C22/S22 alone, 15.3 with it 1.55x too strong,
-    # 20.6 km before the deep-space forces), GPS 1.75 km (1.9; 2.2; 2.3; 5.0 km before);
-    # SGP4 itself 8.1 and 1.0 km. On these 20: 8.5 and 2.06 km.
+    # 20.6 km before the deep-space forces), GPS 1.23 km (1.75 fitted over one day either
+    # side; 1.9; 2.2; 2.3; 5.0 km before); SGP4 itself 8.1 and 1.0 km. On these 20: 8.5
+    # and 1.43 km.
     [((0.99, 1.01), 12.0), ((1.9, 2.1), 3.5)],
     ids=["GEO", "GPS"],
 )

@@ -332,7 +332,8 @@ def load(
             is sampled once into one field covering every object's span and altitudes;
             a ``DensityField`` is used as given.
         span: fit span, s from each epoch (default :func:`~rhoprop.catalog.fit.default_span`:
-            the day before the epoch, one day either side for deep-space orbits).
+            the day before the epoch, one day either side for deep-space orbits, three
+            for GPS and MEO).
         threads: objects fitted at once (default: CPU count).
         zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6 (default
             4, the degree of catalog runs, ``propagate_catalog``); fit with the degree the
@@ -489,7 +490,7 @@ def fit_objects(
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
     :func:`~rhoprop.catalog.fit.default_span`: the day before it, one day either side for
-    deep-space orbits; with a span reaching past the epoch, an orbit that comes down
+    deep-space orbits, three for GPS and MEO; with a span reaching past the epoch, an orbit that comes down
     within it is fitted to the part before the epoch instead), in the core many objects
     per call (:func:`~rhoprop.catalog.fit.fit_histories`; ``threads`` calls at once), in
     epoch order so that the fits of a call share their day tiles. ``history``: {NORAD

@@ -70,15 +70,29 @@ DEFAULT_SPAN = (-86400.0, 0.0)
 #: element sets came within a median 13.2 / 2.2 km, against 17.2 / 2.4 km with the day
 #: before (``tests/test_deep_space.py``).
 DEEP_SPACE_SPAN = (-86400.0, 86400.0)
+#: Fit span of a near-circular (e < 0.1) deep-space orbit with a period under 16 hours
+#: (GPS and other MEO), s: three days either side. Chosen on the four development weeks
+#: together (docs/catalog-realism.md, "Deep-space fit span"): against one day either
+#: side, GPS medians fell or held in every week, other MEO ones in three and held in the
+#: fourth; GEO ones rose in one week of four, so GEO keeps one day.
+MEO_SPAN = (-3 * 86400.0, 3 * 86400.0)
 #: SDP4's deep-space limit of the period, min.
 DEEP_SPACE_PERIOD_MIN = 225.0
+#: Longest period of :data:`MEO_SPAN`, min (16 hours, the MEO/GEO split of the TLE
+#: accuracy regimes).
+MEO_PERIOD_MAX_MIN = 16 * 60.0
 
 
 def default_span(sat: Any) -> tuple[float, float]:
-    """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch): :data:`DEEP_SPACE_SPAN`
-    for a deep-space orbit, else :data:`DEFAULT_SPAN`."""
+    """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch): :data:`MEO_SPAN` for a
+    near-circular deep-space orbit under 16 hours, :data:`DEEP_SPACE_SPAN` for another
+    deep-space orbit, else :data:`DEFAULT_SPAN`."""
     period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
-    return DEEP_SPACE_SPAN if period >= DEEP_SPACE_PERIOD_MIN else DEFAULT_SPAN
+    if period < DEEP_SPACE_PERIOD_MIN:
+        return DEFAULT_SPAN
+    if period < MEO_PERIOD_MAX_MIN and sat.ecco < 0.1:
+        return MEO_SPAN
+    return DEEP_SPACE_SPAN
 
 
 #: Default spacing of the pseudo-observations, s.
