@@ -490,9 +490,10 @@ def fit_objects(
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
     :func:`~rhoprop.catalog.fit.default_span`: the day before it, one day either side for
-    deep-space orbits, three for GPS and MEO; with a span reaching past the epoch, an orbit that comes down
-    within it is fitted to the part before the epoch instead), in the core many objects
-    per call (:func:`~rhoprop.catalog.fit.fit_histories`; ``threads`` calls at once), in
+    deep-space orbits, three for GPS and MEO; with a span reaching past the epoch, an
+    orbit that comes down within it is fitted to the part before the epoch instead), in
+    the core many objects per call (:func:`~rhoprop.catalog.fit.fit_histories`;
+    ``threads`` calls at once), in
     epoch order so that the fits of a call share their day tiles. ``history``: {NORAD
     id: older element sets} fitted together with the object's (those within
     :data:`HISTORY_DAYS` of it). A fit that leaves an RMS residual above
