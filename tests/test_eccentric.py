@@ -187,3 +187,9 @@ def test_ccsp_default_schedule_is_hourly_on_near_circular_orbits():
     hourly = rp.ccsp(state, craft, atm, 5000.0, update_interval=3600.0)
     np.testing.assert_array_equal(default.times, [0.0, 3600.0, 5000.0])
     np.testing.assert_array_equal(default.covariance, hourly.covariance)
+
+
+def test_ccsp_default_schedule_names_update_interval_when_too_long():
+    state = kepler_state(R_EARTH + 500e3, 0.001, 0.3)
+    with pytest.raises(ValueError, match="update_interval = 3600 s gives"):
+        rp.ccsp(state, rp.Spacecraft(1.0, 0.01), rp.scenarios.benchmark_exponential(0.2), 1e12)

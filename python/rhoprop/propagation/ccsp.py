@@ -221,7 +221,7 @@ def _arguments(
     scheduled = np.empty(0)
     if update_times is None and update_interval is None:
         span = span_of(duration, None, "update_times")
-        check_steps(span, DEFAULT_UPDATE_INTERVAL, "duration")
+        check_steps(span, DEFAULT_UPDATE_INTERVAL, "update_interval")
         n = int(np.ceil(span / DEFAULT_UPDATE_INTERVAL * (1 - 1e-12)))
         hourly = np.minimum(np.arange(1, n + 1) * DEFAULT_UPDATE_INTERVAL, span)
         times, between = update_schedule(state, hourly, DEFAULT_UPDATE_INTERVAL)
