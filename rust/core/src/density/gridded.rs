@@ -585,16 +585,22 @@ impl Atmosphere for GriddedField {
         // Strides of the time, altitude and latitude neighbours in the table.
         let (st, sa, sl) = (na * nl * no, nl * no, no);
         // Each lane's cell corners, per time node and value: read from the table only when
-        // the lane has left the cell it had at the previous stage (mostly it has not). Just
-        // the reads here: this runs lane by lane, so the arithmetic goes in the lane loop.
-        let corners = &mut memory.corners;
+        // the lane has left the cell it had at the previous stage (mostly it has not). The
+        // lanes of a batch are mostly one object's members or sigma points, so they mostly
+        // enter a new cell together: its 16 table reads are done once, and when no other
+        // lane holds another cell, written to all lanes by vector stores, not lane by lane
+        // (32 scattered stores each: the largest cost of a refill).
+        let mut pending = [false; W];
         for l in 0..W {
-            if outside[l] || memory.cell[l] == base_f[l] {
-                continue;
-            }
-            memory.cell[l] = base_f[l];
-            // Exact: table sizes are far below 2^53.
-            let (base, next) = ((base_f[l] - offset) as usize, next_f[l] as isize);
+            pending[l] = !outside[l] & (memory.cell[l] != base_f[l]);
+        }
+        let corners = &mut memory.corners;
+        while let Some(first) = pending.iter().position(|&p| p) {
+            let key = base_f[first];
+            // Exact: table sizes are far below 2^53. The longitude neighbour's offset
+            // follows from the cell, so it is the same for every lane entering it.
+            let (base, next) = ((key - offset) as usize, next_f[first] as isize);
+            let mut values = [0.0; 32];
             for dt in 0..2 {
                 for k in 0..4 {
                     // k = 2 * altitude bit + latitude bit; the longitude pair side by side.
@@ -604,8 +610,34 @@ impl Atmosphere for GriddedField {
                     // of the longitude interpolation, done once per cell, not per stage
                     // (the same difference, so the same bits).
                     for q in 0..2 {
-                        corners[(2 * dt + q) * 8 + 2 * k][l] = ca[q];
-                        corners[(2 * dt + q) * 8 + 2 * k + 1][l] = cb[q] - ca[q];
+                        values[(2 * dt + q) * 8 + 2 * k] = ca[q];
+                        values[(2 * dt + q) * 8 + 2 * k + 1] = cb[q] - ca[q];
+                    }
+                }
+            }
+            // The lanes entering it; `every` stays true if all the others hold it already
+            // or are outside (their corners unused: they may take it too).
+            let (mut enter, mut every) = ([false; W], true);
+            for l in 0..W {
+                // `first` always enters: a NaN key would otherwise never leave `pending`.
+                let e = pending[l] & ((base_f[l] == key) | (l == first));
+                pending[l] &= !e;
+                enter[l] = e;
+                every &= e | outside[l] | (memory.cell[l] == key);
+            }
+            if every {
+                // Mostly: plain vector stores.
+                memory.cell = [key; W];
+                for (row, &v) in corners.iter_mut().zip(&values) {
+                    *row = [v; W];
+                }
+            } else {
+                // Lane by lane (a blend of each row was vectorised across rows, not lanes:
+                // gathers and scatters).
+                for l in (0..W).filter(|&l| enter[l]) {
+                    memory.cell[l] = key;
+                    for (row, &v) in corners.iter_mut().zip(&values) {
+                        row[l] = v;
                     }
                 }
             }
@@ -619,7 +651,12 @@ impl Atmosphere for GriddedField {
             for (q, vq) in v.iter_mut().enumerate() {
                 let c = |k: usize| corners[q * 8 + k][l];
                 let lerp = |x: f64, y: f64, f: f64| f.mul_add(y - x, x);
-                let e: [f64; 4] = std::array::from_fn(|k| o.mul_add(c(2 * k + 1), c(2 * k)));
+                let e = [
+                    o.mul_add(c(1), c(0)),
+                    o.mul_add(c(3), c(2)),
+                    o.mul_add(c(5), c(4)),
+                    o.mul_add(c(7), c(6)),
+                ];
                 // Even q: ln(mean), odd: sigma/mean.
                 let a = if q % 2 == 0 { fm[l] } else { fa[l] };
                 *vq = lerp(lerp(e[0], e[1], b), lerp(e[2], e[3], b), a);
@@ -900,37 +937,48 @@ mod tests {
     fn kept_corners_give_the_bits_of_a_fresh_lookup() {
         // A batch walking through the field (staying in a cell, crossing cells and the
         // time cell at 600 s, one lane leaving the grid) with its memory gets exactly
-        // what a lookup with fresh memory gets at every call.
+        // what a lookup with fresh memory gets at every call: lanes far apart (each its
+        // own cell) and lanes close together (mostly one cell, entered together, split
+        // when a cell edge falls between them).
         use crate::frames::{geodetic_to_fixed, Geodetic};
         let f = affine_field();
-        let mut memory = LaneMemory::<8>::default();
-        for k in 0..60 {
-            let ut1 = 100.0 + 19.0 * k as f64;
-            let rot = EarthRotation::new(0.01 * k as f64);
-            let pos: [[f64; 3]; 8] = std::array::from_fn(|l| {
-                let alt = if l == 2 && k % 9 == 4 {
-                    100e3
-                } else {
-                    305e3 + 1.3e3 * k as f64 + 5e3 * l as f64
-                };
-                rot.to_inertial(geodetic_to_fixed(Geodetic {
-                    lat: (-50.0 + 1.7 * k as f64 + l as f64).to_radians(),
-                    lon: (3.1 * k as f64 + 40.0 * l as f64).to_radians(),
-                    alt,
-                }))
-            });
-            let (x, y, z) = (pos.map(|p| p[0]), pos.map(|p| p[1]), pos.map(|p| p[2]));
-            let on = std::array::from_fn(|l| if l == 2 { 0.0 } else { 1.0 });
-            let (mut m, mut s) = ([0.0; 8], [0.0; 8]);
-            let (mut m0, mut s0) = ([0.0; 8], [0.0; 8]);
-            f.mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut m, &mut s, &mut memory)
-                .unwrap();
-            let fresh = &mut LaneMemory::default();
-            f.mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut m0, &mut s0, fresh)
-                .unwrap();
-            for l in 0..8 {
-                assert_eq!(m[l].to_bits(), m0[l].to_bits(), "call {k} lane {l}");
-                assert_eq!(s[l].to_bits(), s0[l].to_bits(), "call {k} lane {l}");
+        for (d_lat, d_lon, d_alt) in [(1.0, 40.0, 5e3), (0.05, 0.3, 200.0)] {
+            let mut memory = LaneMemory::<8>::default();
+            for k in 0..60 {
+                let ut1 = 100.0 + 19.0 * k as f64;
+                let rot = EarthRotation::new(0.01 * k as f64);
+                let pos: [[f64; 3]; 8] = std::array::from_fn(|l| {
+                    let alt = if l == 2 && k % 9 == 4 {
+                        100e3
+                    } else {
+                        305e3 + 1.3e3 * k as f64 + d_alt * l as f64
+                    };
+                    rot.to_inertial(geodetic_to_fixed(Geodetic {
+                        lat: (-50.0 + 1.7 * k as f64 + d_lat * l as f64).to_radians(),
+                        lon: (3.1 * k as f64 + d_lon * l as f64).to_radians(),
+                        alt,
+                    }))
+                });
+                let (x, y, z) = (pos.map(|p| p[0]), pos.map(|p| p[1]), pos.map(|p| p[2]));
+                let on = std::array::from_fn(|l| if l == 2 { 0.0 } else { 1.0 });
+                let (mut m, mut s) = ([0.0; 8], [0.0; 8]);
+                let (mut m0, mut s0) = ([0.0; 8], [0.0; 8]);
+                f.mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut m, &mut s, &mut memory)
+                    .unwrap();
+                let fresh = &mut LaneMemory::default();
+                f.mean_sigma_lanes(ut1, &x, &y, &z, &on, &rot, &mut m0, &mut s0, fresh)
+                    .unwrap();
+                for l in 0..8 {
+                    assert_eq!(m[l].to_bits(), m0[l].to_bits(), "{d_lon} call {k} lane {l}");
+                    assert_eq!(s[l].to_bits(), s0[l].to_bits(), "{d_lon} call {k} lane {l}");
+                    // and the values themselves: the scalar lookup's, to the lane
+                    // conversion's tolerance (zero outside the grid: lane 2 at 100 km)
+                    if l != 2 || k % 9 != 4 {
+                        let (ms, ss) = f.mean_sigma(ut1, pos[l], &rot).unwrap();
+                        assert!((m[l] / ms - 1.0).abs() < LANE_TOL, "call {k} lane {l}");
+                        assert!((s[l] / ss - 1.0).abs() < LANE_TOL, "call {k} lane {l}");
+                    }
+                }
             }
         }
     }
