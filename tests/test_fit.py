@@ -13,7 +13,7 @@ from sgp4.api import WGS72, Satrec
 
 import rhoprop as rp
 from rhoprop import catalog
-from rhoprop.catalog.covariance import tle_accuracy, tle_covariance
+from rhoprop.catalog.covariance import TleAccuracy, tle_accuracy, tle_covariance
 from rhoprop.catalog.fit import DEFAULT_DRAG_PARAMETER, fit_element_set
 from rhoprop.cli import main
 from rhoprop.frames import rtn_basis
@@ -116,6 +116,22 @@ def test_tle_covariance_has_the_regime_rms_in_rtn(tle_file):
     np.testing.assert_allclose(sig, [acc.radial, acc.along_track, acc.cross_track], rtol=1e-9)
     assert np.linalg.eigvalsh(cov).min() > -1e-9 * np.abs(cov).max()
     np.testing.assert_allclose(obj.covariance, cov)
+
+
+@pytest.mark.parametrize("radial", [200.0, 400.0, 600.0, 1500.0])
+def test_tle_covariance_is_a_covariance_for_any_accuracy(radial):
+    # A radial error implies an along-track oscillation (2 A sin nt, Clohessy-Wiltshire)
+    # with twice the radial amplitude; an along-track accuracy below it (here 1 km against
+    # 600 m and 1.5 km radial) must still give a positive semi-definite matrix, with the
+    # stated radial and cross-track RMS and at least the stated along-track one.
+    state = rp.OrbitState("2023-08-13T00:00", [6_878e3, 0.0, 0.0], [0.0, 4_730.0, 5_965.0])
+    acc = TleAccuracy(radial, 1000.0, 300.0, 1000.0 / 86400.0, "test")
+    cov = tle_covariance(state, acc)
+    assert np.linalg.eigvalsh(cov).min() > -1e-9 * np.abs(cov).max()
+    basis = rtn_basis(state.position, state.velocity)
+    sig = np.sqrt(np.diag(basis @ cov[:3, :3] @ basis.T))
+    np.testing.assert_allclose(sig[[0, 2]], [radial, 300.0], rtol=1e-9)
+    assert sig[1] >= 1000.0 * (1 - 1e-9)
 
 
 def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):

@@ -118,11 +118,17 @@ def tle_covariance(state: OrbitState, accuracy: TleAccuracy | None = None) -> np
     # then smaller than the regime's: 1.5 n radial / sqrt(2).
     var_a = min((acc.drift_rate / (1.5 * n)) ** 2, acc.radial**2 / 2.0)
     amp2 = 2.0 * (acc.radial**2 - var_a)  # A^2, >= radial^2
-    var_y0 = max(acc.along_track**2 - amp2, 0.0)
+    # The along-track oscillation 2 A sin(nt) has variance 2 A^2; the rest is the offset.
+    # Where the stated along-track error is smaller than the oscillation a radial error
+    # implies (radial above along-track / 2), the along-track variance is the
+    # oscillation's: any less and the matrix is not a covariance (before 2026-12-03 it
+    # took A^2 there and a 600 m radial, 1 km along-track accuracy gave a negative
+    # eigenvalue, which made every CCSP of such objects invalid).
+    var_y0 = max(acc.along_track**2 - 2.0 * amp2, 0.0)
     b2 = 2.0 * acc.cross_track**2
     rot = np.zeros((6, 6))  # rotating-frame RTN covariance [x y z xdot ydot zdot]
     rot[0, 0] = amp2 / 2 + var_a
-    rot[1, 1] = var_y0 + amp2
+    rot[1, 1] = var_y0 + 2.0 * amp2
     rot[2, 2] = b2 / 2
     rot[3, 3] = amp2 * n**2 / 2
     rot[4, 4] = 2 * amp2 * n**2 + 2.25 * n**2 * var_a
