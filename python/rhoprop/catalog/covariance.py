@@ -67,10 +67,12 @@ _KM_PER_DAY = 1e3 / 86400.0
 #: LEO" regime before (500 m, 3 km, 500 m, 1 km/day) held 100 % of GPS and MEO errors
 #: inside 2 sigma and 30-55 % of GEO ones. The eccentric regime's cross-track error
 #: (1 km before) was doubled on the same weeks: 50 % of its cross-track errors fell
-#: inside 2 sigma, 95 % now.
+#: inside 2 sigma, 95 % now. The LEO radial error, 200 m before 2026-12-04, is 300 m: the
+#: later element sets of the same weeks sit 0.2-0.7 km above the earlier ones' orbits,
+#: and with 300 m the RTN Mahalanobis goal holds in every week ("Week by week").
 REGIMES = (
     # (max perigee altitude m, max eccentricity, max period s, accuracy)
-    (800e3, 0.1, np.inf, TleAccuracy(200.0, 1000.0, 300.0, 1.0 * _KM_PER_DAY, "LEO below 800 km")),
+    (800e3, 0.1, np.inf, TleAccuracy(300.0, 1000.0, 300.0, 1.0 * _KM_PER_DAY, "LEO below 800 km")),
     (2000e3, 0.1, np.inf, TleAccuracy(150.0, 600.0, 250.0, 0.5 * _KM_PER_DAY, "LEO 800-2000 km")),
     (np.inf, 0.1, 16 * 3600.0, TleAccuracy(200.0, 1000.0, 150.0, 0.3 * _KM_PER_DAY, "MEO")),
     (np.inf, 0.1, np.inf, TleAccuracy(2000.0, 5000.0, 2000.0, 6.0 * _KM_PER_DAY, "GEO")),
