@@ -20,6 +20,37 @@ def test_help_lists_commands(capsys):
     assert "paper" in out and "usage: rhoprop" in out
 
 
+def test_every_option_with_a_default_names_it_in_the_help():
+    # A newcomer reads --help for what a run does without an option: every option with a
+    # default (other than on/off switches and None) says it, once.
+    import argparse
+
+    from rhoprop.cli import build_parser
+
+    def parsers(p: argparse.ArgumentParser):
+        yield p
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    yield from parsers(sub)
+
+    checked = 0
+    for p in parsers(build_parser()):
+        text = p.format_help()
+        for action in p._actions:
+            if not action.option_strings or action.default in (None, argparse.SUPPRESS):
+                continue
+            if isinstance(action.default, bool):
+                continue
+            assert action.help, f"{p.prog} {action.option_strings[0]} has no help"
+            shown = p._get_formatter()._get_help_string(action) % {"default": action.default}
+            assert "default" in shown.lower(), f"{p.prog} {action.option_strings[0]}"
+            assert shown.lower().count("default:") <= 1, f"{p.prog} {action.option_strings[0]}"
+            checked += 1
+        assert "%%" not in text, p.prog
+    assert checked >= 20
+
+
 def test_paper_quick_prints_methods_that_agree(capsys, tmp_path):
     assert main(["paper", "--quick", "--members", "8", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from ._version import __version__
 from .catalog.job import MODEL_NAMES
@@ -193,9 +194,34 @@ def _overwrite(parser: argparse.ArgumentParser) -> None:
     )
 
 
+class _Formatter(argparse.HelpFormatter):
+    """Help that names each option's default, unless its text already speaks of it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            not action.option_strings
+            or "default" in text.lower()
+            or default is None
+            or isinstance(default, bool)
+            or default is argparse.SUPPRESS
+        ):
+            return action.help
+        return f"{text} (default: %(default)s)" if text else "default: %(default)s"
+
+
+class _Parser(argparse.ArgumentParser):
+    """Every (sub)command's parser: the same help formatter throughout."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``rhoprop`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="rhoprop",
         description="Orbit uncertainty of LEO objects from thermospheric density uncertainty: "
         "correlated-density Monte Carlo, the CCSP filter and multi-model ensembles.",
@@ -276,7 +302,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--end", required=True, help="common end epoch, UTC ISO (e.g. 2002-09-10T00:00Z)"
     )
     cat.add_argument("--out", default="rhoprop-catalog", help="output directory")
-    cat.add_argument("--method", choices=("ccsp", "monte_carlo"), default="ccsp")
+    cat.add_argument(
+        "--method",
+        choices=("ccsp", "monte_carlo"),
+        default="ccsp",
+        help="the sigma-point filter or a Monte Carlo per object",
+    )
     cat.add_argument("--members", type=int, default=100, help="Monte Carlo members per object")
     cat.add_argument("--output-step", type=float, default=3600.0, help="output spacing, s")
     cat.add_argument(
@@ -380,7 +411,12 @@ def build_parser() -> argparse.ArgumentParser:
     reentry.add_argument("file", help="TLE or OMM file")
     reentry.add_argument("--horizon", type=float, default=30.0, help="days after each epoch")
     reentry.add_argument("--members", type=int, default=100, help="Monte Carlo members")
-    reentry.add_argument("--model", default="2.1", choices=MODEL_NAMES)
+    reentry.add_argument(
+        "--model",
+        default="2.1",
+        choices=MODEL_NAMES,
+        help="NRLMSIS version or the benchmark exponential",
+    )
     reentry.add_argument(
         "--fit",
         action=argparse.BooleanOptionalAction,
@@ -426,7 +462,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="s before TCA the density uncertainty starts (default: TCA - CREATION_DATE)",
     )
-    conj.add_argument("--method", choices=("ccsp", "monte_carlo"), default="ccsp")
+    conj.add_argument(
+        "--method",
+        choices=("ccsp", "monte_carlo"),
+        default="ccsp",
+        help="the sigma-point filter or a Monte Carlo",
+    )
     conj.add_argument("--members", type=int, default=None, help="Monte Carlo members (200)")
     conj.add_argument(
         "--drag",
@@ -459,7 +500,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="start of the window, UTC ISO (default: the epoch 99 %% of the element sets are "
         "not after; later ones are propagated back to it)",
     )
-    scr.add_argument("--distance", type=float, default=5e3, help="screening distance, m (5000)")
+    scr.add_argument("--distance", type=float, default=5e3, help="screening distance, m")
     scr.add_argument(
         "--model",
         default="families",
@@ -477,7 +518,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="per-object radii (columns norad_id, radius_m); others by kind: payload and "
         "rocket body 5 m, debris 1 m; an event's hard-body radius is the sum",
     )
-    scr.add_argument("--pc", action=argparse.BooleanOptionalAction, default=True, help="compute Pc")
+    scr.add_argument(
+        "--pc",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="compute each event's Pc (default; --no-pc lists the close approaches only)",
+    )
     scr.add_argument(
         "--monte-carlo",
         type=int,
