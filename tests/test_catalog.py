@@ -401,6 +401,52 @@ def test_load_reads_gzip_compressed_catalogs(test_data, tmp_path):
         rp.catalog.load(damaged)
 
 
+def test_a_published_catalog_loads_as_it_comes_far_orbits_set_aside(test_data, tmp_path, capsys):
+    # Published catalogs hold orbits beyond the 10 Earth radii rhoprop propagates (TESS,
+    # MMS, Chandra): valid element sets, not bad input. By default they are set aside and
+    # listed, whatever `errors`; an object whose newest element set is set aside is not
+    # predicted from an older one that happened to lie nearer (MMS 1 in the 2023
+    # snapshots: 9.1 Earth radii at its 11-13 epoch, 25.5 at its 11-18 one).
+    import gzip
+
+    def sets(snapshot: str, names: set[str]) -> str:
+        lines = gzip.open(test_data / "catalogs" / snapshot, "rt").read().splitlines()
+        return "".join(
+            "\n".join(lines[i : i + 3]) + "\n"
+            for i in range(len(lines) - 2)
+            if lines[i].strip() in names and lines[i + 1].startswith("1 ")
+        )
+
+    path = tmp_path / "two_snapshots.tle"
+    path.write_text(
+        sets("celestrak_active_20231113.txt.gz", {"MMS 1", "ISS (ZARYA)"})
+        + sets("history/celestrak_active_20231118.txt.gz", {"MMS 1", "TESS"})
+    )
+    with pytest.warns(RuntimeWarning, match="2 objects beyond 10 Earth radii set aside"):
+        cat = catalog.load(path)
+    assert [o.name for o in cat] == ["ISS (ZARYA)"]
+    reasons = " | ".join(message for _, message in cat.skipped)
+    assert len(cat.skipped) == 3, reasons
+    assert "TESS (NORAD 43435) is 19.7 Earth radii" in reasons
+    assert "MMS 1 (NORAD 40482) is 25.5 Earth radii" in reasons
+    assert "MMS 1 (NORAD 40482): its newest element set (2023-11-18" in reasons
+    with pytest.raises(ValueError, match=r"lines \d+-\d+: MMS 1 .* beyond the 10"):
+        catalog.load(path, far_orbits="error")
+    with pytest.warns(RuntimeWarning):
+        each = catalog.load(path, history="each")
+    assert sorted(o.name for o in each) == ["ISS (ZARYA)", "MMS 1"]  # MMS 1 of 11-13
+    with pytest.raises(ValueError, match="far_orbits must be"):
+        catalog.load(path, far_orbits="ignore")
+    # The CLI runs such a file with its defaults and lists what it set aside.
+    out = tmp_path / "run"
+    end = "2023-11-20T00:00Z"
+    assert (
+        main(["catalog", str(path), "--end", end, "--model", "exponential", "--out", str(out)]) == 0
+    )
+    err = capsys.readouterr().err
+    assert err.count("skipped") == 3 and "TESS" in err and "RuntimeWarning" not in err
+
+
 def test_an_initial_covariance_callable_is_called_once_per_object():
     calls = []
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -351,7 +352,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--skip-bad",
         action="store_true",
         help="skip malformed element sets and record objects whose propagation fails "
-        "(status 'failed' in the summary; all reported on stderr) instead of stopping",
+        "(status 'failed' in the summary; all reported on stderr) instead of stopping "
+        "(orbits beyond 10 Earth radii, such as TESS's, are always set aside and listed)",
     )
     cat.add_argument(
         "--duplicates",
@@ -439,7 +441,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     reentry.add_argument("--out", default="rhoprop-reentry", help="output directory")
     reentry.add_argument(
-        "--skip-bad", action="store_true", help="skip malformed element sets (listed on stderr)"
+        "--skip-bad",
+        action="store_true",
+        help="skip malformed element sets (listed on stderr; orbits beyond 10 Earth radii "
+        "are always set aside and listed)",
     )
     _overwrite(reentry)
     reentry.set_defaults(run=_reentry)
@@ -595,7 +600,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as err:
             parser.error(f"--threads: {err}")
     try:
-        return int(args.run(args))
+        with warnings.catch_warnings():
+            # The commands list each element set they set aside on stderr themselves.
+            warnings.filterwarnings("ignore", r".* Earth radii set aside", RuntimeWarning)
+            return int(args.run(args))
     except KeyboardInterrupt:
         print("\ninterrupted", file=sys.stderr)
         return 130

@@ -13,6 +13,7 @@ import csv
 import io
 import json
 import math
+import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,9 +22,11 @@ from typing import Any, Literal
 import numpy as np
 
 from .. import _validate
+from ..constants import R_EARTH
 from ..density.model import ModelLike
 from ..options import Errors
 from ..propagation import OrbitState
+from ..propagation.state import MAX_RADII
 from ..time import from_jd
 from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
 
@@ -81,8 +84,10 @@ class CatalogObject:
 
 @dataclass
 class Catalog:
-    """Objects read from a file, and the entries skipped (with ``errors="record"``) as
-    (where, message) pairs."""
+    """Objects read from a file, and the entries skipped as (where, message) pairs: with
+    ``errors="record"`` the unusable ones, and (``far_orbits="skip"``, the default)
+    those beyond :data:`~rhoprop.propagation.state.MAX_RADII` Earth radii at their
+    epoch."""
 
     objects: list[CatalogObject]
     skipped: list[tuple[str, str]] = field(default_factory=list)
@@ -95,6 +100,14 @@ class Catalog:
 
     def __getitem__(self, i: int) -> CatalogObject:
         return self.objects[i]
+
+
+class _FarOrbit(ValueError):
+    """A valid element set whose epoch position lies beyond the radius rhoprop takes."""
+
+    def __init__(self, message: str, norad: int, epoch: np.datetime64) -> None:
+        super().__init__(message)
+        self.norad, self.epoch = norad, epoch
 
 
 def _object_from_satrec(
@@ -126,6 +139,14 @@ def _object_from_satrec(
                 "load with fit=True (fits Cd*A/m to the element set) or give drag_parameters "
                 "for this object"
             )
+    radii = float(np.linalg.norm(r)) * 1e3 / R_EARTH
+    if radii > MAX_RADII:  # a real orbit (TESS, IBEX, lunar transfers), not bad input
+        raise _FarOrbit(
+            f"{name.strip() or sat.satnum} (NORAD {sat.satnum}) is {radii:.3g} Earth radii "
+            f"from the centre at its epoch, beyond the {MAX_RADII:g} rhoprop propagates",
+            int(sat.satnum),
+            epoch,
+        )
     state = OrbitState(epoch, np.array(r) * 1e3, np.array(v) * 1e3)
     acc = tle_accuracy(state)
     note = _tle_note(acc)
@@ -304,6 +325,7 @@ def load(
     zonal_degree: int = 4,
     nonpositive_bstar: Literal["error", "prior"] = "prior",
     history: Literal["newest", "fit", "each"] = "newest",
+    far_orbits: Literal["skip", "error"] = "skip",
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content, plain or gzip-compressed.
@@ -355,11 +377,20 @@ def load(
             those used); ``"each"``: every element set is its own object. ``"fit"`` is
             not the default because on the development weeks it does not predict better
             than the newest element set's fit (docs/catalog-realism.md, "History fits").
+        far_orbits: an element set whose state at its epoch lies beyond
+            :data:`~rhoprop.propagation.state.MAX_RADII` (10) Earth radii, such as TESS's
+            (high orbits that published catalogs hold: 4 of the 8,838 element sets of
+            CelesTrak's 2023-11-13 snapshot): ``"skip"`` (default, whatever ``errors``):
+            it is listed in ``Catalog.skipped`` (and with ``errors="raise"`` a
+            RuntimeWarning says how many), so a published catalog loads as it comes;
+            ``"error"``: a ValueError (recorded with ``errors="record"``).
     """
     if history not in ("newest", "fit", "each"):
         raise ValueError(f"history must be 'newest', 'fit' or 'each', got {history!r}")
     if history == "fit" and not fit:
         raise ValueError("history='fit' fits element sets together: it needs fit=True")
+    if far_orbits not in ("skip", "error"):
+        raise ValueError(f"far_orbits must be 'skip' or 'error', got {far_orbits!r}")
     if nonpositive_bstar not in ("error", "prior"):
         raise ValueError(f"nonpositive_bstar must be 'error' or 'prior', got {nonpositive_bstar!r}")
 
@@ -382,6 +413,7 @@ def load(
         raise ValueError("load needs at least one file")
     entries = [e for one in paths for e in _read_entries(Path(one), errors)]
     out = Catalog([])
+    far: dict[int, np.datetime64] = {}  # NORAD id: newest epoch set aside as too far
     for where, item in entries:
         try:
             if isinstance(item, Exception):
@@ -400,15 +432,41 @@ def load(
             )
         except ValueError as err:
             message = str(err) if str(err).startswith(where) else f"{where}: {err}"
-            if errors == "raise":
+            skip_far = isinstance(err, _FarOrbit) and far_orbits == "skip"
+            if errors == "raise" and not skip_far:
                 raise ValueError(message) from err
             out.skipped.append((where, str(err)))
+            if isinstance(err, _FarOrbit):
+                far[err.norad] = max(far.get(err.norad, err.epoch), err.epoch)
+    if far and errors == "raise":  # with "record" the list is the report
+        warnings.warn(
+            f"element sets of {len(far)} object{'s' if len(far) > 1 else ''} beyond "
+            f"{MAX_RADII:g} Earth radii set aside (Catalog.skipped names them; "
+            "far_orbits='error' to stop instead)",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     if not out.objects and not out.skipped:
         where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} files"
         raise ValueError(f"{where} holds no TLE or OMM element sets")
     older: dict[int, list[CatalogObject]] = {}
     if history != "each":
         out.objects, older = _newest_of_each(out.objects)
+        # An object whose newest element set was set aside is not predicted from an
+        # older one that happened to lie nearer.
+        stale = [o for o in out.objects if o.norad_id in far and o.state.epoch < far[o.norad_id]]
+        for o in stale:
+            out.skipped.append(
+                (
+                    o.source,
+                    f"{o.name} (NORAD {o.norad_id}): its newest element set "
+                    f"({far[o.norad_id]!s:.19}) is beyond {MAX_RADII:g} Earth radii; "
+                    "the older ones are set aside with it",
+                )
+            )
+            older.pop(o.norad_id, None)
+        gone = {id(o) for o in stale}
+        out.objects = [o for o in out.objects if id(o) not in gone]
     if fit and out.objects:
         together = older if history == "fit" else None
         _fit_all(out, model, span, errors, threads, zonal_degree, together)

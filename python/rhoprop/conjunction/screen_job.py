@@ -111,7 +111,12 @@ def default_start(cat: Catalog) -> np.datetime64:
 
 
 def _catalog(file: str | Path, skip_bad: bool) -> Catalog:
-    cat = load(file, errors="record" if skip_bad else "raise", nonpositive_bstar="prior")
+    cat = load(
+        file,
+        errors="record" if skip_bad else "raise",
+        nonpositive_bstar="prior",
+        far_orbits="skip" if skip_bad else "error",  # --strict stops at them too
+    )
     for where, message in cat.skipped:
         print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
     if len(cat) < 2:
