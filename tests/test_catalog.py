@@ -156,6 +156,40 @@ def test_common_epochs_and_decay(local_result):
     np.testing.assert_array_equal(d.status == "decayed", ~np.isnat(d.decay_epoch))
 
 
+def test_element_sets_older_than_max_span_end_stale_and_leave_the_rest_unchanged(
+    local_result, tmp_path, capsys
+):
+    # A run holds the density tiles of every day it flies through: the 2023 snapshots
+    # merged (181 objects last seen months before the end) took 16 GB before max_span.
+    # Objects 90001-90003 lie 18, 15.6 and 13.2 h before END; with max_span 14 h the
+    # first two end "stale", unrun, and the others' results are the full run's, bit for bit.
+    r = catalog.propagate_catalog(
+        catalog.load(SAMPLE),
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        progress=False,
+        max_span=14 * 3600.0,
+    )
+    assert list(r.status) == ["stale"] * 2 + ["propagated"] * 4
+    assert "0.8 days before the end, beyond max_span" in r.reason[0]
+    assert not r.valid[:2].any() and np.isnan(r.mean[:2]).all()
+    np.testing.assert_array_equal(r.mean[2:], local_result.mean[2:])
+    np.testing.assert_array_equal(r.covariance[2:], local_result.covariance[2:])
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="max_span"):
+            catalog.propagate_catalog(
+                catalog.load(SAMPLE), rp.scenarios.benchmark_exponential(0.2), END, max_span=bad
+            )
+    # The CLI says so per object and in its counts.
+    out = tmp_path / "run"
+    args = ["catalog", str(SAMPLE), "--end", END, "--model", "exponential", "--out", str(out)]
+    assert main([*args, "--max-span", str(14 / 24)]) == 0
+    captured = capsys.readouterr()
+    assert "2 stale" in captured.out and captured.err.count(": stale: epoch") == 2
+    assert main([*args, "--max-span", "-1", "--overwrite"]) == 1
+
+
 def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so():
     # At 1e-8 kg/m^3 object 90004's covariance stops being positive definite before its
     # mean orbit decays: outputs end there, status "shortened" with the epoch.

@@ -57,6 +57,7 @@ def _catalog(args: argparse.Namespace) -> int:
         drag_file=args.drag_file,
         cd=args.cd,
         drag_sigma=args.drag_sigma,
+        max_span_days=args.max_span,
     )
     return 0
 
@@ -398,6 +399,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="highest zonal harmonic of the gravity field: 4 (default, J2..J4 as SGP4 "
         "carries), 2 (J2 only, the paper's model) to 6 (J2..J6, EGM2008)",
+    )
+    cat.add_argument(
+        "--max-span",
+        type=float,
+        default=60.0,
+        metavar="DAYS",
+        help="objects whose epoch lies more days than this before --end are not run "
+        "(status 'stale': a run holds its days of density tiles in memory); 0: no limit",
     )
     _overwrite(cat)
     cat.set_defaults(run=_catalog)

@@ -16,7 +16,7 @@ from ..options import Duplicates, UncertaintyMethod
 from ..spaceweather import SpaceWeather
 from .covariance import COVARIANCE_NAMES
 from .elements import Catalog, load
-from .run import STATUSES, propagate_catalog
+from .run import MAX_SPAN, STATUSES, propagate_catalog
 
 #: Density models by the names the command line accepts.
 MODEL_NAMES = ("2.1", "2.0", "00", "exponential")
@@ -184,6 +184,7 @@ def run_catalog_file(
     drag_file: str | Path | None = None,
     cd: float | None = None,
     drag_sigma: str | float = "auto",
+    max_span_days: float | None = MAX_SPAN / 86400.0,
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -202,7 +203,11 @@ def run_catalog_file(
     ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
     interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
     ``drag_sigma``: "auto" or a number (or its text), see ``propagate_catalog``.
-    Returns the paths written."""
+    ``max_span_days``: objects with an epoch more days before ``end`` end "stale", not
+    run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). Returns the paths
+    written."""
+    if max_span_days is not None and not max_span_days >= 0:
+        raise ValueError(f"--max-span must be a number of days >= 0, got {max_span_days}")
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma: float | Literal["auto"] = "auto"
     if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
@@ -250,6 +255,7 @@ def run_catalog_file(
         update_interval=update_interval,
         drag_sigma=sigma,
         fit="auto" if fit == "auto" else False,
+        max_span=None if not max_span_days else max_span_days * 86400.0,
     )
     wall = time.perf_counter() - t0
     directory = folder.directory

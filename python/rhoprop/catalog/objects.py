@@ -176,6 +176,7 @@ class Status(enum.Enum):
     DECAYED = "decayed"
     SHORTENED = "shortened"
     FAILED = "failed"
+    STALE = "stale"
 
 
 @dataclass(frozen=True)

@@ -65,7 +65,18 @@ CATALOG_ZONAL_DEGREE = 4
 CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
 
 #: The statuses an object can end with (:class:`Status` values).
-STATUSES = ("propagated", "decayed", "shortened", "failed")
+STATUSES = ("propagated", "decayed", "shortened", "failed", "stale")
+
+#: Longest run (s) :func:`propagate_catalog` makes by default, from an object's epoch to
+#: ``end``. A run holds the density tiles of every day it flies through (about 25 MB per
+#: day of NRLMSIS) until it ends, so an element set months older than the rest of a
+#: catalog (decayed or lost objects in merged snapshots) took the memory of months: 16 GB
+#: for the 2023 snapshots merged. Such objects end "stale" instead; ``max_span=None``
+#: runs them anyway. A TLE state that old is of little use in LEO: 1-3 km/day of error
+#: growth (docs/catalog-realism.md). 60 days keeps a single published snapshot whole in a
+#: 30-day run (its oldest element sets are about 30 days old: 27 days in CelesTrak's
+#: 2023-11-13 "active" snapshot).
+MAX_SPAN = 60 * 86400.0
 #: What ``errors`` of :func:`propagate_catalog` accepts.
 ERRORS = ("raise", "record")  # the values of errors= (rhoprop.Errors)
 
@@ -91,7 +102,8 @@ class CatalogResult:
             ``"decayed"`` (the mean orbit came down at ``decay_epoch``), ``"shortened"``
             (the CCSP stopped early: a sigma point came down, or its covariance lost
             positive definiteness near decay), ``"failed"`` (only with
-            ``errors="record"``).
+            ``errors="record"``), ``"stale"`` (not run: its epoch lies more than
+            ``max_span`` before the end).
         reason: per object, what happened in words ("" when propagated): the decay epoch,
             where the CCSP stopped, or the error (type and message) of a failed object.
         drag_sigma: per object (objects,), the relative 1-sigma of Cd*A/m propagated (0:
@@ -241,6 +253,7 @@ def propagate_catalog(
     drag_sigma: DragSigma = "auto",
     dynamics: Dynamics | None = None,
     fit: FitChoice = "auto",
+    max_span: float | None = MAX_SPAN,
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -302,6 +315,12 @@ def propagate_catalog(
             unfitted object with an element set; False: none (B* scaled to the model).
             A failed fit leaves the object as it was, the failure in its note; ``objects``
             of the result carry the fitted ones.
+        max_span: longest run, s from an object's epoch to ``end`` (default
+            :data:`MAX_SPAN`, 60 days): an object whose epoch is older is not fitted or
+            propagated and ends with status ``"stale"``, its reason saying so, so that a
+            catalog holding a few months-old element sets runs in bounded memory (the
+            density tiles of every day of a run stay in memory while it runs); None: no
+            limit.
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -331,6 +350,9 @@ def propagate_catalog(
             f"({late[0].state.epoch})"
         )
     step = _validate.positive("output_step", output_step)
+    limit = None if max_span is None else _validate.positive("max_span", max_span)
+    spans = [float((end64 - o.state.epoch) / np.timedelta64(1, "s")) for o in objs]
+    stale = {i for i, span in enumerate(spans) if limit is not None and span > limit}
     dyn = resolve(
         "propagate_catalog",
         dynamics,
@@ -350,7 +372,10 @@ def propagate_catalog(
         errors=errors,
         zonal_degree=zonal_degree_argument(zonal_degree),
     )
-    objs = fit_catalog_objects(objs, model, fit, cfg.zonal_degree)
+    fresh = [i for i in range(len(objs)) if i not in stale]
+    fitted = fit_catalog_objects([objs[i] for i in fresh], model, fit, cfg.zonal_degree)
+    for i, obj in zip(fresh, fitted, strict=True):
+        objs[i] = obj
     plans = _plans(objs, initial_covariance, drag_sigma, model)
     notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step)
@@ -363,16 +388,34 @@ def propagate_catalog(
         bar = shown
     try:
         results = Outcomes(len(objs), len(epochs))
-        if client is None:
-            _run_local(plans, shipped, epochs, cfg, bar, results)
-        else:
-            indexed = by_epoch(plans)
+        for i in sorted(stale):
+            results[i] = _stale(spans[i], limit, len(epochs))
+        running = [plans[i] for i in fresh]
+        if running and client is None:
+            _run_local(running, shipped, epochs, cfg, bar, results)
+        elif running:
+            indexed = by_epoch(running)
             chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
             _run_on_dask(client, shipped, chunks, epochs, cfg, bar, results)
     finally:
         if shown is not None:
             shown.close()
     return _result(objs, epochs, method, results, plans, notes)
+
+
+def _stale(span: float, limit: float | None, nt: int) -> ObjectOutcome:
+    """The outcome of an object not run because its epoch lies ``span`` s before the end,
+    more than ``limit``."""
+    return ObjectOutcome(
+        mean=np.full((nt, 6), np.nan),
+        cov=np.full((nt, 6, 6), np.nan),
+        valid=np.zeros(nt, dtype=bool),
+        decay=None,
+        fraction=0.0,
+        status=Status.STALE,
+        reason=f"epoch {span / 86400:.1f} days before the end, beyond max_span "
+        f"({(limit or 0) / 86400:g} days; max_span=None, or --max-span 0, runs it)",
+    )
 
 
 def _result(
