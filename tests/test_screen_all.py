@@ -245,6 +245,32 @@ def test_bad_input_is_refused_naming_what(shell):
         screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, radii={5: 0.0})
 
 
+def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
+    # Merged snapshots hold element sets months old; their propagation to the window
+    # would hold months of density tiles. Beyond max_span (60 days) they are listed in
+    # skipped, and the others' events are those of the run without them.
+    import dataclasses
+
+    objs, start = shell
+    objs = objs[:60]
+    end = add_seconds(start, 3600.0)
+    old = objs[0]
+    stale_state = rp.OrbitState(
+        add_seconds(old.state.epoch, -61 * 86400.0), old.state.position, old.state.velocity
+    )
+    stale = dataclasses.replace(old, state=stale_state, name="OLD ONE")
+    kw = {"start": start, "end": end, "distance": 30e3, "pc": False, "progress": False}
+    res = screen_all([*objs[1:], stale], MODEL, **kw)
+    assert [n for n, _ in res.skipped] == ["OLD ONE"]
+    assert "days before the start, beyond max_span (60 days" in res.skipped[0][1]
+    alone = screen_all(objs[1:], MODEL, **kw)
+    assert [(e.name1, e.name2, e.tca) for e in res.events] == [
+        (e.name1, e.name2, e.tca) for e in alone.events
+    ]
+    with pytest.raises(ValueError, match="max_span"):
+        screen_all(objs[:5], MODEL, **kw, max_span=-1.0)
+
+
 SYNTHETIC = """
 import numpy as np, rhoprop as rp
 epoch = np.datetime64("2023-11-14T00:00:00", "ns")

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core, _validate
-from ..catalog.run import CATALOG_ZONAL_DEGREE
+from ..catalog.run import CATALOG_ZONAL_DEGREE, MAX_SPAN
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, R_EARTH
 from ..density.model import ModelLike
 from ..options import Errors
@@ -201,6 +201,7 @@ def screen_all(
     seed: int = 0,
     errors: Errors = "raise",
     progress: bool | Callable[[str, int, int], object] = True,
+    max_span: float | None = MAX_SPAN,
 ) -> AllOnAllResult:
     """Screens every object of a catalog against every other for close approaches within
     ``distance`` over [start, end] (UTC), each with its probability of collision per
@@ -257,6 +258,10 @@ def screen_all(
             itself runs on this machine's threads.
         progress: show progress bars on a terminal, or a callable given (stage, done,
             total).
+        max_span: an object whose epoch lies more than this (s) before ``start`` or
+            after ``end`` is not screened and is listed in ``skipped`` (default
+            :data:`~rhoprop.catalog.run.MAX_SPAN`, 60 days: a propagation holds the density
+            tiles of every day it flies through; None: no limit).
 
     Returns:
         :class:`AllOnAllResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -276,6 +281,13 @@ def screen_all(
     _validate.count("members", members, minimum=2)
     _validate.seed(seed, limit=2**63)
     objs, skipped, given = _unique_objects(objects)
+    objs, stale = _recent(objs, cfg.start, cfg.end, max_span)
+    skipped += stale
+    if len(objs) < 2:
+        raise ValueError(
+            f"screen_all needs at least two objects within max_span of the window; "
+            f"{len(stale)} of {given} lie further"
+        )
     earliest = min([cfg.start, *(o.state.epoch for o in objs)])
     latest = max([cfg.end, *(o.state.epoch for o in objs)])
     check_options(models, weights, hard_body_radius, radii)
@@ -428,6 +440,33 @@ def _model_set(model: Any, reference: str | None) -> tuple[dict[str, Any], str]:
     if ref not in models:
         raise ValueError(f"reference {ref!r} is not one of the models {list(models)}")
     return {ref: models[ref], **{k: v for k, v in models.items() if k != ref}}, ref
+
+
+def _recent(
+    objs: list[_Object], start: np.datetime64, end: np.datetime64, max_span: float | None
+) -> tuple[list[_Object], list[tuple[str, str]]]:
+    """The objects whose epoch lies within ``max_span`` s before ``start`` or after
+    ``end``, and (name, reason) of the others."""
+    if max_span is None:
+        return objs, []
+    limit = _validate.positive("max_span", max_span)
+    kept, stale = [], []
+    for o in objs:
+        before = seconds_between(o.state.epoch, start)
+        after = seconds_between(end, o.state.epoch)
+        if max(before, after) > limit:
+            side = "before the start" if before > 0 else "after the end"
+            days = max(before, after) / 86400
+            stale.append(
+                (
+                    o.name,
+                    f"epoch {days:.1f} days {side}, beyond max_span ({limit / 86400:g} "
+                    "days; max_span=None runs it)",
+                )
+            )
+        else:
+            kept.append(o)
+    return kept, stale
 
 
 def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]], int]:

@@ -312,6 +312,7 @@ def _model_moments(
                 progress=False,
                 client=client,
                 fit=False,  # each model's Cd*A/m is set above (debiased)
+                max_span=None,  # screen_all already set aside the stale element sets
             )
             base = res if name == ref else base
             # One model's run at a time is held (with the reference's): bounded memory.
