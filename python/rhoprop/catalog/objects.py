@@ -212,6 +212,22 @@ class ObjectOutcome:
     reason: str
     error: Exception | None = None
 
+    @classmethod
+    def without_output(
+        cls, nt: int, status: Status, reason: str, error: Exception | None = None
+    ) -> ObjectOutcome:
+        """An object with no valid output (failed, or not run): NaN on all ``nt`` epochs."""
+        return cls(
+            mean=np.full((nt, 6), np.nan),
+            cov=np.full((nt, 6, 6), np.nan),
+            valid=np.zeros(nt, dtype=bool),
+            decay=None,
+            fraction=0.0,
+            status=status,
+            reason=reason,
+            error=error,
+        )
+
 
 @dataclass(frozen=True)
 class ObjectPlan:
@@ -437,16 +453,8 @@ def _run_object(
             if named is err:
                 raise
             raise named from err
-        nt = len(epochs)
-        return ObjectOutcome(
-            mean=np.full((nt, 6), np.nan),
-            cov=np.full((nt, 6, 6), np.nan),
-            valid=np.zeros(nt, dtype=bool),
-            decay=None,
-            fraction=0.0,
-            status=Status.FAILED,
-            reason=f"{type(err).__name__}: {err}",
-            error=err,
+        return ObjectOutcome.without_output(
+            len(epochs), Status.FAILED, f"{type(err).__name__}: {err}", err
         )
 
 

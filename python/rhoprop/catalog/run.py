@@ -406,14 +406,10 @@ def propagate_catalog(
 def _stale(span: float, limit: float | None, nt: int) -> ObjectOutcome:
     """The outcome of an object not run because its epoch lies ``span`` s before the end,
     more than ``limit``."""
-    return ObjectOutcome(
-        mean=np.full((nt, 6), np.nan),
-        cov=np.full((nt, 6, 6), np.nan),
-        valid=np.zeros(nt, dtype=bool),
-        decay=None,
-        fraction=0.0,
-        status=Status.STALE,
-        reason=f"epoch {span / 86400:.1f} days before the end, beyond max_span "
+    return ObjectOutcome.without_output(
+        nt,
+        Status.STALE,
+        f"epoch {span / 86400:.1f} days before the end, beyond max_span "
         f"({(limit or 0) / 86400:g} days; max_span=None, or --max-span 0, runs it)",
     )
 
