@@ -269,6 +269,10 @@ def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
     ]
     with pytest.raises(ValueError, match="max_span"):
         screen_all(objs[:5], MODEL, **kw, max_span=-1.0)
+    from rhoprop.cli import main
+
+    sample = Path(__file__).parent / "data" / "sample.tle"
+    assert main(["screen", str(sample), "--end", "2002-09-08", "--max-span", "-1"]) == 1
 
 
 SYNTHETIC = """

@@ -107,6 +107,7 @@ def _screen(args: argparse.Namespace) -> int:
         skip_bad=not args.strict,
         overwrite=args.overwrite,
         command=args.command_line,
+        max_span_days=args.max_span,
     )
     return 0
 
@@ -547,6 +548,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     scr.add_argument(
         "--members", type=int, default=200, help="Monte Carlo members per object and model"
+    )
+    scr.add_argument(
+        "--max-span",
+        type=float,
+        default=60.0,
+        metavar="DAYS",
+        help="element sets whose epoch lies more days than this before --start (or after "
+        "--end) are skipped and listed: a propagation holds its days of density tiles in "
+        "memory; 0: no limit",
     )
     scr.add_argument("--out", default="rhoprop-screen", help="output directory")
     scr.add_argument(

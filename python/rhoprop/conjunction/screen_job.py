@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..catalog.elements import Catalog, load
+from ..catalog.run import MAX_SPAN
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
 from ..time import to_datetime64
@@ -140,6 +141,7 @@ def run_screen_file(
     skip_bad: bool = True,
     overwrite: bool = False,
     command: str | None = None,
+    max_span_days: float | None = MAX_SPAN / 86400.0,
 ) -> list[Path]:
     """Every element set of ``file`` screened against every other from ``start`` (default
     :func:`default_start`: the epoch 99 % of the element sets are not after) to ``end``
@@ -148,7 +150,11 @@ def run_screen_file(
     ``out/events.parquet``, ``out/cdm/`` and ``out/manifest.json``; prints the events
     with the largest mixture Pc, the filter counts and the time per stage;
     ``monte_carlo_events`` events of largest Pc also get the member Monte Carlo's Pc
-    (``members`` members). Returns the paths written."""
+    (``members`` members). ``max_span_days``: element sets further than that from the
+    window are listed as skipped, not screened (0 or None: no limit). Returns the paths
+    written."""
+    if max_span_days is not None and not max_span_days >= 0:
+        raise ValueError(f"--max-span must be a number of days >= 0, got {max_span_days}")
     cat = _catalog(file, skip_bad)
     radii = read_radii(radii_file) if radii_file else None
     t0 = to_datetime64(start, "start") if start else default_start(cat)
@@ -165,6 +171,7 @@ def run_screen_file(
         monte_carlo_events=monte_carlo_events,
         members=members,
         errors="record" if skip_bad else "raise",
+        max_span=None if not max_span_days else max_span_days * 86400.0,
     )
     written = output_events(res, folder)
     manifest = folder.finish()
