@@ -439,51 +439,69 @@ def load(
             if isinstance(err, _FarOrbit):
                 far[err.norad] = max(far.get(err.norad, err.epoch), err.epoch)
     if far and errors == "raise":  # with "record" the list is the report
-        warnings.warn(
-            f"element sets of {len(far)} object{'s' if len(far) > 1 else ''} beyond "
-            f"{MAX_RADII:g} Earth radii set aside (Catalog.skipped names them; "
-            "far_orbits='error' to stop instead)",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+        _warn_far(len(far))
     if not out.objects and not out.skipped:
         where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} files"
         raise ValueError(f"{where} holds no TLE or OMM element sets")
     older: dict[int, list[CatalogObject]] = {}
     if history != "each":
         out.objects, older = _newest_of_each(out.objects)
-        # An object whose newest element set was set aside is not predicted from an
-        # older one that happened to lie nearer.
-        stale = [o for o in out.objects if o.norad_id in far and o.state.epoch < far[o.norad_id]]
-        for o in stale:
-            out.skipped.append(
-                (
-                    o.source,
-                    f"{o.name} (NORAD {o.norad_id}): its newest element set "
-                    f"({far[o.norad_id]!s:.19}) is beyond {MAX_RADII:g} Earth radii; "
-                    "the older ones are set aside with it",
-                )
-            )
-            older.pop(o.norad_id, None)
-        gone = {id(o) for o in stale}
-        out.objects = [o for o in out.objects if id(o) not in gone]
+        _drop_behind_far(out, older, far)
     if fit and out.objects:
         together = older if history == "fit" else None
         _fit_all(out, model, span, errors, threads, zonal_degree, together)
     if older and history == "newest":
-        import dataclasses
-
-        out.objects = [
-            dataclasses.replace(
-                o,
-                covariance_note=f"{o.covariance_note}; the newest of "
-                f"{len(older[o.norad_id]) + 1} element sets (history='fit' fits them together)",
-            )
-            if o.norad_id in older
-            else o
-            for o in out.objects
-        ]
+        out.objects = _noted_histories(out.objects, older)
     return out
+
+
+def _warn_far(count: int) -> None:
+    warnings.warn(
+        f"element sets of {count} object{'s' if count > 1 else ''} beyond "
+        f"{MAX_RADII:g} Earth radii set aside (Catalog.skipped names them; "
+        "far_orbits='error' to stop instead)",
+        RuntimeWarning,
+        stacklevel=3,
+    )
+
+
+def _drop_behind_far(
+    out: Catalog, older: dict[int, list[CatalogObject]], far: dict[int, np.datetime64]
+) -> None:
+    """Sets aside (into ``out.skipped``) each object whose newest element set was set aside
+    as too far (``far``: NORAD id -> its epoch): it is not predicted from an older one
+    that happened to lie nearer."""
+    stale = [o for o in out.objects if o.norad_id in far and o.state.epoch < far[o.norad_id]]
+    for o in stale:
+        out.skipped.append(
+            (
+                o.source,
+                f"{o.name} (NORAD {o.norad_id}): its newest element set "
+                f"({far[o.norad_id]!s:.19}) is beyond {MAX_RADII:g} Earth radii; "
+                "the older ones are set aside with it",
+            )
+        )
+        older.pop(o.norad_id, None)
+    gone = {id(o) for o in stale}
+    out.objects = [o for o in out.objects if id(o) not in gone]
+
+
+def _noted_histories(
+    objects: list[CatalogObject], older: dict[int, list[CatalogObject]]
+) -> list[CatalogObject]:
+    """``objects`` with the note of those that stand for several element sets."""
+    import dataclasses
+
+    return [
+        dataclasses.replace(
+            o,
+            covariance_note=f"{o.covariance_note}; the newest of "
+            f"{len(older[o.norad_id]) + 1} element sets (history='fit' fits them together)",
+        )
+        if o.norad_id in older
+        else o
+        for o in objects
+    ]
 
 
 def _read_entries(p: Path, errors: str) -> list[tuple[str, Any]]:

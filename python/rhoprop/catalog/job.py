@@ -206,8 +206,6 @@ def run_catalog_file(
     ``max_span_days``: objects with an epoch more days before ``end`` end "stale", not
     run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). Returns the paths
     written."""
-    if max_span_days is not None and not max_span_days >= 0:
-        raise ValueError(f"--max-span must be a number of days >= 0, got {max_span_days}")
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma: float | Literal["auto"] = "auto"
     if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
@@ -255,7 +253,7 @@ def run_catalog_file(
         update_interval=update_interval,
         drag_sigma=sigma,
         fit="auto" if fit == "auto" else False,
-        max_span=None if not max_span_days else max_span_days * 86400.0,
+        max_span=max_span_option(max_span_days),
     )
     wall = time.perf_counter() - t0
     directory = folder.directory
@@ -287,6 +285,13 @@ def run_catalog_file(
     )
     print(atlas_line())
     return [*paths, summary, manifest]
+
+
+def max_span_option(days: float | None) -> float | None:
+    """``--max-span DAYS`` as ``max_span`` seconds (0 or None: None, no limit)."""
+    if days is not None and not days >= 0:
+        raise ValueError(f"--max-span must be a number of days >= 0, got {days}")
+    return days * 86400.0 if days else None
 
 
 def atlas_line() -> str:

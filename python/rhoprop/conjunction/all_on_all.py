@@ -281,13 +281,7 @@ def screen_all(
     _validate.count("members", members, minimum=2)
     _validate.seed(seed, limit=2**63)
     objs, skipped, given = _unique_objects(objects)
-    objs, stale = _recent(objs, cfg.start, cfg.end, max_span)
-    skipped += stale
-    if len(objs) < 2:
-        raise ValueError(
-            f"screen_all needs at least two objects within max_span of the window; "
-            f"{len(stale)} of {given} lie further"
-        )
+    objs = _recent(objs, skipped, cfg.start, cfg.end, max_span)
     earliest = min([cfg.start, *(o.state.epoch for o in objs)])
     latest = max([cfg.end, *(o.state.epoch for o in objs)])
     check_options(models, weights, hard_body_radius, radii)
@@ -443,21 +437,25 @@ def _model_set(model: Any, reference: str | None) -> tuple[dict[str, Any], str]:
 
 
 def _recent(
-    objs: list[_Object], start: np.datetime64, end: np.datetime64, max_span: float | None
-) -> tuple[list[_Object], list[tuple[str, str]]]:
+    objs: list[_Object],
+    skipped: list[tuple[str, str]],
+    start: np.datetime64,
+    end: np.datetime64,
+    max_span: float | None,
+) -> list[_Object]:
     """The objects whose epoch lies within ``max_span`` s before ``start`` or after
-    ``end``, and (name, reason) of the others."""
+    ``end``; (name, reason) of the others go to ``skipped``."""
     if max_span is None:
-        return objs, []
+        return objs
     limit = _validate.positive("max_span", max_span)
-    kept, stale = [], []
+    kept = []
     for o in objs:
         before = seconds_between(o.state.epoch, start)
         after = seconds_between(end, o.state.epoch)
         if max(before, after) > limit:
             side = "before the start" if before > 0 else "after the end"
             days = max(before, after) / 86400
-            stale.append(
+            skipped.append(
                 (
                     o.name,
                     f"epoch {days:.1f} days {side}, beyond max_span ({limit / 86400:g} "
@@ -466,7 +464,12 @@ def _recent(
             )
         else:
             kept.append(o)
-    return kept, stale
+    if len(kept) < 2:
+        raise ValueError(
+            f"screen_all needs at least two objects within max_span of the window; "
+            f"{len(objs) - len(kept)} of {len(objs)} lie further"
+        )
+    return kept
 
 
 def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]], int]:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..catalog.elements import Catalog, load
+from ..catalog.job import max_span_option
 from ..catalog.run import MAX_SPAN
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
@@ -153,8 +154,7 @@ def run_screen_file(
     (``members`` members). ``max_span_days``: element sets further than that from the
     window are listed as skipped, not screened (0 or None: no limit). Returns the paths
     written."""
-    if max_span_days is not None and not max_span_days >= 0:
-        raise ValueError(f"--max-span must be a number of days >= 0, got {max_span_days}")
+    span = max_span_option(max_span_days)
     cat = _catalog(file, skip_bad)
     radii = read_radii(radii_file) if radii_file else None
     t0 = to_datetime64(start, "start") if start else default_start(cat)
@@ -171,7 +171,7 @@ def run_screen_file(
         monte_carlo_events=monte_carlo_events,
         members=members,
         errors="record" if skip_bad else "raise",
-        max_span=None if not max_span_days else max_span_days * 86400.0,
+        max_span=span,
     )
     written = output_events(res, folder)
     manifest = folder.finish()
