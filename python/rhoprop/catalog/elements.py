@@ -22,11 +22,10 @@ from typing import Any, Literal
 import numpy as np
 
 from .. import _validate
-from ..constants import R_EARTH
 from ..density.model import ModelLike
 from ..options import Errors
 from ..propagation import OrbitState
-from ..propagation.state import MAX_RADII
+from ..propagation.state import MAX_RADII, radii_beyond_reach
 from ..time import from_jd
 from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
 
@@ -139,8 +138,8 @@ def _object_from_satrec(
                 "load with fit=True (fits Cd*A/m to the element set) or give drag_parameters "
                 "for this object"
             )
-    radii = float(np.linalg.norm(r)) * 1e3 / R_EARTH
-    if radii > MAX_RADII:  # a real orbit (TESS, IBEX, lunar transfers), not bad input
+    radii = radii_beyond_reach(np.array(r) * 1e3)
+    if radii is not None:  # a real orbit (TESS, IBEX, lunar transfers), not bad input
         raise _FarOrbit(
             f"{name.strip() or sat.satnum} (NORAD {sat.satnum}) is {radii:.3g} Earth radii "
             f"from the centre at its epoch, beyond the {MAX_RADII:g} rhoprop propagates",

@@ -351,8 +351,11 @@ def propagate_catalog(
         )
     step = _validate.positive("output_step", output_step)
     limit = None if max_span is None else _validate.positive("max_span", max_span)
-    spans = [float((end64 - o.state.epoch) / np.timedelta64(1, "s")) for o in objs]
-    stale = {i for i, span in enumerate(spans) if limit is not None and span > limit}
+    stale = {
+        i: reason
+        for i, o in enumerate(objs)
+        if (reason := beyond_max_span(seconds_between(o.state.epoch, end64), "end", limit))
+    }
     dyn = resolve(
         "propagate_catalog",
         dynamics,
@@ -388,8 +391,8 @@ def propagate_catalog(
         bar = shown
     try:
         results = Outcomes(len(objs), len(epochs))
-        for i in sorted(stale):
-            results[i] = _stale(spans[i], limit, len(epochs))
+        for i, reason in sorted(stale.items()):
+            results[i] = ObjectOutcome.without_output(len(epochs), Status.STALE, reason)
         running = [plans[i] for i in fresh]
         if running and client is None:
             _run_local(running, shipped, epochs, cfg, bar, results)
@@ -403,14 +406,16 @@ def propagate_catalog(
     return _result(objs, epochs, method, results, plans, notes)
 
 
-def _stale(span: float, limit: float | None, nt: int) -> ObjectOutcome:
-    """The outcome of an object not run because its epoch lies ``span`` s before the end,
-    more than ``limit``."""
-    return ObjectOutcome.without_output(
-        nt,
-        Status.STALE,
-        f"epoch {span / 86400:.1f} days before the end, beyond max_span "
-        f"({(limit or 0) / 86400:g} days; max_span=None, or --max-span 0, runs it)",
+def beyond_max_span(seconds: float, side: str, limit: float | None) -> str:
+    """Why an epoch ``seconds`` from the ``side`` ("end": before it, "start", or "end"
+    with negative seconds: after it) is not run, or "" when within ``limit`` (s; None:
+    no limit)."""
+    if limit is None or abs(seconds) <= limit:
+        return ""
+    where = f"before the {side}" if seconds > 0 else f"after the {side}"
+    return (
+        f"epoch {abs(seconds) / 86400:.1f} days {where}, beyond max_span "
+        f"({limit / 86400:g} days; max_span=None, or --max-span 0, runs it)"
     )
 
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core, _validate
-from ..catalog.run import CATALOG_ZONAL_DEGREE, MAX_SPAN
+from ..catalog.run import CATALOG_ZONAL_DEGREE, MAX_SPAN, beyond_max_span
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, R_EARTH
 from ..density.model import ModelLike
 from ..options import Errors
@@ -450,18 +450,12 @@ def _recent(
     limit = _validate.positive("max_span", max_span)
     kept = []
     for o in objs:
-        before = seconds_between(o.state.epoch, start)
-        after = seconds_between(end, o.state.epoch)
-        if max(before, after) > limit:
-            side = "before the start" if before > 0 else "after the end"
-            days = max(before, after) / 86400
-            skipped.append(
-                (
-                    o.name,
-                    f"epoch {days:.1f} days {side}, beyond max_span ({limit / 86400:g} "
-                    "days; max_span=None runs it)",
-                )
-            )
+        t = o.state.epoch
+        reason = beyond_max_span(seconds_between(t, start), "start", limit) if t <= start else ""
+        if t > end:
+            reason = beyond_max_span(seconds_between(t, end), "end", limit)
+        if reason:
+            skipped.append((o.name, reason))
         else:
             kept.append(o)
     if len(kept) < 2:

@@ -106,14 +106,21 @@ class Spacecraft:
         return self.cd * self.area_to_mass
 
 
+def radii_beyond_reach(r: npt.ArrayLike) -> float | None:
+    """The distance of position ``r`` (m) from the centre in Earth radii where it exceeds
+    :data:`MAX_RADII` (the loader sets such element sets aside), else None."""
+    # hypot: no overflow for huge components (np.linalg.norm of 1e154 overflowed).
+    radii = math.hypot(*(float(c) for c in np.asarray(r).ravel())) / R_EARTH
+    return radii if radii > MAX_RADII else None
+
+
 def _check_orbit(r: np.ndarray, v: np.ndarray) -> None:
     """ValueError unless ``r`` (m) and ``v`` (m/s) look like an Earth orbit in SI units.
     Inside the WGS-84 ellipsoid is exact without an epoch: it is symmetric about z, the
     axis that the inertial and Earth-fixed frames share."""
-    # hypot: no overflow for huge components (np.linalg.norm of 1e154 overflowed).
     rn = math.hypot(*(float(c) for c in r))
     top = MAX_RADII * R_EARTH
-    if rn > top:
+    if radii_beyond_reach(r) is not None:
         raise ValueError(
             f"position is {rn / R_EARTH:.3g} Earth radii from the centre (|r| = {rn:.4g} m); "
             f"rhoprop takes Earth orbits within {MAX_RADII:g} Earth radii ({top:.4g} m), "
