@@ -3,7 +3,7 @@
 //! CCSP filter). Run: `cargo bench -p rhoprop-core --bench core`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rhoprop_core::ccsp::{ccsp, CcspConfig};
+use rhoprop_core::ccsp::{ccsp, CcspConfig, Coordinates};
 use rhoprop_core::density::Exponential;
 use rhoprop_core::dynamics::{BatchRhs, Dynamics, Perturbation, State};
 use rhoprop_core::integrators::{FixedMethod, FixedStepper};
@@ -134,6 +134,7 @@ fn runs(c: &mut Criterion) {
         method: FixedMethod::Rk8,
         max_step: 180.0,
         drag_sigma: 0.0,
+        coordinates: Coordinates::Equinoctial,
     };
     group.bench_function("exponential/3 days, hourly updates", |b| {
         b.iter(|| ccsp(&atm, black_box(&cfg), &Progress::default()).unwrap())

@@ -23,6 +23,7 @@
 use crate::decay::{crossing, lane_step, may_cross_lanes};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
+use crate::equinoctial;
 use crate::error::{finite, positive, CoreError};
 use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
 use crate::kappa::KappaLanes;
@@ -59,6 +60,25 @@ pub struct CcspConfig {
     /// Relative 1-sigma of Cd*A/m (log-normal, [`drag_factor`]), carried as the second
     /// consider parameter c; 0 (the paper's filter) leaves it out.
     pub drag_sigma: f64,
+    /// Coordinates in which the sigma points are drawn and their moments taken.
+    pub coordinates: Coordinates,
+}
+
+/// Coordinates of the filter's mean and covariance (docs/conventions.md, "CCSP
+/// coordinates").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coordinates {
+    /// Inertial position and velocity: the paper's filter. Points drawn on a straight
+    /// line leave the curved orbit: once the along-track spread reaches tens of km (about
+    /// 5 days at 400 km) both points of a pair gain the same energy, and the spurious
+    /// drift feeds the covariance faster than the density does (8.6x a Monte Carlo's
+    /// along-track sigma by 19 days).
+    Cartesian,
+    /// Equinoctial elements (a, h, k, p, q, lambda) ([`crate::equinoctial`]): an
+    /// along-track spread is a spread of lambda, points stay on their orbits, and the
+    /// Gaussian holds for weeks. Outputs are mapped to Cartesian by the Jacobian at the
+    /// mean; the element moments are returned too.
+    Equinoctial,
 }
 
 /// Mean, covariance and state-kappa cross-covariance at every update time.
@@ -74,6 +94,11 @@ pub struct CcspOutput {
     /// When a sigma point first went below the floor altitude (s from the epoch): the
     /// filter stopped there and the outputs end at the last update before it.
     pub decayed_at: Option<f64>,
+    /// With [`Coordinates::Equinoctial`], the mean (a m, h, k, p, q, lambda rad) and
+    /// covariance in equinoctial elements at every output (the filter's own Gaussian;
+    /// the Cartesian one is its linear map); empty with Cartesian coordinates.
+    pub element_means: Vec<[f64; 6]>,
+    pub element_covariances: Vec<[[f64; 6]; 6]>,
 }
 
 const N: usize = 6;
@@ -243,19 +268,26 @@ fn run<A: Atmosphere + ?Sized>(
         ));
     }
     let y0 = cfg.problem.y0;
-    let mut mean = Vector6::from_column_slice(&y0);
+    let coords = Frame::new(cfg.coordinates, &Vector6::from_column_slice(&y0))?;
+    // Mean and covariances in the filter's coordinates.
+    let (mut mean, p0) = coords.initial(&Vector6::from_column_slice(&y0), &p0)?;
     // The state covariance without the part explained by c: P = pc + D D^T.
     let mut pc = p0;
     let mut c = Vector6::zeros();
     let mut d = Vector6::zeros();
     let mut out = CcspOutput {
-        times: vec![0.0],
-        means: vec![y0],
-        covariances: vec![cfg.p0],
-        cross: vec![[0.0; 6]],
-        drag_cross: vec![[0.0; 6]],
+        times: Vec::new(),
+        means: Vec::new(),
+        covariances: Vec::new(),
+        cross: Vec::new(),
+        drag_cross: Vec::new(),
         decayed_at: None,
+        element_means: Vec::new(),
+        element_covariances: Vec::new(),
     };
+    out.push(&coords, 0.0, &mean, &p0, &c, &d);
+    out.means[0] = y0;
+    out.covariances[0] = cfg.p0;
     if cfg.output_times.windows(2).any(|w| w[1] <= w[0]) {
         return Err(CoreError::rejected(
             "output times",
@@ -285,6 +317,7 @@ fn run<A: Atmosphere + ?Sized>(
                 pt[i] = base + col.map_or(0.0, |j| sign * s[(i, j)]);
             }
         }
+        let flown = coords.flown(&points, t)?;
         // The output times inside this update's interval, then the update itself.
         let mut stops = Vec::new();
         while next_output < cfg.output_times.len() && cfg.output_times[next_output] <= t1 {
@@ -296,7 +329,8 @@ fn run<A: Atmosphere + ?Sized>(
         }
         stops.push(t1);
         let (ends_at, decayed_at) =
-            propagate_points(atmosphere, cfg, &points, t, &stops, progress, grouping)?;
+            propagate_points(atmosphere, cfg, &flown, t, &stops, progress, grouping)?;
+        let ends_at = coords.ends(ends_at, &stops)?;
         // The outputs in flight (before any floor crossing): the points' moments.
         for (k, ends) in ends_at.iter().enumerate().take(stops.len() - 1) {
             if decayed_at.is_some_and(|td| stops[k] >= td) {
@@ -310,7 +344,7 @@ fn run<A: Atmosphere + ?Sized>(
             };
             let p_k = pc_k + d_k * d_k.transpose();
             let p_k = positive_definite((p_k + p_k.transpose()) * 0.5);
-            out.push(stops[k], &mean_k, &p_k, &c_k, &d_k);
+            out.push(&coords, stops[k], &mean_k, &p_k, &c_k, &d_k);
         }
         if decayed_at.is_some() {
             out.decayed_at = decayed_at;
@@ -336,27 +370,141 @@ fn run<A: Atmosphere + ?Sized>(
             p = (p + p.transpose()) * 0.5;
         }
         t = t1;
-        out.push(t, &mean, &p, &c, &d);
+        out.push(&coords, t, &mean, &p, &c, &d);
         progress.add(1);
     }
     Ok(out)
 }
 
 impl CcspOutput {
+    /// Records the moments (in the filter's coordinates) at `t`, mapped to Cartesian.
     fn push(
         &mut self,
+        coords: &Frame,
         t: f64,
         mean: &Vector6<f64>,
         p: &Matrix6<f64>,
         c: &Vector6<f64>,
         d: &Vector6<f64>,
     ) {
+        let arr = |v: &Vector6<f64>| -> [f64; 6] { std::array::from_fn(|i| v[i]) };
+        let mat = |m: &Matrix6<f64>| -> [[f64; 6]; 6] {
+            std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+        };
         self.times.push(t);
-        self.means.push(std::array::from_fn(|i| mean[i]));
-        self.covariances
-            .push(std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])));
-        self.cross.push(std::array::from_fn(|i| c[i]));
-        self.drag_cross.push(std::array::from_fn(|i| d[i]));
+        match coords.axes {
+            None => {
+                self.means.push(arr(mean));
+                self.covariances.push(mat(p));
+                self.cross.push(arr(c));
+                self.drag_cross.push(arr(d));
+            }
+            Some(axes) => {
+                let jac = equinoctial::jacobian(mean, axes);
+                let px = jac * p * jac.transpose();
+                self.means.push(arr(&equinoctial::to_cartesian(mean, axes)));
+                self.covariances.push(mat(&((px + px.transpose()) * 0.5)));
+                self.cross.push(arr(&(jac * c)));
+                self.drag_cross.push(arr(&(jac * d)));
+                let mut m = *mean;
+                m[5] = equinoctial::wrap(m[5]);
+                self.element_means.push(arr(&m));
+                self.element_covariances.push(mat(p));
+            }
+        }
+    }
+}
+
+/// The filter's coordinates: the identity for Cartesian ones, else the axes in which the
+/// equinoctial elements are taken.
+struct Frame {
+    axes: Option<equinoctial::Axes>,
+}
+
+impl Frame {
+    fn new(coordinates: Coordinates, y0: &Vector6<f64>) -> Result<Self, CoreError> {
+        Ok(Frame {
+            axes: match coordinates {
+                Coordinates::Cartesian => None,
+                Coordinates::Equinoctial => Some(equinoctial::Axes::for_state(y0)),
+            },
+        })
+    }
+
+    /// The initial mean and covariance in these coordinates: P_el = K P K^T with K the
+    /// inverse of d(Cartesian)/d(elements) at the mean.
+    fn initial(
+        &self,
+        y0: &Vector6<f64>,
+        p0: &Matrix6<f64>,
+    ) -> Result<(Vector6<f64>, Matrix6<f64>), CoreError> {
+        let Some(axes) = self.axes else {
+            return Ok((*y0, *p0));
+        };
+        let el = equinoctial::from_cartesian(y0, axes, "initial state")?;
+        let k = equinoctial::jacobian(&el, axes)
+            .try_inverse()
+            .ok_or_else(|| {
+                CoreError::rejected(
+                    "initial state",
+                    "gives a singular equinoctial Jacobian; use Cartesian coordinates",
+                )
+            })?;
+        let p = k * p0 * k.transpose();
+        Ok((el, (p + p.transpose()) * 0.5))
+    }
+
+    /// The sigma points with their state part in Cartesian coordinates, to fly.
+    fn flown(&self, points: &[Point], t: f64) -> Result<Vec<Point>, CoreError> {
+        let Some(axes) = self.axes else {
+            return Ok(points.to_vec());
+        };
+        points
+            .iter()
+            .map(|pt| {
+                let el = Vector6::from_column_slice(&pt[..N]);
+                if !(el[0] > 0.0) || el[1] * el[1] + el[2] * el[2] >= 1.0 {
+                    return Err(CoreError::invalid(
+                        "CCSP sigma point semi-major axis",
+                        el[0],
+                        format!(
+                            "at t = {t} s the equinoctial spread reaches a non-elliptic \
+                             orbit (e^2 = {:.3}); use Cartesian coordinates",
+                            el[1] * el[1] + el[2] * el[2]
+                        ),
+                    ));
+                }
+                let x = equinoctial::to_cartesian(&el, axes);
+                let mut out = *pt;
+                out[..N].copy_from_slice(x.as_slice());
+                Ok(out)
+            })
+            .collect()
+    }
+
+    /// The flown points' states at each stop in these coordinates, lambda unwrapped next
+    /// to the centre point's so that a spread across +-pi stays one spread.
+    fn ends(
+        &self,
+        ends: Vec<Vec<Vector6<f64>>>,
+        stops: &[f64],
+    ) -> Result<Vec<Vec<Vector6<f64>>>, CoreError> {
+        let Some(axes) = self.axes else {
+            return Ok(ends);
+        };
+        ends.into_iter()
+            .zip(stops)
+            .map(|(at, &ts)| {
+                let what = format!("a CCSP sigma point at t = {ts} s");
+                let centre = equinoctial::from_cartesian(&at[0], axes, &what)?;
+                at.iter()
+                    .map(|x| {
+                        let el = equinoctial::from_cartesian(x, axes, &what)?;
+                        Ok(equinoctial::unwrap_near(&el, centre[5]))
+                    })
+                    .collect()
+            })
+            .collect()
     }
 }
 
@@ -700,6 +848,7 @@ mod tests {
             method: FixedMethod::Rk8,
             max_step: 180.0,
             drag_sigma: 0.0,
+            coordinates: Coordinates::Equinoctial,
         };
         let out = ccsp(&atm, &cfg, &Progress::default()).unwrap();
         let mean = propagate(
@@ -785,6 +934,7 @@ mod tests {
             method: FixedMethod::Rk8,
             max_step: 180.0,
             drag_sigma,
+            coordinates: Coordinates::Equinoctial,
         }
     }
 

@@ -33,6 +33,7 @@ pub mod decay;
 pub mod density;
 pub mod dynamics;
 pub mod ephemeris;
+pub mod equinoctial;
 pub mod error;
 pub mod fit;
 pub mod frames;

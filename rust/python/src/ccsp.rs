@@ -6,17 +6,20 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use rhoprop_core::ccsp::{ccsp as core_ccsp, ccsp_many as core_ccsp_many, CcspConfig, CcspOutput};
+use rhoprop_core::ccsp::{
+    ccsp as core_ccsp, ccsp_many as core_ccsp_many, CcspConfig, CcspOutput, Coordinates,
+};
 use rhoprop_core::integrators::FixedMethod;
 
 /// Runs the CCSP filter; see `rhoprop.ccsp` for the documented API. Returns a dict:
 /// decayed_at (s, or None: when a sigma point crossed the floor; the outputs end before it),
 /// times (nt,), means (nt, 6), covariances (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6),
-/// nt = 1 + the updates + the output times between them.
+/// nt = 1 + the updates + the output times between them; with `coordinates`
+/// "equinoctial" also element_means (nt, 6) and element_covariances (nt, 6, 6).
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
     scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0,
-    output_times = None))]
+    output_times = None, coordinates = "equinoctial"))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -33,7 +36,9 @@ pub fn ccsp<'py>(
     zonal_degree: u8,
     drag_sigma: f64,
     output_times: Option<PyReadonlyArray1<'py, f64>>,
+    coordinates: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
     let p0 = crate::arrays::matrix6("initial_covariance", &initial_covariance)?;
@@ -50,6 +55,7 @@ pub fn ccsp<'py>(
         method: FixedMethod::Rk8,
         max_step: step,
         drag_sigma,
+        coordinates,
     };
     let out = long_call(py, None, |progress| {
         with_atmosphere!(&atm, |a| core_ccsp(a, &cfg, progress))
@@ -81,7 +87,7 @@ type ObjectArgs<'py> = (
 /// the call and is raised.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, objects, scaling, perturbation, floor_altitude,
-    zonal_degree = 2, progress = None))]
+    zonal_degree = 2, progress = None, coordinates = "equinoctial"))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp_many<'py>(
     py: Python<'py>,
@@ -92,7 +98,9 @@ pub fn ccsp_many<'py>(
     floor_altitude: f64,
     zonal_degree: u8,
     progress: Option<Py<PyAny>>,
+    coordinates: &str,
 ) -> PyResult<Bound<'py, PyList>> {
+    let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
     let cfgs = objects
@@ -119,6 +127,7 @@ pub fn ccsp_many<'py>(
                     method: FixedMethod::Rk8,
                     max_step: *step,
                     drag_sigma: *drag_sigma,
+                    coordinates,
                 })
             },
         )
@@ -134,6 +143,17 @@ pub fn ccsp_many<'py>(
         }
     }
     Ok(list)
+}
+
+/// The filter's coordinates from their name.
+fn coordinates_arg(name: &str) -> PyResult<Coordinates> {
+    match name {
+        "equinoctial" => Ok(Coordinates::Equinoctial),
+        "cartesian" => Ok(Coordinates::Cartesian),
+        _ => Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "coordinates must be 'equinoctial' or 'cartesian', got {name:?}"
+        ))),
+    }
 }
 
 /// The dict `ccsp` returns.
@@ -158,5 +178,16 @@ fn output_dict(py: Python<'_>, out: CcspOutput) -> PyResult<Bound<'_, PyDict>> {
         "drag_cross",
         Array2::from_shape_fn((nt, 6), |(i, j)| out.drag_cross[i][j]).into_pyarray(py),
     )?;
+    if !out.element_means.is_empty() {
+        dict.set_item(
+            "element_means",
+            Array2::from_shape_fn((nt, 6), |(i, j)| out.element_means[i][j]).into_pyarray(py),
+        )?;
+        dict.set_item(
+            "element_covariances",
+            Array3::from_shape_fn((nt, 6, 6), |(i, j, k)| out.element_covariances[i][j][k])
+                .into_pyarray(py),
+        )?;
+    }
     Ok(dict)
 }
