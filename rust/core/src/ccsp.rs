@@ -463,14 +463,15 @@ impl Frame {
             .iter()
             .map(|pt| {
                 let el = Vector6::from_column_slice(&pt[..N]);
-                if !(el[0] > 0.0) || el[1] * el[1] + el[2] * el[2] >= 1.0 {
+                let e2 = el[1] * el[1] + el[2] * el[2];
+                if el[0].is_nan() || el[0] <= 0.0 || e2.is_nan() || e2 >= 1.0 {
                     return Err(CoreError::invalid(
                         "CCSP sigma point semi-major axis",
                         el[0],
                         format!(
                             "at t = {t} s the equinoctial spread reaches a non-elliptic \
                              orbit (e^2 = {:.3}); use Cartesian coordinates",
-                            el[1] * el[1] + el[2] * el[2]
+                            e2
                         ),
                     ));
                 }
