@@ -1,5 +1,7 @@
 """CCSP vs Monte Carlo cost: 3 days through the NRLMSIS 2.1 field of Case I, CCSP with
-60-min updates vs a 1000-member GaussMarkov(18 min) Monte Carlo, same run, all cores.
+60-min updates vs a 1000-member GaussMarkov(18 min) Monte Carlo, same run, all cores; and
+the CCSP in equinoctial elements (the default) against the Cartesian one (the paper's),
+3 and 7 days.
 
 Run:  python benches/ccsp.py [--repeat 3]
 """
@@ -33,7 +35,7 @@ def main() -> None:
     args = parser.parse_args()
     state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
     duration = rp.scenarios.PAPER_DURATION
-    end = state.epoch + np.timedelta64(int(duration), "s")
+    end = state.epoch + np.timedelta64(7 * 86400, "s")
     field = rp.density.Msis("2.1").atlas.field(state.epoch, end)  # the day tiles
     results = {}
     for name, atmosphere in (
@@ -48,6 +50,23 @@ def main() -> None:
             args.repeat,
         )
         results[name] = {"ccsp_s": cc, "monte_carlo_s": mc, "ratio": mc / cc}
+        for days in (3, 7):
+            span = days * 86400.0
+            timed = {
+                coords: median_time(
+                    lambda a=atmosphere, c=coords, s=span: rp.ccsp(
+                        state, craft, a, s, coordinates=c
+                    ),
+                    args.repeat,
+                )
+                for coords in ("equinoctial", "cartesian")
+            }
+            ratio = timed["equinoctial"] / timed["cartesian"]
+            results[name][f"equinoctial_over_cartesian_{days}d"] = ratio
+            print(
+                f"  {days} days: CCSP equinoctial {timed['equinoctial']:.4f} s, Cartesian "
+                f"{timed['cartesian']:.4f} s: {ratio:.2f}x"
+            )
         print(
             f"{name}: CCSP (60 min updates, 16 sigma points) {cc:.4f} s; Monte Carlo (1000 "
             f"members, GaussMarkov 18 min) {mc:.3f} s; Monte Carlo / CCSP = {mc / cc:.1f}x"

@@ -6,7 +6,7 @@ from typing import NamedTuple, TypedDict, final
 
 import numpy as np
 import numpy.typing as npt
-from typing_extensions import Self
+from typing_extensions import NotRequired, Self
 
 _F64 = npt.NDArray[np.float64]
 
@@ -28,6 +28,8 @@ __all__ = [
     "GriddedAtmosphere",
     "ccsp",
     "ccsp_many",
+    "equinoctial_elements",
+    "equinoctial_to_cartesian",
     "fit_orbits",
     "geodetic",
     "geodetic_to_fixed",
@@ -138,6 +140,8 @@ class _CcspOutput(TypedDict):
     covariances: _F64
     cross: _F64
     drag_cross: _F64
+    element_means: NotRequired[_F64]
+    element_covariances: NotRequired[_F64]
 
 class _MonteCarloOutput(TypedDict):
     """What ``monte_carlo`` returns."""
@@ -178,6 +182,7 @@ def ccsp(
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
     output_times: _F64 | None = None,
+    coordinates: str = "equinoctial",
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
@@ -192,6 +197,7 @@ def ccsp_many(
     floor_altitude: float,
     zonal_degree: int = 2,
     progress: Callable[[int], object] | None = None,
+    coordinates: str = "equinoctial",
 ) -> list[_CcspOutput | Exception]:
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
     update_times, step, drag_sigma, output_times (empty: none)), in one call: per object
@@ -252,6 +258,13 @@ def geodetic_to_fixed(lla: _F64) -> _F64:
 
 def rtn_basis(positions: _F64, velocities: _F64) -> _F64:
     """RTN bases (n, 3, 3), rows R, T, N."""
+
+def equinoctial_elements(states: _F64, reference: _F64) -> _F64:
+    """Cartesian states (n, 6) -> equinoctial elements (n, 6) in the axes of `reference`
+    (6,), lambda within pi of the reference's."""
+
+def equinoctial_to_cartesian(elements: _F64, reference: _F64) -> _F64:
+    """Equinoctial elements (n, 6) -> Cartesian states (n, 6) in the axes of `reference`."""
 
 def jb2008_core(amjd: _F64, geometry: _F64, indices: _F64) -> tuple[_F64, _F64, _F64]:
     """JB2008 as the reference routine: amjd (n,), geometry (n, 5) [Sun RA, Sun Dec,

@@ -1,5 +1,6 @@
-"""Frames and time: GMST (IAU-82), inertial <-> Earth-fixed, geodetic WGS-84 and the RTN
-frame of a reference orbit. Inputs may be one vector (3,) or many (n, 3)."""
+"""Frames and time: GMST (IAU-82), inertial <-> Earth-fixed, geodetic WGS-84, the RTN
+frame of a reference orbit and equinoctial elements. Inputs may be one vector (3,) or
+many (n, 3)."""
 
 from __future__ import annotations
 
@@ -133,3 +134,41 @@ def to_rtn(
     basis = rtn_basis(ref_positions, ref_velocities)
     delta = np.asarray(positions, dtype=float) - np.asarray(ref_positions, dtype=float)
     return np.asarray(np.einsum("...ij,...j->...i", basis, delta))
+
+
+def _states(name: str, value: Any) -> tuple[np.ndarray, bool]:
+    a = _validate.real_array(name, value)
+    single = a.ndim == 1
+    a2 = np.atleast_2d(a)
+    if a2.ndim != 2 or a2.shape[1] != 6:
+        raise ValueError(f"{name} must have shape (6,) or (n, 6), got {a.shape}")
+    if not np.isfinite(a2).all():
+        raise ValueError(f"{name} must be finite")
+    return np.ascontiguousarray(a2), single
+
+
+def to_equinoctial(states: npt.ArrayLike, reference: npt.ArrayLike | None = None) -> np.ndarray:
+    """Inertial states (6,) or (n, 6), m and m/s, as equinoctial elements (a m, h, k, p,
+    q, lambda rad): k + i h = e exp(i (omega + Omega)),
+    q + i p = tan(i / 2) exp(i Omega), lambda = M + omega + Omega (docs/conventions.md,
+    "CCSP coordinates").
+
+    ``reference`` (a state (6,); default the first state) fixes the axes (turned 180 deg
+    about x when its orbit is retrograde, so the elements stay regular) and lambda is
+    returned within pi of the reference's, so a spread of states across lambda = +-pi
+    stays one spread. With the initial state of a :func:`rhoprop.ccsp` run as reference,
+    Monte Carlo members compare directly with its ``element_mean`` and
+    ``element_covariance``. Raises ValueError for a state not on an elliptic orbit."""
+    s, single = _states("states", states)
+    ref = s[0] if reference is None else _states("reference", reference)[0][0]
+    out = _core.equinoctial_elements(s, np.ascontiguousarray(ref))
+    return out[0] if single else out
+
+
+def from_equinoctial(elements: npt.ArrayLike, reference: npt.ArrayLike) -> np.ndarray:
+    """Equinoctial elements (6,) or (n, 6) (as :func:`to_equinoctial`) back to inertial
+    states, m and m/s, in the axes of ``reference`` (a state (6,))."""
+    e, single = _states("elements", elements)
+    ref = _states("reference", reference)[0][0]
+    out = _core.equinoctial_to_cartesian(e, np.ascontiguousarray(ref))
+    return out[0] if single else out

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -41,6 +41,9 @@ DEFAULT_INITIAL_COVARIANCE = np.diag([1e-6, 1e-6, 1e-6, 1e-12, 1e-12, 1e-12])
 #: Memory of one CCSP output (mean, covariance, cross-covariance, RTN covariance and the
 #: along-track sigma as float64), bytes.
 OUTPUT_BYTES = 8 * (6 + 36 + 6 + 9 + 1)
+#: The CCSP's coordinates (:func:`ccsp`'s ``coordinates``).
+Coordinates = Literal["equinoctial", "cartesian"]
+COORDINATES: tuple[Coordinates, ...] = ("equinoctial", "cartesian")
 #: The paper's update interval, s: the default for near-circular orbits.
 DEFAULT_UPDATE_INTERVAL = 3600.0
 #: Eccentricity from which the default schedule updates once per revolution, at apogee
@@ -65,6 +68,7 @@ def ccsp(
     drag_sigma: float = 0.0,
     dynamics: Dynamics | None = None,
     output_times: npt.ArrayLike | None = None,
+    coordinates: Coordinates = "equinoctial",
 ) -> CcspResult:
     """Propagates mean and covariance with the CCSP filter.
 
@@ -129,6 +133,14 @@ def ccsp(
             end): the moments of the sigma points in flight, not re-drawn there. Default
             None: an output at each update only (and, for an eccentric orbit with the
             default ``update_interval``, hourly between its apogee updates).
+        coordinates: where the sigma points are drawn and their moments taken:
+            ``"equinoctial"`` (default: elements a, h, k, p, q, lambda, in which an
+            along-track spread stays on the orbit; the Cartesian outputs are the linear
+            map of that Gaussian, which is returned too as ``element_mean`` and
+            ``element_covariance``) or ``"cartesian"`` (the paper's filter: its
+            straight-line points leave the orbit, and its along-track sigma outgrows the
+            Monte Carlo it stands for past about 5 days: 1.2x at 7 days, 8.6x at 19;
+            docs/conventions.md, "CCSP coordinates").
 
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -158,6 +170,7 @@ def ccsp(
         zonal_degree=zonal_degree,
         drag_sigma=drag_sigma,
         output_times=output_times,
+        coordinates=coordinates,
     )
 
     def run(atmosphere: AtmosphereLike) -> _CcspOutput:
@@ -175,6 +188,7 @@ def ccsp(
             args.degree,
             args.drag_sigma,
             args.outputs if len(args.outputs) else None,
+            args.coordinates,
         )
 
     out = run_in_field(model, state, span, args.floor, run)
@@ -194,6 +208,7 @@ class _Arguments:
     degree: int
     drag_sigma: float
     outputs: np.ndarray  # output times between updates, s (may be empty)
+    coordinates: Coordinates
 
 
 def _arguments(
@@ -211,6 +226,7 @@ def _arguments(
     zonal_degree: int,
     drag_sigma: float,
     output_times: Any = None,
+    coordinates: str = "equinoctial",
 ) -> tuple[_Arguments, float]:
     """Checks the arguments of :func:`ccsp`; returns them for the core and the span, s."""
     if not isinstance(state, OrbitState):
@@ -266,6 +282,7 @@ def _arguments(
         degree=zonal_degree_argument(zonal_degree),
         drag_sigma=drag_sigma_argument(drag_sigma),
         outputs=outputs,
+        coordinates=coordinates_argument(coordinates),
     )
     return args, span
 
@@ -287,6 +304,18 @@ def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResul
         decayed_at=None if decayed is None else float(decayed),
         drag_sigma=drag_sigma,
         drag_cross_covariance=out["drag_cross"],
+        element_mean=out.get("element_means"),
+        element_covariance=out.get("element_covariances"),
+    )
+
+
+def coordinates_argument(coordinates: object) -> Coordinates:
+    """``coordinates`` checked: ``"equinoctial"`` or ``"cartesian"``."""
+    for name in COORDINATES:
+        if coordinates == name:
+            return name
+    raise ValueError(
+        f"coordinates must be one of {', '.join(map(repr, COORDINATES))}, got {coordinates!r}"
     )
 
 
@@ -297,6 +326,7 @@ def ccsp_many(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = 2,
     progress: Callable[[int], None] | None = None,
+    coordinates: Coordinates = "equinoctial",
 ) -> list[CcspResult | Exception]:
     """The CCSP of several objects in one core call (a catalog chunk): each entry of
     ``runs`` holds the keywords of :func:`ccsp` that differ per object (``state``,
@@ -308,7 +338,9 @@ def ccsp_many(
     per object, its :class:`CcspResult` or the exception its run raised there (not
     raised: the caller decides, e.g. repeats the object with :func:`ccsp`, which widens
     a field an object left). ``progress(updates_done)`` is called about every 50 ms; an
-    exception from it stops the call and is raised, as is Ctrl-C."""
+    exception from it stops the call and is raised, as is Ctrl-C. ``coordinates``: as
+    in :func:`ccsp`, shared by every object."""
+    coordinates = coordinates_argument(coordinates)
     prepared = []
     for run in runs:
         state = run["state"]
@@ -347,6 +379,7 @@ def ccsp_many(
             first.floor,
             first.degree,
             progress,
+            coordinates,
         )
         for i, out in zip(members, outs, strict=True):
             state, _c, args, _atm = prepared[i]

@@ -1,10 +1,12 @@
 //! Vectorised frame and time functions over numpy arrays.
 
-use crate::arrays::{row3, rows, vector};
+use crate::arrays::{fixed, row3, rows, vector};
+use nalgebra::Vector6;
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use rhoprop_core::equinoctial;
 use rhoprop_core::frames::{self, EarthRotation, Geodetic};
 use rhoprop_core::time;
 
@@ -109,6 +111,65 @@ pub fn rtn_basis<'py>(
             for c in 0..3 {
                 out[[i, a, c]] = b[a][c];
             }
+        }
+    }
+    Ok(out.into_pyarray(py))
+}
+
+/// The axes of `reference` (a Cartesian state) for equinoctial elements.
+fn element_axes(reference: &PyReadonlyArray1<'_, f64>) -> PyResult<equinoctial::Axes> {
+    let r = fixed::<6>("reference", reference)?;
+    Ok(equinoctial::Axes::for_state(&Vector6::from(r)))
+}
+
+/// Cartesian states (n, 6) m, m/s -> equinoctial elements (n, 6) (a m, h, k, p, q,
+/// lambda rad), in the axes of `reference` and with lambda within pi of its lambda.
+#[pyfunction]
+pub fn equinoctial_elements<'py>(
+    py: Python<'py>,
+    states: PyReadonlyArray2<'py, f64>,
+    reference: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let s = rows("states", &states, 6)?;
+    let axes = element_axes(&reference)?;
+    let r = fixed::<6>("reference", &reference)?;
+    let centre = equinoctial::from_cartesian(&Vector6::from(r), axes, "reference")
+        .map_err(crate::errors::to_py)?;
+    let mut out = Array2::zeros((s.nrows(), 6));
+    for i in 0..s.nrows() {
+        let x = Vector6::from_iterator(s.row(i).iter().copied());
+        let el = equinoctial::from_cartesian(&x, axes, &format!("states[{i}]"))
+            .map_err(crate::errors::to_py)?;
+        let el = equinoctial::unwrap_near(&el, centre[5]);
+        for c in 0..6 {
+            out[[i, c]] = el[c];
+        }
+    }
+    Ok(out.into_pyarray(py))
+}
+
+/// Equinoctial elements (n, 6) -> Cartesian states (n, 6), in the axes of `reference`.
+#[pyfunction]
+pub fn equinoctial_to_cartesian<'py>(
+    py: Python<'py>,
+    elements: PyReadonlyArray2<'py, f64>,
+    reference: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let e = rows("elements", &elements, 6)?;
+    let axes = element_axes(&reference)?;
+    let mut out = Array2::zeros((e.nrows(), 6));
+    for i in 0..e.nrows() {
+        let el = Vector6::from_iterator(e.row(i).iter().copied());
+        if el[0].is_nan() || el[0] <= 0.0 || el[1] * el[1] + el[2] * el[2] >= 1.0 {
+            return Err(PyValueError::new_err(format!(
+                "elements[{i}] is not an elliptic orbit (a = {} m, h^2 + k^2 = {})",
+                el[0],
+                el[1] * el[1] + el[2] * el[2]
+            )));
+        }
+        let x = equinoctial::to_cartesian(&el, axes);
+        for c in 0..6 {
+            out[[i, c]] = x[c];
         }
     }
     Ok(out.into_pyarray(py))

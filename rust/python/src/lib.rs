@@ -34,6 +34,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::geodetic, m)?)?;
     m.add_function(wrap_pyfunction!(frames::geodetic_to_fixed, m)?)?;
     m.add_function(wrap_pyfunction!(frames::rtn_basis, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::equinoctial_elements, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::equinoctial_to_cartesian, m)?)?;
     m.add_function(wrap_pyfunction!(sieve::screen_candidates, m)?)?;
     m.add_function(wrap_pyfunction!(sieve::screen_approaches, m)?)?;
     models::register(m)?;
