@@ -190,15 +190,37 @@ def test_element_sets_older_than_max_span_end_stale_and_leave_the_rest_unchanged
     assert main([*args, "--max-span", "-1", "--overwrite"]) == 1
 
 
-def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so():
-    # At 1e-8 kg/m^3 object 90004's covariance stops being positive definite before its
-    # mean orbit decays: outputs end there, status "shortened" with the epoch.
+def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so(monkeypatch):
+    # At 1e-8 kg/m^3 the Cartesian filter's covariance of object 90004 stops being
+    # positive definite before its mean orbit decays (its straight-line sigma points leave
+    # the orbit): outputs end there, status "shortened" with the epoch. The default filter
+    # (equinoctial elements) keeps it positive definite to the end.
+    import functools
+
+    from rhoprop.catalog import objects
+
     dense = rp.density.Exponential(1e-8, 400e3, 58.515e3, rel_sigma=0.2)
-    # The paper's near-zero initial covariance, so that the density alone breaks it.
-    d = catalog.propagate_catalog(
-        catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False, initial_covariance="paper"
+
+    def run():
+        # The paper's near-zero initial covariance, so that the density alone breaks it.
+        return catalog.propagate_catalog(
+            catalog.load(SAMPLE),
+            dense,
+            "2002-09-09T00:00",
+            progress=False,
+            initial_covariance="paper",
+        )
+
+    default = run()
+    k = [o.norad_id for o in default.objects].index(90004)
+    assert default.status[k] == "propagated" and default.valid[k].all()
+    for cov in default.covariance[k]:
+        assert np.linalg.eigvalsh(cov).min() > 0
+    monkeypatch.setattr(objects, "ccsp", functools.partial(objects.ccsp, coordinates="cartesian"))
+    monkeypatch.setattr(
+        objects, "ccsp_many", functools.partial(objects.ccsp_many, coordinates="cartesian")
     )
-    k = [o.norad_id for o in d.objects].index(90004)
+    d = run()
     assert d.status[k] == "shortened" and np.isnat(d.decay_epoch[k])
     assert "lost positive definiteness at 2002-09-08T" in d.reason[k]
     n_valid = d.valid[k].sum()
