@@ -268,7 +268,7 @@ fn run<A: Atmosphere + ?Sized>(
         ));
     }
     let y0 = cfg.problem.y0;
-    let coords = Frame::new(cfg.coordinates, &Vector6::from_column_slice(&y0))?;
+    let coords = Frame::new(cfg.coordinates, &Vector6::from_column_slice(&y0), l1)?;
     // Mean and covariances in the filter's coordinates.
     let (mut mean, p0) = coords.initial(&Vector6::from_column_slice(&y0), &p0)?;
     // The state covariance without the part explained by c: P = pc + D D^T.
@@ -355,6 +355,9 @@ fn run<A: Atmosphere + ?Sized>(
         mean = m1;
         c = cross;
         pc = (pc1 + pc1.transpose()) * 0.5;
+        if coords.axes.is_some() && Cholesky::new(pc).is_none() {
+            pc = rounding_repaired(pc).unwrap_or(pc);
+        }
         if Cholesky::new(pc).is_none() {
             return Err(CoreError::NotPositiveDefinite {
                 what: "CCSP covariance",
@@ -377,7 +380,11 @@ fn run<A: Atmosphere + ?Sized>(
 }
 
 impl CcspOutput {
-    /// Records the moments (in the filter's coordinates) at `t`, mapped to Cartesian.
+    /// Records the moments (in the filter's coordinates) at `t`. From equinoctial
+    /// elements the Cartesian mean and covariance are the unscented transform of the
+    /// element Gaussian (its points are on their orbits, so the mean sits inside the arc
+    /// and the radial variance holds the arc's sag, as a Monte Carlo's sample moments
+    /// do); the cross-covariances are mapped by the Jacobian at the mean.
     fn push(
         &mut self,
         coords: &Frame,
@@ -401,9 +408,16 @@ impl CcspOutput {
             }
             Some(axes) => {
                 let jac = equinoctial::jacobian(mean, axes);
-                let px = jac * p * jac.transpose();
-                self.means.push(arr(&equinoctial::to_cartesian(mean, axes)));
-                self.covariances.push(mat(&((px + px.transpose()) * 0.5)));
+                let (mx, px) = equinoctial::cartesian_moments(mean, p, axes, coords.l1)
+                    .unwrap_or_else(|| {
+                        (
+                            equinoctial::to_cartesian(mean, axes),
+                            jac * p * jac.transpose(),
+                        )
+                    });
+                self.means.push(arr(&mx));
+                self.covariances
+                    .push(mat(&positive_definite((px + px.transpose()) * 0.5)));
                 self.cross.push(arr(&(jac * c)));
                 self.drag_cross.push(arr(&(jac * d)));
                 let mut m = *mean;
@@ -419,11 +433,15 @@ impl CcspOutput {
 /// equinoctial elements are taken.
 struct Frame {
     axes: Option<equinoctial::Axes>,
+    /// lambda1 + n of the unscented transform that maps the element Gaussian to Cartesian
+    /// moments.
+    l1: f64,
 }
 
 impl Frame {
-    fn new(coordinates: Coordinates, y0: &Vector6<f64>) -> Result<Self, CoreError> {
+    fn new(coordinates: Coordinates, y0: &Vector6<f64>, l1: f64) -> Result<Self, CoreError> {
         Ok(Frame {
+            l1,
             axes: match coordinates {
                 Coordinates::Cartesian => None,
                 Coordinates::Equinoctial => Some(equinoctial::Axes::for_state(y0)),
@@ -564,6 +582,29 @@ fn positive_definite(p: Matrix6<f64>) -> Matrix6<f64> {
     let lifted = eig.eigenvalues.map(|l| l.max(floor));
     let q = eig.eigenvectors * Matrix6::from_diagonal(&lifted) * eig.eigenvectors.transpose();
     (q + q.transpose()) * 0.5
+}
+
+/// `p` with the rounding noise of its thinnest directions lifted, or None when its
+/// indefiniteness is more than rounding. Element covariances span 30 orders of magnitude
+/// (a in m^2 against p and q, from a mm-level initial covariance, near 1e-20), so an
+/// eigenvalue check relative to the largest is meaningless; in the correlation matrix
+/// D^-1/2 p D^-1/2 an eigenvalue above -1e-9 is rounding (sums of 16 weighted outer
+/// products, the centre's weight negative), and is raised to 1e-12 there.
+fn rounding_repaired(p: Matrix6<f64>) -> Option<Matrix6<f64>> {
+    let d = p.diagonal();
+    if d.iter().any(|&x| x.is_nan() || x <= 0.0) {
+        return None;
+    }
+    let s = d.map(|x| x.sqrt());
+    let corr = Matrix6::from_fn(|i, j| p[(i, j)] / (s[i] * s[j]));
+    let eig = corr.symmetric_eigen();
+    if eig.eigenvalues.min() < -1e-9 {
+        return None;
+    }
+    let lifted = eig.eigenvalues.map(|l| l.max(1e-12));
+    let c = eig.eigenvectors * Matrix6::from_diagonal(&lifted) * eig.eigenvectors.transpose();
+    let q = Matrix6::from_fn(|i, j| c[(i, j)] * s[i] * s[j]);
+    Some((q + q.transpose()) * 0.5)
 }
 
 /// Set 2, c point: the cross-covariance with the ballistic-coefficient error, carried
@@ -1147,8 +1188,10 @@ mod tests {
             &Progress::default(),
         )
         .unwrap();
-        // The kappa part (means, kappa cross-covariance) is the same with the c points.
-        assert_eq!(out.means, with.means);
+        // The kappa part (the filter's own mean, kappa cross-covariance) is the same with
+        // the c points. (The Cartesian mean is the unscented transform of the whole
+        // element Gaussian, c's part included.)
+        assert_eq!(out.element_means, with.element_means);
         assert_eq!(out.cross, with.cross);
         assert!(with.covariances.last().unwrap()[0][0] > out.covariances.last().unwrap()[0][0]);
         let mut bad = cfg.clone();

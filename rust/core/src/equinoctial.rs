@@ -154,6 +154,39 @@ pub fn unwrap_near(el: &Vector6<f64>, near: f64) -> Vector6<f64> {
     out
 }
 
+/// Cartesian mean and covariance of the Gaussian (`mean`, `cov`) in elements by the
+/// unscented transform with lambda + n = `l1` (points mean +- sqrt(l1) columns of the
+/// Cholesky factor, weights (l1 - 6) / l1 and 1 / (2 l1)); None when `cov` is not
+/// positive definite or a point is not an elliptic orbit.
+pub fn cartesian_moments(
+    mean: &Vector6<f64>,
+    cov: &Matrix6<f64>,
+    axes: Axes,
+    l1: f64,
+) -> Option<(Vector6<f64>, Matrix6<f64>)> {
+    let chol = nalgebra::Cholesky::new(*cov)?;
+    let l = chol.l() * l1.sqrt();
+    let (w0, wi) = ((l1 - 6.0) / l1, 0.5 / l1);
+    let mut points = vec![to_cartesian(mean, axes)];
+    for j in 0..6 {
+        for sign in [1.0, -1.0] {
+            let el = mean + l.column(j) * sign;
+            if el[0].is_nan() || el[0] <= 0.0 || el[1] * el[1] + el[2] * el[2] >= 1.0 {
+                return None;
+            }
+            points.push(to_cartesian(&el, axes));
+        }
+    }
+    let w = |k: usize| if k == 0 { w0 } else { wi };
+    let m: Vector6<f64> = points.iter().enumerate().map(|(k, x)| x * w(k)).sum();
+    let mut p = Matrix6::zeros();
+    for (k, x) in points.iter().enumerate() {
+        let dx = x - m;
+        p += dx * dx.transpose() * w(k);
+    }
+    Some((m, p))
+}
+
 /// d(Cartesian)/d(elements) at `el` (6x6), by central differences: steps of 1e-6 in a
 /// relative, 1e-8 in h, k, p, q and lambda, so that truncation (O(step^2)) and rounding
 /// (eps / step) both stay below about 1e-8 relative.
