@@ -18,8 +18,12 @@ mean motion fell between the two snapshots (an orbit raise: drag only raises it)
 Truth: the later element set's own state at its epoch (SGP4 at t = 0, its most accurate
 point); each object is predicted from its start epoch to that epoch. Compared there:
 SGP4 of the start element set (the baseline) and rhoprop's mean and covariance
-(``propagate_catalog`` with its defaults: CCSP, NRLMSIS 2.1 with the observed space
-weather of the bundled record: a hindcast, no driver-forecast error). Errors are in the
+(``propagate_catalog`` with its defaults: CCSP, NRLMSIS 2.1). Drivers (``--drivers``):
+``forecast`` (default) runs each week as a forecaster would, on the bundled record as of
+the start snapshot's day (``SpaceWeather.as_of``: observed before it, persistence after);
+``hindcast`` on the record as observed through the prediction (no driver-forecast error,
+flattering); ``both`` prints the hindcast beside the forecast, its configurations
+suffixed ``/hindcast``. Errors are in the
 truth's RTN frame. The truth is itself a TLE state: its published accuracy
 (``rp.catalog.tle_covariance``) is added to the predicted covariance for the sigma tests
 (``--truth-covariance none`` leaves it out).
@@ -66,6 +70,7 @@ import json
 import os
 import tempfile
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -610,6 +615,13 @@ def main() -> None:
         "(to try other drivers)",
     )
     parser.add_argument(
+        "--drivers",
+        choices=("forecast", "hindcast", "both"),
+        default="forecast",
+        help="space weather as known at each week's start, then a forecast (default); as "
+        "observed through the prediction (a hindcast); or both",
+    )
+    parser.add_argument(
         "--per-object",
         action="store_true",
         help="also write catalog_realism_objects.json in --out: per week, configuration "
@@ -627,15 +639,27 @@ def main() -> None:
     weeks = [w for w in WEEKS if w[0] in args.weeks.split(",")]
     if not weeks:
         parser.error(f"no development week starts on {args.weeks}")
-    model = Msis("2.1", space_weather=args.space_weather)
+    record = rp.SpaceWeather(args.space_weather) if args.space_weather else rp.SpaceWeather()
+    modes = ("forecast", "hindcast") if args.drivers == "both" else (args.drivers,)
+    configs = [
+        c if mode == "forecast" else f"{c}/hindcast"
+        for mode in modes
+        for c in args.configs.split(",")
+    ]
     results: dict[str, Any] = {}
-    pooled: dict[str, tuple[dict, dict]] = {c: ({}, {}) for c in args.configs.split(",")}
+    pooled: dict[str, tuple[dict, dict]] = {c: ({}, {}) for c in configs}
+    warnings.simplefilter("ignore", rp.errors.PredictedDriversWarning)
     for start, stop in weeks:
-        figs, raw, truth = run_week(start, stop, args, model)
-        results[start] = figs
-        for config, pred in raw.items():
-            pooled[config][0].update({(start, k): v for k, v in pred.items()})
-            pooled[config][1].update({(start, k): v for k, v in truth.items()})
+        results[start] = {}
+        for mode in modes:
+            weather = record.as_of(f"{start}T00:00") if mode == "forecast" else record
+            print(f"\n--- drivers: {mode} ({weather.source})")
+            figs, raw, truth = run_week(start, stop, args, Msis("2.1", space_weather=weather))
+            suffix = "" if mode == "forecast" else "/hindcast"
+            results[start].update({c + suffix: f for c, f in figs.items()})
+            for config, pred in raw.items():
+                pooled[config + suffix][0].update({(start, k): v for k, v in pred.items()})
+                pooled[config + suffix][1].update({(start, k): v for k, v in truth.items()})
     print("\n=== all weeks")
     results["all"] = {}
     for config, (pred, truth) in pooled.items():
@@ -649,14 +673,11 @@ def main() -> None:
                 f"log std {np.std(logs):.3f}"
             )
         show(f"all {config}", results["all"][config], 0.0, 0.0)
-    summary(results, [w[0] for w in weeks], args.configs.split(","))
+    summary(results, [w[0] for w in weeks], configs)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if args.per_object:
-        rows = {
-            w: {c: results[w][c].pop("per_object") for c in args.configs.split(",")}
-            for w, _ in weeks
-        }
+        rows = {w: {c: results[w][c].pop("per_object") for c in configs} for w, _ in weeks}
         signed_summary(rows)
         (out / "catalog_realism_objects.json").write_text(
             json.dumps({"machine": info(), "weeks": rows}, indent=1)
@@ -666,6 +687,7 @@ def main() -> None:
             {
                 "machine": info(),
                 "objects_per_week": args.objects,
+                "drivers": args.drivers,
                 "truth_covariance": args.truth_covariance,
                 "results": results,
             },

@@ -221,10 +221,12 @@ def test_equinoctial_gaussian_holds_the_monte_carlo_members_at_two_weeks(setup):
     dl = (lam - cc.element_mean[-1, 5] + np.pi) % (2 * np.pi) - np.pi
     inside = np.mean(np.abs(dl) <= 2 * np.sqrt(cc.element_covariance[-1, 5, 5]))
     assert 0.93 <= inside <= 0.97
-    # The Cartesian outputs are the element Gaussian's linear map at the mean.
-    np.testing.assert_allclose(
-        rp.frames.from_equinoctial(cc.element_mean[-1], state.state), cc.mean[-1], atol=1e-3
-    )
+    # The Cartesian mean is the unscented transform of the element Gaussian: inside the
+    # arc the members spread over, off the element mean's orbit by the arc's sag (about
+    # a sigma_lambda^2, ~2 km here), a small part of the along-track sigma.
+    on_orbit = rp.frames.from_equinoctial(cc.element_mean[-1], state.state)
+    sag = np.linalg.norm(on_orbit[:3] - cc.mean[-1, :3])
+    assert 0 < sag < 0.05 * cc.along_track_std[-1]
 
 
 def test_a_day_of_an_initial_covariance_matches_the_monte_carlo(setup):

@@ -528,3 +528,50 @@ def test_bundled_record_merges_the_newer_last_five_years_file(sw):
     # A 2026 epoch has observed drivers offline.
     d = sw.drivers(np.datetime64(last) + np.timedelta64(12, "h"))
     assert np.isfinite(d.ap).all() and np.isfinite(d.f107).all()
+
+
+def test_as_of_is_what_a_forecaster_had(sw):
+    # Forecast mode at 2002-09-08T06:00, the last 3 days' ap held (ap_days=3). Expected
+    # values from the verbatim rows above (TXT_ROWS): F10.7 obs of 09-07 182.8, held;
+    # 81-day trailing average obs of 09-07 175.6 (published to 0.1 sfu); ap of 09-05..07
+    # averaged: 570 / 24 = 23.75; 09-08's 00-03 and 03-06 ap (154, 67) observed by then.
+    from rhoprop.errors import PredictedDriversWarning
+
+    f = sw.as_of("2002-09-08T06:00", ap_days=3)
+    t = np.array(["2002-09-08T07:00", "2002-09-12T00:00"], dtype="datetime64[ns]")
+    with pytest.warns(PredictedDriversWarning):
+        d = f.drivers(t)
+    np.testing.assert_array_equal(d.f107, [182.8, 182.8])
+    np.testing.assert_allclose(d.f107a, 175.6, atol=0.05)
+    assert d.ap[0, 2] == 67 and d.ap[0, 3] == 154 and d.ap[0, 4] == 132
+    assert d.ap[0, 1] == pytest.approx(23.75)
+    np.testing.assert_allclose(d.ap[1], 23.75)
+    assert d.ap[0, 0] == pytest.approx((154 + 67 + 6 * 23.75) / 8)  # the day's Ap
+    assert d.lead_time is not None and d.f107_forecast_sigma is not None
+    assert 0 < d.lead_time[0] < 1 and d.lead_time[1] == pytest.approx(4.0)
+    assert d.f107_forecast_sigma[1] > d.f107_forecast_sigma[0] > 0
+    # Before the centred averages reach the epoch (41 days back and more), the drivers
+    # are the record's own; the days just before it have the trailing average.
+    early = np.array(["2002-07-01T12:00"], dtype="datetime64[ns]")
+    ref, got = sw.drivers(early), f.drivers(early)
+    for name in ("f107", "f107a", "ap"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(ref, name))
+    late = f.drivers(np.array(["2002-09-05T12:00"], dtype="datetime64[ns]"))
+    assert late.f107a[0] == d.f107a[0] != sw.drivers(np.array(["2002-09-05T12:00"])).f107a[0]
+    assert "as of 2002-09-08T06:00:00" in f.source
+    # Nothing past the forecast: the record ends 60 days (default) after the epoch.
+    assert sw.as_of("2002-09-08T06:00").span[1] < np.datetime64("2002-11-08")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"epoch": "1957-11-01"}, ValueError, "needs the 81 observed days before it"),
+        ({"epoch": "2002-09-08", "ap_days": 0}, ValueError, "ap_days must lie in 1-81"),
+        ({"epoch": "2002-09-08", "ap_days": 2.5}, TypeError, "ap_days must be an integer"),
+        ({"epoch": "2002-09-08", "days": -1}, ValueError, "days must lie in 0-3660"),
+    ],
+)
+def test_as_of_refuses(sw, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        sw.as_of(**kwargs)

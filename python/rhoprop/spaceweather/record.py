@@ -62,6 +62,21 @@ F107_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.05), (3.0, 0.08), (27.0, 0.15), (365.
 AP_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.5), (3.0, 1.0))
 
 
+#: Days of forecast :meth:`SpaceWeather.as_of` appends after the epoch.
+AS_OF_DAYS = 60.0
+#: Observed days whose mean geomagnetic activity :meth:`SpaceWeather.as_of` holds.
+AS_OF_AP_DAYS = 27
+
+
+def _validate_days(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number of days, got {type(value).__name__}")
+    days = float(value)
+    if not np.isfinite(days) or not 0.0 <= days <= 3660.0:
+        raise ValueError(f"{name} must lie in 0-3660 days, got {value}")
+    return days
+
+
 def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Relative 1-sigma of predicted F10.7 and of predicted ap at ``lead_days`` (days past
     the last observed day; <= 0: observed, sigma 0), interpolated in
@@ -448,6 +463,92 @@ class SpaceWeather:
         return SpaceWeather._from_columns(
             out, self.source, None, self.mean_range, start.astype("datetime64[D]")
         )
+
+    def as_of(
+        self, epoch: EpochLike, days: float = AS_OF_DAYS, ap_days: int = AS_OF_AP_DAYS
+    ) -> SpaceWeather:
+        """The record as a forecaster had it at ``epoch`` (UTC): what was observed before
+        it, then ``days`` days (default 60) of a forecast made only from that.
+
+        - Observed: every day before the epoch's day, and the 3-hourly ap and Kp of the
+          epoch's day that ended by the epoch. Nothing later is used.
+        - F10.7 (observed and adjusted): the last observed day's value, held
+          (persistence: the drivers take the previous day's flux, so the epoch's own
+          drivers are observed).
+        - The 81-day averages of every day from 40 days before the epoch on, whose
+          centred window reaches past it: the mean of the 81 observed days up to the
+          epoch, held (the trailing average a forecaster has); the trailing averages of
+          the forecast days likewise.
+        - ap, Kp (3-hourly), daily Ap, Cp and C9: the mean of the last ``ap_days``
+          observed days (default 27, one solar rotation), held: a storm is not
+          foreseen, and a quiet spell is not extended into the next storm.
+
+        Its :meth:`drivers` carry the lead time from the epoch's day and the forecast
+        sigma (:func:`forecast_sigma`), which NRLMSIS adds to its driver uncertainty, and
+        warn (:class:`~rhoprop.errors.PredictedDriversWarning`) for epochs past the
+        epoch's day. Choice and measurement: docs/catalog-realism.md, "Forecast mode".
+        Raises :class:`~rhoprop.OutsideRecordError` when fewer than 81 observed days
+        precede the epoch."""
+        t = to_datetime64(epoch, "epoch")
+        horizon = _validate_days("days", days)
+        if isinstance(ap_days, bool) or not isinstance(ap_days, (int, np.integer)):
+            raise TypeError(f"ap_days must be an integer, got {type(ap_days).__name__}")
+        if not 1 <= ap_days <= 81:
+            raise ValueError(f"ap_days must lie in 1-81, got {ap_days}")
+        day = t.astype("datetime64[D]")
+        cols = self._columns()
+        observed = (cols["date"] < day) & (cols["section"] == 0)
+        known = np.flatnonzero(observed)
+        if len(known) < 81 or cols["date"][known[-1]] != day - _DAY:
+            raise OutsideRecordError(
+                f"epoch {np.datetime_as_string(t, unit='s')}: the space-weather record "
+                f"{self.source} needs the 81 observed days before it (observed "
+                f"{self.observed_end} last)"
+            )
+        out = {k: np.array(v[: known[-1] + 1]) for k, v in cols.items()}
+        last = known[-1]
+        f_obs, f_adj = float(cols["f107_obs"][last]), float(cols["f107_adj"][last])
+        trail_obs = float(np.nanmean(cols["f107_obs"][known[-81:]]))
+        trail_adj = float(np.nanmean(cols["f107_adj"][known[-81:]]))
+        recent = known[-ap_days:]
+        ap_mean = float(np.nanmean(cols["ap"][recent]))
+        kp_mean = float(np.nanmean(cols["kp"][recent]))
+        n_new = int(np.ceil(horizon)) + 1
+        dates = day + np.arange(n_new) * _DAY
+        extra: dict[str, np.ndarray] = {
+            "date": dates,
+            "section": np.full(n_new, 1, dtype=cols["section"].dtype),
+            "kp": np.full((n_new, 8), kp_mean),
+            "ap": np.full((n_new, 8), ap_mean),
+        }
+        same = np.flatnonzero((cols["date"] == day) & (cols["section"] == 0))
+        if len(same):  # the slots of the epoch's day that ended by the epoch
+            ended = (t - day.astype("datetime64[ns]")) // np.timedelta64(3, "h")
+            extra["kp"][0, :ended] = cols["kp"][same[0], :ended]
+            extra["ap"][0, :ended] = cols["ap"][same[0], :ended]
+        held = {
+            "f107_obs": f_obs,
+            "f107_adj": f_adj,
+            "f107_obs_ctr81": trail_obs,
+            "f107_adj_ctr81": trail_adj,
+            "f107_obs_lst81": trail_obs,
+            "f107_adj_lst81": trail_adj,
+            "cp": float(np.nanmean(cols["cp"][recent])),
+            "c9": float(np.nanmean(cols["c9"][recent])),
+            "isn": float(cols["isn"][last]),
+        }
+        for name in SCALARS:
+            if name == "ap_daily":
+                extra[name] = extra["ap"].mean(axis=1)
+            else:
+                extra[name] = np.full(n_new, held.get(name, np.nan))
+        # Centred averages whose window reaches past the epoch are not known yet.
+        late = out["date"] >= day - 40 * _DAY
+        out["f107_obs_ctr81"][late] = trail_obs
+        out["f107_adj_ctr81"][late] = trail_adj
+        out = {k: np.concatenate([out[k], extra[k].astype(out[k].dtype)]) for k in out}
+        stamp = np.datetime_as_string(t, unit="s")
+        return SpaceWeather._from_columns(out, f"{self.source} as of {stamp}", None, None, day)
 
     def _outside_message(self, t: np.ndarray, outside: np.ndarray) -> str:
         first, last = self.span
