@@ -128,6 +128,10 @@ def altitudes_km(sat: Any) -> tuple[float, float]:
     return a * (1 - sat.ecco) - EARTH_RADIUS_KM, a * (1 + sat.ecco) - EARTH_RADIUS_KM
 
 
+#: Perigee and apogee altitudes of the objects selected, km (``--altitudes``).
+ALTITUDES_KM = (200.0, 700.0)
+
+
 def select(first: dict, second: dict, limit: int, min_gap: float) -> list[int]:
     """NORAD ids of one week's objects (see the module docstring)."""
     ids = []
@@ -138,7 +142,7 @@ def select(first: dict, second: dict, limit: int, min_gap: float) -> list[int]:
         s1 = Satrec.twoline2rv(*first[norad][1:])
         s2 = Satrec.twoline2rv(*second[norad][1:])
         lo, hi = altitudes_km(s1)
-        if lo < 200 or hi > 700:
+        if lo < ALTITUDES_KM[0] or hi > ALTITUDES_KM[1]:
             continue
         span = (s2.jdsatepoch - s1.jdsatepoch) + (s2.jdsatepochF - s1.jdsatepochF)
         if span < min_gap:
@@ -622,6 +626,17 @@ def main() -> None:
         "observed through the prediction (a hindcast); or both",
     )
     parser.add_argument(
+        "--altitudes",
+        default="200,700",
+        help="LOW,HIGH km: perigee and apogee altitudes of the objects selected (default "
+        "200,700, the development regime; e.g. 700,2000 for the orbits above it)",
+    )
+    parser.add_argument(
+        "--as-of",
+        default=None,
+        help="F107_DAYS,AP_DAYS of the forecast mode's SpaceWeather.as_of (default: the library's)",
+    )
+    parser.add_argument(
         "--per-object",
         action="store_true",
         help="also write catalog_realism_objects.json in --out: per week, configuration "
@@ -630,6 +645,9 @@ def main() -> None:
         "along the orbit in the fit window and the prediction (issue 24's diagnosis)",
     )
     args = parser.parse_args()
+    global ALTITUDES_KM
+    low, high = (float(x) for x in args.altitudes.split(","))
+    ALTITUDES_KM = (low, high)
     for c in args.configs.split(","):
         if c not in CONFIGS:
             parser.error(f"unknown configuration {c!r}; choose from {', '.join(CONFIGS)}")
@@ -652,7 +670,17 @@ def main() -> None:
     for start, stop in weeks:
         results[start] = {}
         for mode in modes:
-            weather = record.as_of(f"{start}T00:00") if mode == "forecast" else record
+            weather = record
+            if mode == "forecast":
+                f107_days, ap_days = (
+                    (int(x) for x in args.as_of.split(","))
+                    if args.as_of
+                    else (
+                        rp.spaceweather.record.AS_OF_F107_DAYS,
+                        rp.spaceweather.record.AS_OF_AP_DAYS,
+                    )
+                )
+                weather = record.as_of(f"{start}T00:00", ap_days=ap_days, f107_days=f107_days)
             print(f"\n--- drivers: {mode} ({weather.source})")
             figs, raw, truth = run_week(start, stop, args, Msis("2.1", space_weather=weather))
             suffix = "" if mode == "forecast" else "/hindcast"

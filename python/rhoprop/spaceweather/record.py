@@ -57,7 +57,17 @@ def _as_epochs(epochs: EpochsLike) -> np.ndarray:
 
 #: Relative 1-sigma of predicted F10.7: (lead time, days; sigma) nodes, linear between,
 #: constant after the last. See :func:`forecast_sigma`.
-F107_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.05), (3.0, 0.08), (27.0, 0.15), (365.0, 0.3))
+F107_FORECAST_SIGMA = (
+    (0.0, 0.0),
+    (1.0, 0.07),
+    (2.0, 0.09),
+    (3.0, 0.11),
+    (5.0, 0.14),
+    (7.0, 0.17),
+    (10.0, 0.19),
+    (14.0, 0.2),
+    (365.0, 0.3),
+)
 #: Relative 1-sigma of predicted ap, same layout.
 AP_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.5), (3.0, 1.0))
 
@@ -65,7 +75,9 @@ AP_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.5), (3.0, 1.0))
 #: Days of forecast :meth:`SpaceWeather.as_of` appends after the epoch.
 AS_OF_DAYS = 60.0
 #: Observed days whose mean geomagnetic activity :meth:`SpaceWeather.as_of` holds.
-AS_OF_AP_DAYS = 27
+AS_OF_AP_DAYS = 1
+#: Observed days whose mean daily F10.7 :meth:`SpaceWeather.as_of` holds.
+AS_OF_F107_DAYS = 1
 
 
 def _validate_days(name: str, value: object) -> float:
@@ -82,11 +94,13 @@ def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     the last observed day; <= 0: observed, sigma 0), interpolated in
     :data:`F107_FORECAST_SIGMA` and :data:`AP_FORECAST_SIGMA`.
 
-    Basis (orders of magnitude, documented in docs/catalog-realism.md): NOAA SWPC's
-    F10.7 forecasts err by about 5 % at one day and 10-20 % at 27-45 days (Warren, Emmert
-    & Crump 2017, Space Weather 15); monthly predictions of the solar cycle by about 30 %
-    a year ahead; ap is hardly predictable beyond a day or two (an error as large as ap
-    itself, 100 %, from 3 days). These add to the observed-driver sigma of
+    Basis: F10.7 to 14 days is the RMS log error of persistence measured on the record's
+    observed days 1995-2023 (7 / 9 / 11 / 14 / 17 / 19 / 20 % at 1 / 2 / 3 / 5 / 7 / 10 /
+    14 days, 16-20 % at 27-45; docs/catalog-realism.md, "Forecast mode"), which NOAA
+    SWPC's forecasts hardly beat (about 5 % at one day, 10-20 % at 27-45 days: Warren,
+    Emmert & Crump 2017, Space Weather 15); monthly predictions of the solar cycle err by
+    about 30 % a year ahead; ap is hardly predictable beyond a day or two (an error as
+    large as ap itself, 100 %, from 3 days). These add to the observed-driver sigma of
     :class:`~rhoprop.density.DriverUncertainty`.
     """
     lead = np.clip(np.asarray(lead_days, dtype=float), 0.0, None)
@@ -465,23 +479,31 @@ class SpaceWeather:
         )
 
     def as_of(
-        self, epoch: EpochLike, days: float = AS_OF_DAYS, ap_days: int = AS_OF_AP_DAYS
+        self,
+        epoch: EpochLike,
+        days: float = AS_OF_DAYS,
+        ap_days: int = AS_OF_AP_DAYS,
+        f107_days: int = AS_OF_F107_DAYS,
     ) -> SpaceWeather:
         """The record as a forecaster had it at ``epoch`` (UTC): what was observed before
         it, then ``days`` days (default 60) of a forecast made only from that.
 
         - Observed: every day before the epoch's day, and the 3-hourly ap and Kp of the
           epoch's day that ended by the epoch. Nothing later is used.
-        - F10.7 (observed and adjusted): the last observed day's value, held
-          (persistence: the drivers take the previous day's flux, so the epoch's own
-          drivers are observed).
+        - F10.7 (observed and adjusted): the mean of the last ``f107_days`` observed days
+          (default 1: the last day's value, persistence), held. The drivers take the
+          previous day's flux, so the epoch's own are observed.
         - The 81-day averages of every day from 40 days before the epoch on, whose
           centred window reaches past it: the mean of the 81 observed days up to the
           epoch, held (the trailing average a forecaster has); the trailing averages of
           the forecast days likewise.
         - ap, Kp (3-hourly), daily Ap, Cp and C9: the mean of the last ``ap_days``
-          observed days (default 27, one solar rotation), held: a storm is not
-          foreseen, and a quiet spell is not extended into the next storm.
+          observed days (default 1: the last day's activity, persistence), held.
+
+        Persistence of both was chosen on the four development weeks of
+        ``benches/catalog_realism.py`` together (pooled median along-track error 1.00x
+        SGP4's; F10.7 held from 3, 7 or 81 days and ap from 27 or 81 days gave
+        1.19-1.68x).
 
         Its :meth:`drivers` carry the lead time from the epoch's day and the forecast
         sigma (:func:`forecast_sigma`), which NRLMSIS adds to its driver uncertainty, and
@@ -491,10 +513,11 @@ class SpaceWeather:
         precede the epoch."""
         t = to_datetime64(epoch, "epoch")
         horizon = _validate_days("days", days)
-        if isinstance(ap_days, bool) or not isinstance(ap_days, (int, np.integer)):
-            raise TypeError(f"ap_days must be an integer, got {type(ap_days).__name__}")
-        if not 1 <= ap_days <= 81:
-            raise ValueError(f"ap_days must lie in 1-81, got {ap_days}")
+        for name, n in (("ap_days", ap_days), ("f107_days", f107_days)):
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+                raise TypeError(f"{name} must be an integer, got {type(n).__name__}")
+            if not 1 <= n <= 81:
+                raise ValueError(f"{name} must lie in 1-81, got {n}")
         day = t.astype("datetime64[D]")
         cols = self._columns()
         observed = (cols["date"] < day) & (cols["section"] == 0)
@@ -507,7 +530,8 @@ class SpaceWeather:
             )
         out = {k: np.array(v[: known[-1] + 1]) for k, v in cols.items()}
         last = known[-1]
-        f_obs, f_adj = float(cols["f107_obs"][last]), float(cols["f107_adj"][last])
+        f_obs = float(np.nanmean(cols["f107_obs"][known[-f107_days:]]))
+        f_adj = float(np.nanmean(cols["f107_adj"][known[-f107_days:]]))
         trail_obs = float(np.nanmean(cols["f107_obs"][known[-81:]]))
         trail_adj = float(np.nanmean(cols["f107_adj"][known[-81:]]))
         recent = known[-ap_days:]
