@@ -267,6 +267,7 @@ def figures(
             "sgp4_p90": float(np.percentile(d_s_a, 90) / 1e3),
         },
         "along_track_sigma_km_median": float(np.median(sig_t) / 1e3),
+        "better_than_sgp4": float(np.mean(d_t_a < d_s_a)) if len(d_t_a) else float("nan"),
         "mean_squared_mahalanobis": float(np.mean(maha_a)),
         "median_error_over_sigma_rtn": np.median(ratios, axis=0).tolist(),
     }

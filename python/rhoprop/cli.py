@@ -373,9 +373,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="auto",
         help="fit every object's state and Cd*A/m to its SGP4 positions over the day "
         "before its epoch (one day either side for deep-space orbits) with rhoprop's "
-        "dynamics and the model (over 100 objects/s on 2 cores). Default: the near-Earth "
-        "objects with perigee below 700 km and the deep-space ones (period of 225 min or "
-        "more) whose drag comes from the element set",
+        "dynamics and the model (over 100 objects/s on 2 cores). Default: every object "
+        "whose drag comes from the element set, at any altitude",
     )
     cat.add_argument(
         "--no-fit",

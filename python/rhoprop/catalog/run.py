@@ -306,9 +306,9 @@ def propagate_catalog(
             ``zonal_degree`` at once (then leave those keywords at their defaults; its
             integrator and step are not used: the CCSP integrates with RK8 at its default
             step, the Monte Carlo with its defaults).
-        fit: ``"auto"`` (default): with a model of the real atmosphere, the near-Earth
-            objects with perigee below 700 km whose Cd*A/m comes from the element set (B*,
-            or the guess for B* <= 0) are first fitted
+        fit: ``"auto"`` (default): with a model of the real atmosphere, the objects
+            whose Cd*A/m comes from the element set (B*, or the guess for B* <= 0), at
+            every altitude (until 2026-12-04 only perigees below 700 km), are first fitted
             to their element sets with ``model`` (state and Cd*A/m,
             :func:`~rhoprop.catalog.fit_objects`, in the core at about 100 objects/s on 2
             cores; :data:`~rhoprop.catalog.objects.AUTO_FIT_PERIGEE_KM`); True: every

@@ -1,0 +1,231 @@
+"""Predictions judged on every day of a dense element-set history, as a forecaster runs them.
+
+``$RHOPROP_TEST_DATA/history_2026`` holds every element set CelesTrak published for its
+stations, weather and amateur groups from 2026-02-28 to 2026-04-30 (about one per 6 hours
+per object). Each start day S at 00:00 UTC (every ``--every`` days from 2026-03-02):
+
+- objects: LEO (perigee and apogee 200-700 km at S) with an element set in the 2 days
+  before S, none of the names of ``catalog_realism.EXCLUDE`` (crewed stations, cargo,
+  constellations) and no manoeuvre in the window: no rise of the mean motion between
+  consecutive element sets above 1e-5 rev/day (drag only lowers an orbit);
+- prediction: the newest element set before S, run with the library's defaults
+  (``catalog.load`` then ``propagate_catalog``: fitted state and Cd*A/m, CCSP, NRLMSIS
+  2.1) on the space weather as known at S (``SpaceWeather.as_of(S)``: forecast mode);
+  ``--drivers both`` adds the hindcast (the record as observed) beside it;
+- truth: for each horizon H (1, 3, 7 days) the object's element set whose epoch is
+  nearest S + H (within 12 h), its SGP4 state at its own epoch, the truth's published
+  accuracy added to the predicted covariance (as ``catalog_realism``);
+- baseline: SGP4 of the same start element set to the truth's epoch.
+
+Printed per start and pooled per horizon: median / p90 along-track error (rhoprop and SGP4)
+and their ratio, the share of objects better than SGP4, along-track inside 1/2/3 sigma and
+the RTN Mahalanobis inside 1/2/3 sigma, as ``catalog_realism.figures``.
+
+Run:  python benches/history_days.py [--every 1] [--horizons 1,3,7] [--drivers forecast]
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures as cf
+import gzip
+import json
+import os
+import tempfile
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from catalog_realism import EXCLUDE, altitudes_km, figures, sgp4_state
+from sgp4.api import Satrec
+
+import rhoprop as rp
+from machine import describe, info
+from rhoprop import catalog
+from rhoprop.density import Msis
+
+HISTORY = "history_2026/celestrak_stations_weather_amateur_20260228-20260430.txt.gz"
+
+
+def read_history(path: Path) -> dict[int, list[tuple[str, str, str, float]]]:
+    """Element sets per NORAD id: (name, line 1, line 2, epoch as a Julian date)."""
+    lines = gzip.open(path, "rt").read().splitlines()
+    out: dict[int, list[tuple[str, str, str, float]]] = {}
+    for i in range(0, len(lines) - 2, 3):
+        name, l1, l2 = lines[i].strip(), lines[i + 1], lines[i + 2]
+        sat = Satrec.twoline2rv(l1, l2)
+        out.setdefault(sat.satnum, []).append((name, l1, l2, sat.jdsatepoch + sat.jdsatepochF))
+    for sets in out.values():
+        sets.sort(key=lambda s: s[3])
+    return out
+
+
+def manoeuvres(sets: list[tuple[str, str, str, float]]) -> bool:
+    """Whether the mean motion rises between consecutive element sets (an orbit raise)."""
+    n = [Satrec.twoline2rv(s[1], s[2]).no_kozai * 1440 / (2 * np.pi) for s in sets]
+    return bool(np.any(np.diff(n) > 1e-5))
+
+
+def jd(epoch: np.datetime64) -> float:
+    return float((epoch - np.datetime64("2000-01-01T12:00")) / np.timedelta64(1, "D")) + 2451545.0
+
+
+def start_day(
+    start: np.datetime64,
+    history: dict[int, list[tuple[str, str, str, float]]],
+    clean: set[int],
+    horizons: list[float],
+    model: Any,
+    threads: int,
+) -> dict[float, tuple[dict, dict]]:
+    """Predictions and truths of one start: per horizon (pred, truth) dicts by NORAD id."""
+    t0 = jd(start)
+    chosen: dict[int, tuple[str, str, str, float]] = {}
+    for norad in clean:
+        before = [s for s in history[norad] if t0 - 2.0 <= s[3] < t0]
+        if not before:
+            continue
+        lo, hi = altitudes_km(Satrec.twoline2rv(before[-1][1], before[-1][2]))
+        if lo >= 200 and hi <= 700:
+            chosen[norad] = before[-1]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "start.tle"
+        path.write_text("".join(f"{s[0]}\n{s[1]}\n{s[2]}\n" for s in chosen.values()))
+        # Fitted once here as propagate_catalog's fit="auto" would (every object's
+        # Cd*A/m comes from its element set), not again for each horizon.
+        cat = catalog.load(path, fit=True, model=model, errors="record", threads=threads)
+    objects = {o.norad_id: o for o in cat.objects}
+    out: dict[float, tuple[dict, dict]] = {}
+    for h in horizons:
+        truth: dict[int, dict[str, Any]] = {}
+        for norad, s in chosen.items():
+            later = [x for x in history[norad] if abs(x[3] - (t0 + h)) <= 0.5]
+            if not later or norad not in objects:
+                continue
+            tr = min(later, key=lambda x: abs(x[3] - (t0 + h)))
+            s1, s2 = Satrec.twoline2rv(s[1], s[2]), Satrec.twoline2rv(tr[1], tr[2])
+            truth[norad] = {
+                "epoch": rp.time.from_jd(s2.jdsatepoch, s2.jdsatepochF),
+                "state": sgp4_state(s2, s2.jdsatepoch, s2.jdsatepochF),
+                "sgp4": sgp4_state(s1, s2.jdsatepoch, s2.jdsatepochF),
+            }
+
+        def one(norad: int, truth: dict = truth) -> tuple[int, dict[str, Any]]:
+            res = catalog.propagate_catalog(
+                [objects[norad]],
+                model,
+                truth[norad]["epoch"],
+                output_step=1e9,
+                progress=False,
+                errors="record",
+            )
+            return norad, {
+                "mean": res.mean[0, -1],
+                "cov": res.covariance[0, -1],
+                "status": str(res.status[0]),
+            }
+
+        with cf.ThreadPoolExecutor(threads) as pool:
+            pred = dict(pool.map(one, sorted(truth)))
+        out[h] = (pred, truth)
+    return out
+
+
+def row(label: str, f: dict[str, Any]) -> str:
+    e = f["along_track_error_km"]
+    ins = [f[f"inside_{k}sigma"] for k in (1, 2, 3)]
+    ratio = e["rhoprop_median"] / e["sgp4_median"]
+    return (
+        f"| {label} | {f['objects']} | {e['rhoprop_median']:.2f} / {e['rhoprop_p90']:.1f} | "
+        f"{e['sgp4_median']:.2f} / {e['sgp4_p90']:.1f} | {ratio:.2f} | "
+        f"{100 * f['better_than_sgp4']:.0f} | "
+        + " / ".join(f"{100 * i['along_track']:.0f}" for i in ins)
+        + " | "
+        + " / ".join(f"{100 * i['mahalanobis_rtn']:.0f}" for i in ins)
+        + " |"
+    )
+
+
+def main() -> None:
+    print(describe())
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--first", default="2026-03-02", help="first start day")
+    parser.add_argument("--last", default="2026-04-22", help="last start day")
+    parser.add_argument("--every", type=int, default=1, help="days between starts")
+    parser.add_argument("--horizons", default="1,3,7", help="days, comma-separated")
+    parser.add_argument("--drivers", choices=("forecast", "hindcast", "both"), default="forecast")
+    parser.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    args = parser.parse_args()
+    data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data"))
+    history = read_history(data / HISTORY)
+    clean = {
+        n
+        for n, sets in history.items()
+        if not any(w in sets[-1][0].upper() for w in EXCLUDE) and not manoeuvres(sets)
+    }
+    print(f"{len(history)} objects in the history, {len(clean)} without a manoeuvre")
+    horizons = [float(x) for x in args.horizons.split(",")]
+    modes = ("forecast", "hindcast") if args.drivers == "both" else (args.drivers,)
+    record = rp.SpaceWeather()
+    warnings.simplefilter("ignore", rp.errors.PredictedDriversWarning)
+    starts = np.arange(
+        np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
+    )
+    pooled = {(m, h): ({}, {}) for m in modes for h in horizons}
+    per_start: dict[str, Any] = {}
+    print(
+        "\n| start, drivers, horizon | objects | along-track median / p90 km | SGP4 median / "
+        "p90 km | ratio | better than SGP4 % | inside 1/2/3 sigma along-track % | RTN "
+        "Mahalanobis 1/2/3 sigma % |"
+    )
+    print("| --- | ---: | --- | --- | ---: | ---: | --- | --- |")
+    for start in starts:
+        t_start = np.datetime64(start, "ns")
+        for mode in modes:
+            weather = record.as_of(t_start) if mode == "forecast" else record
+            t0 = time.perf_counter()
+            res = start_day(
+                t_start, history, clean, horizons, Msis("2.1", space_weather=weather), args.threads
+            )
+            for h, (pred, truth) in res.items():
+                if not pred:
+                    continue
+                f = figures(pred, truth)
+                key = f"{start} {mode} {h:g} d"
+                per_start[key] = f
+                print(row(key, f), flush=True)
+                pooled[(mode, h)][0].update({(str(start), k): v for k, v in pred.items()})
+                pooled[(mode, h)][1].update({(str(start), k): v for k, v in truth.items()})
+            print(f"<!-- {start} {mode}: {time.perf_counter() - t0:.1f} s -->", flush=True)
+    print("\npooled:")
+    summary = {}
+    for (mode, h), (pred, truth) in pooled.items():
+        if pred:
+            f = figures(pred, truth)
+            days = [
+                v["along_track_error_km"]["rhoprop_median"]
+                / v["along_track_error_km"]["sgp4_median"]
+                for k, v in per_start.items()
+                if k.endswith(f"{mode} {h:g} d")
+            ]
+            f["start_days_at_most_sgp4"] = float(np.mean(np.array(days) <= 1.0))
+            summary[f"{mode} {h:g} d"] = f
+            print(row(f"all, {mode}, {h:g} d", f))
+            print(
+                f"  start days with median <= SGP4's: {100 * f['start_days_at_most_sgp4']:.0f} %"
+                f" of {len(days)}"
+            )
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "history_days.json").write_text(
+        json.dumps({**info(), "per_start": per_start, "pooled": summary}, indent=1)
+    )
+
+
+if __name__ == "__main__":
+    main()
