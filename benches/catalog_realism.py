@@ -333,6 +333,15 @@ def week_paths(start: str, truth: str) -> tuple[list[Path], Path]:
     return up_to, folder / dict(SNAPSHOTS)[truth]
 
 
+def as_of_options(text: str | None) -> dict[str, Any]:
+    """``SpaceWeather.as_of`` keywords from "F107_DAYS,AP_DAYS,AP_RELAX_DAYS" (None: the
+    library's defaults)."""
+    if not text:
+        return {}
+    f, a, r = text.split(",")
+    return {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+
+
 def run_week(
     start: str, stop: str, args: argparse.Namespace, model: Any
 ) -> tuple[dict[str, Any], dict[str, dict[int, dict[str, Any]]], dict[int, dict[str, Any]]]:
@@ -635,7 +644,8 @@ def main() -> None:
     parser.add_argument(
         "--as-of",
         default=None,
-        help="F107_DAYS,AP_DAYS of the forecast mode's SpaceWeather.as_of (default: the library's)",
+        help="F107_DAYS,AP_DAYS,AP_RELAX_DAYS of the forecast mode's SpaceWeather.as_of "
+        "(default: the library's)",
     )
     parser.add_argument(
         "--per-object",
@@ -673,15 +683,7 @@ def main() -> None:
         for mode in modes:
             weather = record
             if mode == "forecast":
-                f107_days, ap_days = (
-                    (int(x) for x in args.as_of.split(","))
-                    if args.as_of
-                    else (
-                        rp.spaceweather.record.AS_OF_F107_DAYS,
-                        rp.spaceweather.record.AS_OF_AP_DAYS,
-                    )
-                )
-                weather = record.as_of(f"{start}T00:00", ap_days=ap_days, f107_days=f107_days)
+                weather = record.as_of(f"{start}T00:00", **as_of_options(args.as_of))
             print(f"\n--- drivers: {mode} ({weather.source})")
             figs, raw, truth = run_week(start, stop, args, Msis("2.1", space_weather=weather))
             suffix = "" if mode == "forecast" else "/hindcast"

@@ -86,6 +86,7 @@ def scores(cc: rp.CcspResult, k: int, states: np.ndarray, ref: np.ndarray) -> di
     out["in_95_xyz"] = float(np.mean(m3 <= CHI2_3D_95))
     if cc.element_mean is not None and cc.element_covariance is not None:
         em, ec = cc.element_mean[k], cc.element_covariance[k]
+        out["arc_sigma_deg"] = float(np.degrees(np.sqrt(ec[5, 5])))
         el = rp.frames.to_equinoctial(states, ref)
         dl = (el[:, 5] - em[5] + np.pi) % (2 * np.pi) - np.pi
         z = np.abs(dl) / np.sqrt(ec[5, 5])
@@ -174,15 +175,17 @@ def main() -> None:
     print()
     print(
         "| case | coordinates | day | sigma ratio | in 2 / 3 sigma % | in 95 % xyz % "
-        "| in 95 % a, lambda % |"
+        "| in 95 % a, lambda % | arc sigma deg |"
     )
-    print("| --- | --- | ---: | ---: | --- | ---: | ---: |")
+    print("| --- | --- | ---: | ---: | --- | ---: | ---: | ---: |")
     for r in rows:
         al = r.get("in_95_a_lambda")
         print(
             f"| {r['case']} | {r['coordinates']} | {r['day']} | {r['sigma_ratio']:.2f} | "
             f"{100 * r['in_2']:.1f} / {100 * r['in_3']:.1f} | {100 * r['in_95_xyz']:.1f} | "
             + ("-" if al is None else f"{100 * al:.1f}")
+            + " | "
+            + ("-" if al is None else f"{r['arc_sigma_deg']:.3f}")
             + " |"
         )
     out = Path(__file__).parent / "results" / "ccsp_long.json"

@@ -139,6 +139,15 @@ def start_day(
     return out
 
 
+def as_of_options(text: str | None) -> dict[str, Any]:
+    """``SpaceWeather.as_of`` keywords from "F107_DAYS,AP_DAYS,AP_RELAX_DAYS" (None: the
+    library's defaults)."""
+    if not text:
+        return {}
+    f, a, r = text.split(",")
+    return {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+
+
 def row(label: str, f: dict[str, Any]) -> str:
     e = f["along_track_error_km"]
     ins = [f[f"inside_{k}sigma"] for k in (1, 2, 3)]
@@ -165,6 +174,11 @@ def main() -> None:
     parser.add_argument("--horizons", default="1,3,7", help="days, comma-separated")
     parser.add_argument("--drivers", choices=("forecast", "hindcast", "both"), default="forecast")
     parser.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    parser.add_argument(
+        "--as-of",
+        default=None,
+        help="F107_DAYS,AP_DAYS,AP_RELAX_DAYS of SpaceWeather.as_of (default: the library's)",
+    )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = parser.parse_args()
     data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data"))
@@ -193,7 +207,9 @@ def main() -> None:
     for start in starts:
         t_start = np.datetime64(start, "ns")
         for mode in modes:
-            weather = record.as_of(t_start) if mode == "forecast" else record
+            weather = record
+            if mode == "forecast":
+                weather = record.as_of(t_start, **as_of_options(args.as_of))
             t0 = time.perf_counter()
             res = start_day(
                 t_start, history, clean, horizons, Msis("2.1", space_weather=weather), args.threads

@@ -537,7 +537,7 @@ def test_as_of_is_what_a_forecaster_had(sw):
     # averaged: 570 / 24 = 23.75; 09-08's 00-03 and 03-06 ap (154, 67) observed by then.
     from rhoprop.errors import PredictedDriversWarning
 
-    f = sw.as_of("2002-09-08T06:00", ap_days=3)
+    f = sw.as_of("2002-09-08T06:00", ap_days=3, ap_relax_days=float("inf"))
     t = np.array(["2002-09-08T07:00", "2002-09-12T00:00"], dtype="datetime64[ns]")
     with pytest.warns(PredictedDriversWarning):
         d = f.drivers(t)
@@ -559,6 +559,18 @@ def test_as_of_is_what_a_forecaster_had(sw):
     late = f.drivers(np.array(["2002-09-05T12:00"], dtype="datetime64[ns]"))
     assert late.f107a[0] == d.f107a[0] != sw.drivers(np.array(["2002-09-05T12:00"])).f107a[0]
     assert "as of 2002-09-08T06:00:00" in f.source
+    # Relaxing (default 2 days): from the last 3 days' 23.75 towards the mean of the 27
+    # observed days before the epoch, e-folding 2 days from the epoch to an interval's
+    # centre (here 3 days + 1.5 h - 6 h after the epoch).
+    relaxed = sw.as_of("2002-09-08T06:00", ap_days=3)
+    month = sw.ap[
+        (sw.date >= np.datetime64("2002-08-12")) & (sw.date <= np.datetime64("2002-09-07"))
+    ]
+    lead = 3.0 + (1.5 - 6.0) / 24.0
+    expected = month.mean() + (23.75 - month.mean()) * np.exp(-lead / 2.0)
+    with pytest.warns(PredictedDriversWarning):
+        got_ap = relaxed.drivers(np.array(["2002-09-11T01:00"], dtype="datetime64[ns]")).ap
+    assert got_ap[0, 1] == pytest.approx(expected, rel=1e-12)
     # Nothing past the forecast: the record ends 60 days (default) after the epoch.
     assert sw.as_of("2002-09-08T06:00").span[1] < np.datetime64("2002-11-08")
 

@@ -106,9 +106,10 @@ def ccsp(
             given, and must then equal the last update time if given too.
         update_interval: s. Default None: every 60 min (the paper's tuning) for a
             near-circular orbit; for an eccentric one (e >= 0.1) once per revolution, at
-            apogee, with outputs every 60 min between (:func:`update_schedule`: sigma
-            points re-drawn in Cartesian coordinates near perigee leave the orbit's
-            energy, and hourly updates grew CXO's along-track sigma tenfold in 5 days).
+            apogee, with outputs every 60 min between (:func:`update_schedule`: one kappa
+            per perigee pass; it was chosen when sigma points re-drawn in Cartesian
+            coordinates near perigee left the orbit's energy, which in equinoctial
+            elements they no longer do).
             A number: updates every that many s whatever the orbit.
         initial_covariance: 6x6 state covariance (default: the paper's near-zero
             diag(eps^2) with eps = 1 mm and 1 um/s).

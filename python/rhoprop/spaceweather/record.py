@@ -78,6 +78,10 @@ AS_OF_DAYS = 60.0
 AS_OF_AP_DAYS = 1
 #: Observed days whose mean daily F10.7 :meth:`SpaceWeather.as_of` holds.
 AS_OF_F107_DAYS = 1
+#: e-folding time (days) over which :meth:`SpaceWeather.as_of`'s ap relaxes from the last
+#: days' activity to the last 27 days' mean (inf: held; docs/catalog-realism.md,
+#: "Forecast mode").
+AS_OF_AP_RELAX_DAYS = 2.0
 
 
 def _validate_days(name: str, value: object) -> float:
@@ -484,6 +488,7 @@ class SpaceWeather:
         days: float = AS_OF_DAYS,
         ap_days: int = AS_OF_AP_DAYS,
         f107_days: int = AS_OF_F107_DAYS,
+        ap_relax_days: float = AS_OF_AP_RELAX_DAYS,
     ) -> SpaceWeather:
         """The record as a forecaster had it at ``epoch`` (UTC): what was observed before
         it, then ``days`` days (default 60) of a forecast made only from that.
@@ -497,13 +502,15 @@ class SpaceWeather:
           centred window reaches past it: the mean of the 81 observed days up to the
           epoch, held (the trailing average a forecaster has); the trailing averages of
           the forecast days likewise.
-        - ap, Kp (3-hourly), daily Ap, Cp and C9: the mean of the last ``ap_days``
-          observed days (default 1: the last day's activity, persistence), held.
+        - ap and Kp (3-hourly): the mean of the last ``ap_days`` observed days (default
+          1: the last day's activity), relaxing to the last 27 days' mean with an
+          e-folding time of ``ap_relax_days`` (default 2 days; ``float("inf")`` holds
+          it) counted from the epoch: a storm under way is not carried through the
+          week. Daily Ap is the mean of the day's eight; Cp and C9 the last days'.
 
-        Persistence of both was chosen on the four development weeks of
-        ``benches/catalog_realism.py`` together (pooled median along-track error 1.00x
-        SGP4's; F10.7 held from 3, 7 or 81 days and ap from 27 or 81 days gave
-        1.19-1.68x).
+        Chosen on the development data together: the four weeks of
+        ``benches/catalog_realism.py`` and the starts of ``benches/history_days.py``
+        (docs/catalog-realism.md, "Forecast mode").
 
         Its :meth:`drivers` carry the lead time from the epoch's day and the forecast
         sigma (:func:`forecast_sigma`), which NRLMSIS adds to its driver uncertainty, and
@@ -513,6 +520,9 @@ class SpaceWeather:
         precede the epoch."""
         t = to_datetime64(epoch, "epoch")
         horizon = _validate_days("days", days)
+        relax = (
+            np.inf if ap_relax_days == np.inf else _validate_days("ap_relax_days", ap_relax_days)
+        )
         for name, n in (("ap_days", ap_days), ("f107_days", f107_days)):
             if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
                 raise TypeError(f"{name} must be an integer, got {type(n).__name__}")
@@ -535,15 +545,27 @@ class SpaceWeather:
         trail_obs = float(np.nanmean(cols["f107_obs"][known[-81:]]))
         trail_adj = float(np.nanmean(cols["f107_adj"][known[-81:]]))
         recent = known[-ap_days:]
-        ap_mean = float(np.nanmean(cols["ap"][recent]))
-        kp_mean = float(np.nanmean(cols["kp"][recent]))
+        ap_last = float(np.nanmean(cols["ap"][recent]))
+        kp_last = float(np.nanmean(cols["kp"][recent]))
+        month = known[-27:]
+        ap_month = float(np.nanmean(cols["ap"][month]))
+        kp_month = float(np.nanmean(cols["kp"][month]))
         n_new = int(np.ceil(horizon)) + 1
         dates = day + np.arange(n_new) * _DAY
+        # Each 3-hour interval relaxes from the last days' activity to the last 27 days'
+        # mean with e-folding time ap_relax_days (from the epoch to the interval's centre).
+        centres = (
+            (dates[:, None] - day).astype("timedelta64[h]").astype(float)
+            + 3.0 * np.arange(8)[None, :]
+            + 1.5
+        )
+        lead_h = centres - float((t - day.astype("datetime64[ns]")) / np.timedelta64(1, "h"))
+        keep = np.exp(-np.clip(lead_h, 0.0, None) / (24.0 * relax)) if relax > 0 else 0.0
         extra: dict[str, np.ndarray] = {
             "date": dates,
             "section": np.full(n_new, 1, dtype=cols["section"].dtype),
-            "kp": np.full((n_new, 8), kp_mean),
-            "ap": np.full((n_new, 8), ap_mean),
+            "kp": kp_month + (kp_last - kp_month) * keep * np.ones((n_new, 8)),
+            "ap": ap_month + (ap_last - ap_month) * keep * np.ones((n_new, 8)),
         }
         same = np.flatnonzero((cols["date"] == day) & (cols["section"] == 0))
         if len(same):  # the slots of the epoch's day that ended by the epoch
