@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from catalog_realism import EXCLUDE, altitudes_km, figures, sgp4_state
+from catalog_realism import EXCLUDE, altitudes_km, as_of_options, figures, sgp4_state
 from sgp4.api import Satrec
 
 import rhoprop as rp
@@ -137,15 +137,6 @@ def start_day(
             pred = dict(pool.map(one, sorted(truth)))
         out[h] = (pred, truth)
     return out
-
-
-def as_of_options(text: str | None) -> dict[str, Any]:
-    """``SpaceWeather.as_of`` keywords from "F107_DAYS,AP_DAYS,AP_RELAX_DAYS" (None: the
-    library's defaults)."""
-    if not text:
-        return {}
-    f, a, r = text.split(",")
-    return {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
 
 
 def row(label: str, f: dict[str, Any]) -> str:

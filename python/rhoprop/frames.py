@@ -13,15 +13,18 @@ from . import _core, _validate
 from .time import EpochsLike, to_datetime64_array, ut1_seconds
 
 
-def _rows(name: str, value: Any) -> tuple[np.ndarray, bool]:
+def _rows(name: str, value: Any, width: int = 3) -> tuple[np.ndarray, bool]:
+    """``value`` as finite rows (n, width) and whether it was one row (width,)."""
     try:
         a = _validate.real_array(name, value)
     except (TypeError, ValueError) as err:
-        raise TypeError(f"{name} must be numbers of shape (3,) or (n, 3): {err}") from None
+        raise TypeError(
+            f"{name} must be numbers of shape ({width},) or (n, {width}): {err}"
+        ) from None
     single = a.ndim == 1
     a2 = np.atleast_2d(a)
-    if a2.ndim != 2 or a2.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (3,) or (n, 3), got {a.shape}")
+    if a2.ndim != 2 or a2.shape[1] != width:
+        raise ValueError(f"{name} must have shape ({width},) or (n, {width}), got {a.shape}")
     if not np.isfinite(a2).all():
         raise ValueError(f"{name} must be finite")
     return np.ascontiguousarray(a2), single
@@ -136,17 +139,6 @@ def to_rtn(
     return np.asarray(np.einsum("...ij,...j->...i", basis, delta))
 
 
-def _states(name: str, value: Any) -> tuple[np.ndarray, bool]:
-    a = _validate.real_array(name, value)
-    single = a.ndim == 1
-    a2 = np.atleast_2d(a)
-    if a2.ndim != 2 or a2.shape[1] != 6:
-        raise ValueError(f"{name} must have shape (6,) or (n, 6), got {a.shape}")
-    if not np.isfinite(a2).all():
-        raise ValueError(f"{name} must be finite")
-    return np.ascontiguousarray(a2), single
-
-
 def to_equinoctial(states: npt.ArrayLike, reference: npt.ArrayLike | None = None) -> np.ndarray:
     """Inertial states (6,) or (n, 6), m and m/s, as equinoctial elements (a m, h, k, p,
     q, lambda rad): k + i h = e exp(i (omega + Omega)),
@@ -159,8 +151,8 @@ def to_equinoctial(states: npt.ArrayLike, reference: npt.ArrayLike | None = None
     stays one spread. With the initial state of a :func:`rhoprop.ccsp` run as reference,
     Monte Carlo members compare directly with its ``element_mean`` and
     ``element_covariance``. Raises ValueError for a state not on an elliptic orbit."""
-    s, single = _states("states", states)
-    ref = s[0] if reference is None else _states("reference", reference)[0][0]
+    s, single = _rows("states", states, 6)
+    ref = s[0] if reference is None else _rows("reference", reference, 6)[0][0]
     out = _core.equinoctial_elements(s, np.ascontiguousarray(ref))
     return out[0] if single else out
 
@@ -168,7 +160,7 @@ def to_equinoctial(states: npt.ArrayLike, reference: npt.ArrayLike | None = None
 def from_equinoctial(elements: npt.ArrayLike, reference: npt.ArrayLike) -> np.ndarray:
     """Equinoctial elements (6,) or (n, 6) (as :func:`to_equinoctial`) back to inertial
     states, m and m/s, in the axes of ``reference`` (a state (6,))."""
-    e, single = _states("elements", elements)
-    ref = _states("reference", reference)[0][0]
+    e, single = _rows("elements", elements, 6)
+    ref = _rows("reference", reference, 6)[0][0]
     out = _core.equinoctial_to_cartesian(e, np.ascontiguousarray(ref))
     return out[0] if single else out
