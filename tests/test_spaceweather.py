@@ -587,3 +587,27 @@ def test_as_of_is_what_a_forecaster_had(sw):
 def test_as_of_refuses(sw, kwargs, error, match):
     with pytest.raises(error, match=match):
         sw.as_of(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        # F10.7 obs of 2002-09-04 negative: NRLMSIS would give 3.5e-17 kg/m^3 at 400 km.
+        (",247,171.3,174.2,OBS,", ",247,-100,174.2,OBS,", r"f107_obs = -100 on 2002-09-04"),
+        # An ap beyond the scale's 400.
+        (
+            "2002-09-05,2308,13,20,33,17,17,17,17,13,13,147,7,",
+            "2002-09-05,2308,13,20,33,17,17,17,17,13,13,147,700,",
+            r"ap = 700 on 2002-09-05",
+        ),
+    ],
+)
+def test_user_record_values_outside_their_range_are_refused(tmp_path, old, new, message):
+    # A driver read from a user file is range-checked, never clamped; the error names the
+    # file, the column, the value and the day.
+    assert CSV_TEXT.count(old) == 1
+    path = tmp_path / "bad.csv"
+    path.write_text(CSV_TEXT.replace(old, new))
+    with pytest.raises(ValueError, match=message) as info:
+        SpaceWeather(path)
+    assert str(path) in str(info.value)

@@ -256,9 +256,39 @@ def read(path: Path) -> tuple[dict[str, np.ndarray], dict[str, int] | None]:
     return _parse_txt(text)
 
 
+#: Physical ranges of the record's values (inclusive; NaN is a blank field): a value
+#: outside is a damaged or hand-made file, never a clamp.
+RANGES = {
+    "kp": (0.0, 9.0),
+    "ap": (0.0, 400.0),
+    "ap_daily": (0.0, 400.0),
+    "cp": (0.0, 2.5),
+    "c9": (0.0, 9.0),
+    "isn": (0.0, 2000.0),
+    **{name: (1.0, 3000.0) for name in SCALARS if name.startswith("f107")},
+}
+
+
+def check_ranges(columns: dict[str, np.ndarray]) -> None:
+    """Raises ValueError naming the first value outside :data:`RANGES` (column, value,
+    date)."""
+    for name, (low, high) in RANGES.items():
+        values = np.asarray(columns[name], dtype=float)
+        bad = np.isfinite(values) & ((values < low) | (values > high))
+        if bad.any():
+            row = np.flatnonzero(bad.reshape(len(values), -1).any(axis=1))[0]
+            value = values[row].ravel()[bad[row].ravel()][0] if values.ndim > 1 else values[row]
+            raise ValueError(
+                f"space-weather record: {name} = {value:g} on {columns['date'][row]} is "
+                f"outside its range {low:g}-{high:g}"
+            )
+
+
 def check_record(columns: dict[str, np.ndarray]) -> int:
-    """Validates the row order; returns the number of daily (observed or daily predicted)
-    rows, which must come first and be consecutive days."""
+    """Validates the row order and the values' ranges (:func:`check_ranges`); returns the
+    number of daily (observed or daily predicted) rows, which must come first and be
+    consecutive days."""
+    check_ranges(columns)
     dates, section = columns["date"], columns["section"]
     if len(dates) and np.isnat(dates).any():
         raise ValueError("space-weather record: a row has no date")

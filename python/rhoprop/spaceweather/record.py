@@ -228,7 +228,10 @@ class SpaceWeather:
             return
         file = Path(path).expanduser()
         columns, declared = read(file)
-        self._assign(columns, str(file), declared, None)
+        try:
+            self._assign(columns, str(file), declared, None)
+        except ValueError as err:
+            raise ValueError(f"{file}: {err}") from None
 
     def _assign(
         self,
