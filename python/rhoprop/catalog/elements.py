@@ -503,16 +503,41 @@ def _noted_histories(
     ]
 
 
+#: Largest decompressed size of a gzip catalog file, bytes: the whole public catalog
+#: (24,000 objects) is about 5 MB as text, so more is a damaged file or a bomb, and it
+#: is refused before it fills the memory.
+MAX_INFLATED_BYTES = 1 << 30
+
+
+def _inflate(p: Path, raw: bytes) -> bytes:
+    """The decompressed bytes of the gzip file ``p`` (its content ``raw``), read in
+    chunks and refused past :data:`MAX_INFLATED_BYTES`; a damaged file is a ValueError
+    naming it."""
+    import gzip
+    import io
+    import zlib
+
+    out = bytearray()
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(raw)) as stream:
+            while chunk := stream.read(1 << 20):
+                out += chunk
+                if len(out) > MAX_INFLATED_BYTES:
+                    raise ValueError(
+                        f"{p.name}: inflates past {MAX_INFLATED_BYTES:,} bytes, the limit "
+                        "of a catalog file (rhoprop.catalog.elements.MAX_INFLATED_BYTES); "
+                        "a damaged file or not a catalog"
+                    )
+    except (OSError, EOFError, zlib.error) as err:
+        raise ValueError(f"{p.name}: damaged gzip file ({err})") from err
+    return bytes(out)
+
+
 def _read_entries(p: Path, errors: str) -> list[tuple[str, Any]]:
     """The parsed entries (where, element set or exception) of one file."""
     raw = p.read_bytes()
     if raw[:2] == b"\x1f\x8b":  # gzip, as catalog archives are often stored
-        import gzip
-
-        try:
-            raw = gzip.decompress(raw)
-        except (OSError, EOFError) as err:
-            raise ValueError(f"{p.name}: damaged gzip file ({err})") from err
+        raw = _inflate(p, raw)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as err:
