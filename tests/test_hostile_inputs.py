@@ -94,6 +94,23 @@ def test_omm_files_that_do_not_parse_name_the_file_and_field(tmp_path):
     (tmp_path / "typed.json").write_text(json.dumps([{**record, "MEAN_MOTION": "abc"}]))
     with pytest.raises(ValueError, match="unreadable field MEAN_MOTION = 'abc'"):
         rp.catalog.load(tmp_path / "typed.json")
+    # Integer fields out of range: a negative catalog number was accepted, and a huge
+    # revolution count or element-set number overflowed inside sgp4 and stopped the whole
+    # load even with errors="record".
+    for field, value in (
+        ("NORAD_CAT_ID", -5),
+        ("REV_AT_EPOCH", 10**30),
+        ("ELEMENT_SET_NO", 10**20),
+    ):
+        (tmp_path / "range.json").write_text(json.dumps([{**record, field: value}]))
+        with pytest.raises(ValueError, match=f"field {field} = {value} is outside"):
+            rp.catalog.load(tmp_path / "range.json")
+        (tmp_path / "two.json").write_text(
+            json.dumps([{**record, field: value}, {**record, "NORAD_CAT_ID": 25545}])
+        )
+        kept = rp.catalog.load(tmp_path / "two.json", errors="record")
+        assert [o.norad_id for o in kept.objects] == [25545]
+        assert len(kept.skipped) == 1 and field in kept.skipped[0][1]
 
 
 def test_a_damaged_gzip_names_the_file(tmp_path):

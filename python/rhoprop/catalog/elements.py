@@ -233,6 +233,15 @@ _OMM_FLOATS = (
     "RA_OF_ASC_NODE",
 )
 _OMM_INTS = ("EPHEMERIS_TYPE", "ELEMENT_SET_NO", "REV_AT_EPOCH", "NORAD_CAT_ID")
+#: Ranges of the integer fields (inclusive): what a catalog number, an element-set
+#: counter and a revolution count can be, and within sgp4's 32-bit integers (a larger
+#: value overflowed inside sgp4 and stopped the whole load).
+_OMM_INT_RANGES = {
+    "EPHEMERIS_TYPE": (0, 9),
+    "ELEMENT_SET_NO": (0, 99_999),
+    "REV_AT_EPOCH": (0, 99_999_999),
+    "NORAD_CAT_ID": (1, 999_999_999),
+}
 
 
 def _checked_omm(rec: dict[str, Any]) -> dict[str, Any]:
@@ -252,6 +261,10 @@ def _checked_omm(rec: dict[str, Any]) -> dict[str, Any]:
             raise ValueError(f"unreadable field {name} = {value!r}") from None
         if not math.isfinite(number):
             raise ValueError(f"unreadable field {name} = {value!r}")
+        if name in _OMM_INT_RANGES:
+            low, high = _OMM_INT_RANGES[name]
+            if not low <= number <= high:
+                raise ValueError(f"field {name} = {value!r} is outside {low}-{high:,}")
     if "EPOCH" in rec:
         epoch = rec["EPOCH"]
         if not isinstance(epoch, str):
