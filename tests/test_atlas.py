@@ -194,6 +194,9 @@ def test_memory_is_reported_and_bad_budgets_are_refused(monkeypatch):
     assert memory.peak >= memory.live > 0 and memory.tiles >= 1
     with pytest.raises(ValueError, match="nbytes"):
         rp.density.set_memory_budget(-1)
+    for bad in ("x", "1e9", object()):  # a string said "could not convert string to float"
+        with pytest.raises(TypeError, match="nbytes must be a number of bytes"):
+            rp.density.set_memory_budget(bad)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="too fine"):
         rp.density.Atlas(model, rp.density.FieldResolution(latitude=1e-3))
 

@@ -172,7 +172,14 @@ def set_memory_budget(nbytes: float | None) -> None:
     or 1 GB). 0 keeps none (every run reads its tiles from disk). Results are the same
     whatever the budget."""
     if nbytes is not None:
-        value = float(nbytes)
+        if isinstance(nbytes, (bool, str, bytes)):
+            raise TypeError(f"nbytes must be a number of bytes >= 0 or None, got {nbytes!r}")
+        try:
+            value = float(nbytes)
+        except (TypeError, ValueError):
+            raise TypeError(
+                f"nbytes must be a number of bytes >= 0 or None, got {nbytes!r}"
+            ) from None
         if not value >= 0 or value == float("inf"):
             raise ValueError(f"nbytes must be a number of bytes >= 0 or None, got {nbytes!r}")
     with _MEMORY.lock:
