@@ -268,7 +268,7 @@ fn run<A: Atmosphere + ?Sized>(
         ));
     }
     let y0 = cfg.problem.y0;
-    let coords = Frame::new(cfg.coordinates, &Vector6::from_column_slice(&y0), l1)?;
+    let coords = Frame::new(cfg.coordinates, &Vector6::from_column_slice(&y0), l1);
     // Mean and covariances in the filter's coordinates.
     let (mut mean, p0) = coords.initial(&Vector6::from_column_slice(&y0), &p0)?;
     // The state covariance without the part explained by c: P = pc + D D^T.
@@ -439,14 +439,14 @@ struct Frame {
 }
 
 impl Frame {
-    fn new(coordinates: Coordinates, y0: &Vector6<f64>, l1: f64) -> Result<Self, CoreError> {
-        Ok(Frame {
+    fn new(coordinates: Coordinates, y0: &Vector6<f64>, l1: f64) -> Self {
+        Frame {
             l1,
             axes: match coordinates {
                 Coordinates::Cartesian => None,
                 Coordinates::Equinoctial => Some(equinoctial::Axes::for_state(y0)),
             },
-        })
+        }
     }
 
     /// The initial mean and covariance in these coordinates: P_el = K P K^T with K the
