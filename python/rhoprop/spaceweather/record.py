@@ -518,8 +518,7 @@ class SpaceWeather:
         Its :meth:`drivers` carry the lead time from the epoch's day and the forecast
         sigma (:func:`forecast_sigma`), which NRLMSIS adds to its driver uncertainty, and
         warn (:class:`~rhoprop.errors.PredictedDriversWarning`) for epochs past the
-        epoch's day. Choice and measurement: docs/catalog-realism.md, "Forecast mode".
-        Raises :class:`~rhoprop.OutsideRecordError` when fewer than 81 observed days
+        epoch's day. Raises :class:`~rhoprop.OutsideRecordError` when fewer than 81 observed days
         precede the epoch."""
         t = to_datetime64(epoch, "epoch")
         horizon = _validate_days("days", days)
