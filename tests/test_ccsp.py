@@ -77,7 +77,16 @@ def uncertain(setup):
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.2)
     gm18 = (
-        rp.monte_carlo(state, craft, model, DAY3, n=1000, output_step=None, progress=False)
+        rp.monte_carlo(
+            state,
+            craft,
+            model,
+            DAY3,
+            n=1000,
+            output_step=None,
+            progress=False,
+            kappa=rp.kappa.GaussMarkov(1080.0),
+        )
         .along_track[:, -1]
         .std(ddof=1)
     )
@@ -86,8 +95,9 @@ def uncertain(setup):
 
 def test_ccsp_equals_the_equivalent_kappa_process(uncertain):
     state, craft, model, gm18 = uncertain
-    hourly = rp.ccsp(state, craft, model, DAY3, update_interval=3600.0)
-    fine = rp.ccsp(state, craft, model, DAY3, update_interval=300.0)
+    # The paper's filter, (3, 3): PiecewiseConstant(dt, 1/3).
+    hourly = rp.ccsp(state, craft, model, DAY3, update_interval=3600.0, scaling=(3.0, 3.0))
+    fine = rp.ccsp(state, craft, model, DAY3, update_interval=300.0, scaling=(3.0, 3.0))
     # Long-time theory: sqrt(2 dt / D_GM18) = 1.52 at 60 min and 0.44 at 5 min.
     assert hourly.along_track_std[-1] / gm18 == pytest.approx(1.52, rel=0.10)
     assert fine.along_track_std[-1] / gm18 == pytest.approx(0.44, rel=0.15)
@@ -194,7 +204,11 @@ def test_equinoctial_gaussian_holds_the_monte_carlo_members_at_two_weeks(setup):
     state, craft = setup
     atm = rp.scenarios.benchmark_exponential(0.2)
     span = 14 * 86400.0
-    kwargs = {"update_interval": 3600.0, "drag_sigma": 0.1}
+    kwargs = {
+        "update_interval": 3600.0,
+        "drag_sigma": 0.1,
+        "kappa": rp.kappa.PiecewiseConstant(3600.0, 1 / 3),
+    }
     cc = rp.ccsp(state, craft, atm, span, **kwargs)
     flat = rp.ccsp(state, craft, atm, span, coordinates="cartesian", **kwargs)
     mc = rp.monte_carlo(
@@ -257,3 +271,50 @@ def test_a_day_of_an_initial_covariance_matches_the_monte_carlo(setup):
         sample = np.sqrt(np.diag(basis @ np.cov(x.T) @ basis.T))
         ratio = np.sqrt(np.diag(r.rtn_covariance[-1])) / sample
         assert (np.abs(ratio[:2] - 1) < 0.04).all() == close, (coords, ratio)
+
+
+@pytest.mark.parametrize("correlation", [0.6, 0.854])
+def test_ccsp_equals_its_process_at_any_correlation(setup, correlation):
+    # The paper's factor A = l1 P - B^T B held the state covariance only at l1 = l2: at
+    # correlation 0.854 (l2 = 1.17) it was 1.68x the Monte Carlo of its own process. 500
+    # members: the sigma's standard error is 1/sqrt(2 * 500) = 3.2 %; tolerance 8 %.
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    process = rp.kappa.PiecewiseConstant(3600.0, correlation)
+    mc = rp.monte_carlo(
+        state, craft, model, DAY3, n=500, kappa=process, seed=2, output_step=None, progress=False
+    )
+    cc = rp.ccsp(state, craft, model, DAY3, kappa=process)
+    ratio = cc.along_track_std[-1] / mc.along_track[:, -1].std(ddof=1)
+    assert ratio == pytest.approx(1.0, abs=0.08)
+
+
+def test_default_ccsp_stands_for_the_default_monte_carlo(setup):
+    # Both default to the calibrated two-scale kappa: the CCSP carries its fast term as
+    # kappa and its slow one in the constant c (drag_sigma raised). 500 members: 8 %.
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    mc = rp.monte_carlo(state, craft, model, DAY3, n=500, seed=4, output_step=None, progress=False)
+    cc = rp.ccsp(state, craft, model, DAY3)
+    assert cc.drag_sigma > 0.1  # sqrt(0.543 * 0.88) * 0.2 = 0.138
+    ratio = cc.along_track_std[-1] / mc.along_track[:, -1].std(ddof=1)
+    assert ratio == pytest.approx(1.0, abs=0.08)
+    # The paper's filter (3, 3): its 60-min PiecewiseConstant, far narrower.
+    paper = rp.ccsp(state, craft, model, DAY3, scaling=(3.0, 3.0))
+    assert paper.along_track_std[-1] < 0.4 * cc.along_track_std[-1]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"kappa": rp.kappa.GaussMarkov(), "scaling": (3.0, 3.0)}, "give kappa or scaling"),
+        ({"kappa": rp.kappa.White(10.0)}, "holds kappa over each update"),
+        ({"kappa": rp.kappa.PiecewiseConstant(1800.0, 0.5)}, "updates are 3600 s apart"),
+        ({"kappa": rp.kappa.PiecewiseConstant(3600.0, 0.0)}, "correlation between updates"),
+    ],
+)
+def test_kappa_the_ccsp_cannot_stand_for(setup, kwargs, match):
+    state, craft = setup
+    model = rp.scenarios.benchmark_exponential(0.2)
+    with pytest.raises(ValueError, match=match):
+        rp.ccsp(state, craft, model, 7200.0, update_interval=3600.0, **kwargs)

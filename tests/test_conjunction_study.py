@@ -27,6 +27,8 @@ def two_model_ensemble():
         duration=86400.0,
         cds={"high": 2.2},
         n=600,
+        # The paper's 18-minute process: model means more than 2 sigma apart in a day.
+        kappa=rp.kappa.GaussMarkov(1080.0),
         seed=3,
         output_step=None,
         progress=False,

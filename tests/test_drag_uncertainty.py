@@ -38,14 +38,23 @@ def test_zero_drag_sigma_gives_todays_results_exactly(setup):
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.2)
     # The paper's (Cartesian) filter, the one the fingerprints were recorded with.
-    flat = {"initial_covariance": P0, "coordinates": "cartesian"}
+    flat = {"initial_covariance": P0, "coordinates": "cartesian", "scaling": (3.0, 3.0)}
     r = rp.ccsp(state, craft, model, DAY, **flat)
     explicit = rp.ccsp(state, craft, model, DAY, drag_sigma=0.0, **flat)
     np.testing.assert_array_equal(r.covariance, explicit.covariance)
     assert r.drag_sigma == 0.0
     np.testing.assert_array_equal(r.drag_cross_covariance, 0.0)
+    # The Monte Carlo default kappa at the time (the paper's 18-minute process).
     mc = rp.monte_carlo(
-        state, craft, model, DAY, n=20, seed=3, initial_covariance=P0, progress=False
+        state,
+        craft,
+        model,
+        DAY,
+        n=20,
+        seed=3,
+        initial_covariance=P0,
+        progress=False,
+        kappa=rp.kappa.GaussMarkov(1080.0),
     )
     np.testing.assert_array_equal(mc.drag_factors, 1.0)
     assert mc.drag_sigma == 0.0
@@ -130,10 +139,12 @@ def test_ccsp_with_density_and_drag_adds_both(setup):
     # mean, which the kappa spread moves by 0.3 m; 0.04 % at 2 % density sigma).
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.2)
-    both = rp.ccsp(state, craft, model, 3 * DAY, drag_sigma=0.1).along_track_std[-1]
-    density = rp.ccsp(state, craft, model, 3 * DAY).along_track_std[-1]
+    # The paper's filter: kappa alone carries the density (no slow term in c).
+    paper = {"scaling": (3.0, 3.0)}
+    both = rp.ccsp(state, craft, model, 3 * DAY, drag_sigma=0.1, **paper).along_track_std[-1]
+    density = rp.ccsp(state, craft, model, 3 * DAY, **paper).along_track_std[-1]
     certain = rp.scenarios.benchmark_exponential(0.0)
-    drag = rp.ccsp(state, craft, certain, 3 * DAY, drag_sigma=0.1).along_track_std[-1]
+    drag = rp.ccsp(state, craft, certain, 3 * DAY, drag_sigma=0.1, **paper).along_track_std[-1]
     assert both**2 == pytest.approx(density**2 + drag**2, rel=0.015)
     assert drag > density  # 10 % of Cd*A/m, held for 3 days, outweighs hourly kappa
 

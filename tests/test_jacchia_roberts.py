@@ -69,7 +69,7 @@ def test_below_floor_and_bad_input_raise() -> None:
 
 
 def test_drivers_from_the_bundled_record_and_sigma_grows_with_kp() -> None:
-    m = rp.density.JacchiaRoberts()
+    m = rp.density.JacchiaRoberts(preset="paper")
     # 2003-10-30 (Halloween storm): Kp 9- in the 18-21 UT interval; 21:30 takes t - 3 h.
     dr = m.drivers(np.array(["2003-10-30T21:30"], dtype="datetime64[ns]"))
     day = rp.SpaceWeather().daily("2003-10-30")
@@ -79,6 +79,10 @@ def test_drivers_from_the_bundled_record_and_sigma_grows_with_kp() -> None:
     quiet, s_quiet = m.mean_std(np.datetime64("2003-10-20T12:00"), 0.0, 0.0, 400e3)
     assert s_storm / storm > s_quiet / quiet
     assert s_storm / storm == pytest.approx(0.30)
+    # The calibrated default: 0.266 at Kp >= 6.7, 0.190 + 0.076 Kp / 6.7 below.
+    c = rp.density.JacchiaRoberts()
+    storm, s_storm = c.mean_std(np.datetime64("2003-10-30T21:30"), 0.0, 0.0, 400e3)
+    assert s_storm / storm == pytest.approx(0.266)
 
 
 def test_nrlmsise00_matches_ccmc(reference: dict[str, Any]) -> None:

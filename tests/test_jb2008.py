@@ -60,7 +60,7 @@ def test_model_matches_reference_grids(
     assert grid.shape == (7714, 6)
     epoch = np.datetime64(GRIDS[name], "ns")
     alt_km, lon, lat, tinf_ref, temp_ref, rho_ref = grid.T
-    model = rp.density.Jb2008(indices)
+    model = rp.density.Jb2008(indices, preset="paper")
     mean, std = model.mean_std(epoch, lat, lon, alt_km * 1e3)
     np.testing.assert_allclose(mean, rho_ref, rtol=2e-4)
     assert (std > 0).all()
@@ -176,8 +176,8 @@ def test_bad_input_raises_naming_the_argument(indices: rp.density.Jb2008Indices)
 
 
 def test_sigma_grows_with_dtc_and_field_samples(indices: rp.density.Jb2008Indices) -> None:
-    quiet = rp.density.Jb2008(indices, dtc=0.0)
-    storm = rp.density.Jb2008(indices, dtc=300.0)
+    quiet = rp.density.Jb2008(indices, dtc=0.0, preset="paper")
+    storm = rp.density.Jb2008(indices, dtc=300.0, preset="paper")
     t = np.datetime64("2003-10-29T12:00")
     mq, sq = quiet.mean_std(t, 0.0, 0.0, 400e3)
     ms, ss = storm.mean_std(t, 0.0, 0.0, 400e3)

@@ -195,7 +195,7 @@ def test_ensemble(setup, tmp_path):
             np.sqrt(mix.covariance()[0, 0]), rel=1e-9
         )
     np.testing.assert_array_equal(ds.epoch.values, ens.results["ref"].epochs)
-    assert ds.attrs["kappa"] == "gauss_markov" and ds.attrs["members"] == 100
+    assert ds.attrs["kappa"] == "two_scale" and ds.attrs["members"] == 100
     round_trip(ds, tmp_path, "ensemble")
     # A CCSP ensemble: the same layout, method "ccsp", no kappa settings.
     cc = rp.ensemble(
@@ -297,5 +297,5 @@ def test_docs_analysis_examples_run(tmp_path, monkeypatch, capsys):
     for block in blocks:
         exec(compile(block, "docs/analysis.md", "exec"), {})
     out = capsys.readouterr().out
-    assert "gauss_markov 1080.0" in out and "2002-09-07T01:00:00.000000000" in out
+    assert "two_scale 15800.0" in out and "2002-09-07T01:00:00.000000000" in out
     assert (tmp_path / "monte_carlo.nc").is_file()

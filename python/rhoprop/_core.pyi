@@ -183,6 +183,7 @@ def ccsp(
     drag_sigma: float = 0.0,
     output_times: _F64 | None = None,
     coordinates: str = "equinoctial",
+    kappa_scale: float = 1.0,
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
@@ -198,6 +199,7 @@ def ccsp_many(
     zonal_degree: int = 2,
     progress: Callable[[int], object] | None = None,
     coordinates: str = "equinoctial",
+    kappa_scale: float = 1.0,
 ) -> list[_CcspOutput | Exception]:
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
     update_times, step, drag_sigma, output_times (empty: none)), in one call: per object
@@ -226,7 +228,7 @@ def monte_carlo(
     state: _F64,
     drag: float,
     output_times: _F64,
-    kappa: tuple[str, float, float],
+    kappa: tuple[str, list[float]],
     perturbation: str,
     method: str,
     step: float,

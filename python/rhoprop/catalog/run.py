@@ -20,7 +20,7 @@ from ..density import DensityModel, SampledModel
 from ..options import Errors, UncertaintyMethod
 from ..progress import ProgressBar
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
-from ..propagation.kappa import GaussMarkov, KappaProcess
+from ..propagation.kappa import KappaProcess, TwoScale
 from ..propagation.results import (
     dataset_attrs,
     epoch_coords,
@@ -337,7 +337,7 @@ def propagate_catalog(
         raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    process = kappa or GaussMarkov()
+    process = kappa or TwoScale()
     if not isinstance(process, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:

@@ -19,23 +19,28 @@ Layout: ``_inputs`` (input checks, altitude band) <- ``field`` (sampling, the fi
 one module per model.
 """
 
-from . import atlas
+from . import atlas, calibrated
 from ._inputs import altitude_band
 from .atlas import Atlas, FieldMemory, field_memory, set_memory_budget
+from .calibrated import PRESETS, Preset
+from .correction import MeanCorrection
 from .exponential import Exponential
 from .field import DensityField, FieldResolution
 from .function import FromFunction
 from .gridded import Gridded
-from .jacchia_roberts import JR_SIGMA, JacchiaRoberts
-from .jb2008 import JB2008_SIGMA, Jb2008, Jb2008Indices
+from .jacchia_roberts import JR_CALIBRATED, JR_SIGMA, JacchiaRoberts
+from .jb2008 import JB2008_CALIBRATED, JB2008_SIGMA, Jb2008, Jb2008Indices
 from .model import DensityModel, SampledModel, as_atmosphere
 from .msis import DriverUncertainty, Msis, RelativeSigma
 from .pcarom import PcaRom
 from .point_model import ActivitySigma
 
 __all__ = [
+    "JB2008_CALIBRATED",
     "JB2008_SIGMA",
+    "JR_CALIBRATED",
     "JR_SIGMA",
+    "PRESETS",
     "ActivitySigma",
     "Atlas",
     "DensityField",
@@ -49,13 +54,16 @@ __all__ = [
     "JacchiaRoberts",
     "Jb2008",
     "Jb2008Indices",
+    "MeanCorrection",
     "Msis",
     "PcaRom",
+    "Preset",
     "RelativeSigma",
     "SampledModel",
     "altitude_band",
     "as_atmosphere",
     "atlas",
+    "calibrated",
     "field_memory",
     "set_memory_budget",
 ]

@@ -20,12 +20,21 @@ import numpy as np
 from .. import _core
 from ..errors import OutsideRecordError
 from ..spaceweather import SpaceWeather, space_weather_argument
+from . import calibrated as cal
+from .calibrated import Preset
+from .correction import MeanCorrection
 from .field import FieldResolution, resolution_arg
 from .point_model import ActivitySigma, PointModel
 
 #: Jacchia-Roberts' default: 15 % quiet, 30 % in storms, full at Kp = 7 (sources in
 #: docs/density-models.md).
 JR_SIGMA = ActivitySigma(quiet=0.15, storm=0.30, full_at=7.0)
+#: The calibrated default (``preset="calibrated"``): sigma and mean correction fitted on
+#: observed orbit-averaged densities (docs/density-calibration.md).
+JR_CALIBRATED = (
+    ActivitySigma(quiet=cal.JR_QUIET, storm=cal.JR_STORM, full_at=cal.JR_FULL_AT),
+    MeanCorrection(cal.JR_SCALE, cal.JR_F107_EXPONENT),
+)
 _KP_LAG = np.timedelta64(3, "h")
 _CADENCE = np.timedelta64(3, "h")
 
@@ -38,7 +47,12 @@ class JacchiaRoberts(PointModel):
             record file (default: the bundled CelesTrak record; a
             :meth:`~rhoprop.SpaceWeather.mean_geomagnetic` record holds Kp at its
             long-term mean).
-        uncertainty: :class:`ActivitySigma` in Kp (default :data:`JR_SIGMA`).
+        uncertainty: :class:`ActivitySigma` in Kp (default: the preset's).
+        correction: :class:`~rhoprop.density.MeanCorrection` (default: the preset's).
+        preset: ``"calibrated"`` (default): sigma and mean correction calibrated on
+            observed orbit-averaged densities (:data:`JR_CALIBRATED`: 0.728 x the model x
+            (F10.7 / F10.7a) ** -2.17, the model overshooting when the daily flux runs
+            above its mean); ``"paper"``: :data:`JR_SIGMA` and no correction.
         resolution: grid spacing of the sampled field (see :class:`FieldResolution`).
 
     Example:
@@ -54,16 +68,16 @@ class JacchiaRoberts(PointModel):
         space_weather: SpaceWeather | str | os.PathLike[str] | None = None,
         uncertainty: ActivitySigma | None = None,
         *,
+        correction: MeanCorrection | None = None,
+        preset: Preset = "calibrated",
         resolution: FieldResolution | None = None,
     ) -> None:
         self.space_weather = space_weather_argument(space_weather)
-        self.uncertainty = JR_SIGMA if uncertainty is None else uncertainty
-        if not isinstance(self.uncertainty, ActivitySigma):
-            raise TypeError("uncertainty must be an ActivitySigma")
+        self._set_uncertainty(uncertainty, correction, preset, JR_SIGMA, JR_CALIBRATED)
         self.resolution = resolution_arg(resolution)
 
     def __repr__(self) -> str:
-        return f"JacchiaRoberts(uncertainty={self.uncertainty!r})"
+        return f"JacchiaRoberts(uncertainty={self.uncertainty!r}, correction={self.correction!r})"
 
     def drivers(self, times: np.ndarray) -> np.ndarray:
         """(n, 3) F10.7, F10.7a (sfu) and Kp (of t - 3 h) at UTC ``times``."""
@@ -128,4 +142,5 @@ class JacchiaRoberts(PointModel):
             "model": "jacchia-roberts-1971",
             "uncertainty": asdict(self.uncertainty),
             "drivers": digest.hexdigest(),
+            **({} if self.correction.is_identity else {"correction": asdict(self.correction)}),
         }

@@ -39,6 +39,9 @@ from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
 from ..time import EpochsLike
+from . import calibrated as cal
+from .calibrated import Preset
+from .correction import MeanCorrection
 from .field import FieldResolution, resolution_arg
 from .point_model import ActivitySigma, PointModel
 
@@ -301,6 +304,12 @@ class Jb2008Indices:
 #: JB2008's default: 12 % quiet, 27 % in storms (Bruinsma & Boniface 2021: std of
 #: observed/model over 28 storms), full at dTc = 150 K (Kp ~ 7, a strong storm).
 JB2008_SIGMA = ActivitySigma(quiet=0.12, storm=0.27, full_at=150.0)
+#: The calibrated default (``preset="calibrated"``): sigma and mean correction fitted on
+#: observed orbit-averaged densities (docs/density-calibration.md).
+JB2008_CALIBRATED = (
+    ActivitySigma(quiet=cal.JB2008_QUIET, storm=cal.JB2008_STORM, full_at=cal.JB2008_FULL_AT),
+    MeanCorrection(cal.JB2008_SCALE, cal.JB2008_F107_EXPONENT),
+)
 
 
 class Jb2008(PointModel):
@@ -310,7 +319,11 @@ class Jb2008(PointModel):
         indices: the index files (:class:`Jb2008Indices`); None looks in
             ``$RHOPROP_JB2008_DATA``, then the user cache (FileNotFoundError saying how to
             get them if neither has them).
-        uncertainty: :class:`ActivitySigma` in dTc (default :data:`JB2008_SIGMA`).
+        uncertainty: :class:`ActivitySigma` in dTc (default: the preset's).
+        correction: :class:`~rhoprop.density.MeanCorrection` (default: the preset's).
+        preset: ``"calibrated"`` (default): sigma and mean correction calibrated on
+            observed orbit-averaged densities (:data:`JB2008_CALIBRATED`: 0.892 x the model
+            x (F10 / F10B) ** -0.319); ``"paper"``: :data:`JB2008_SIGMA` and no correction.
         dtc: None (observed dTc) or a constant dTc (K) used at every time, e.g. its
             long-term mean for the paper's cases III/IV.
         resolution: grid spacing of the sampled field (see :class:`FieldResolution`).
@@ -330,21 +343,21 @@ class Jb2008(PointModel):
         indices: Jb2008Indices | None = None,
         uncertainty: ActivitySigma | None = None,
         *,
+        correction: MeanCorrection | None = None,
+        preset: Preset = "calibrated",
         dtc: float | None = None,
         resolution: FieldResolution | None = None,
     ) -> None:
         self.indices = Jb2008Indices.default() if indices is None else indices
         if not isinstance(self.indices, Jb2008Indices):
             raise TypeError("indices must be a Jb2008Indices or None")
-        self.uncertainty = JB2008_SIGMA if uncertainty is None else uncertainty
-        if not isinstance(self.uncertainty, ActivitySigma):
-            raise TypeError("uncertainty must be an ActivitySigma")
+        self._set_uncertainty(uncertainty, correction, preset, JB2008_SIGMA, JB2008_CALIBRATED)
         self.dtc = None if dtc is None else _validate.real("dtc", dtc)
         self.resolution = resolution_arg(resolution)
 
     def __repr__(self) -> str:
         extra = "" if self.dtc is None else f", dtc={self.dtc:g}"
-        return f"Jb2008(uncertainty={self.uncertainty!r}{extra})"
+        return f"Jb2008(uncertainty={self.uncertainty!r}, correction={self.correction!r}{extra})"
 
     def drivers(self, times: np.ndarray) -> np.ndarray:
         """The (n, 9) inputs at ``times`` (with ``dtc`` substituted when set)."""
@@ -393,6 +406,7 @@ class Jb2008(PointModel):
         return {
             "model": "jb2008",
             "uncertainty": asdict(self.uncertainty),
+            **({} if self.correction.is_identity else {"correction": asdict(self.correction)}),
             "dtc": self.dtc,
             "indices": self.indices.digest(start, end),
             "lags": "midnight-same",

@@ -19,7 +19,10 @@ import numpy.typing as npt
 from .. import _validate
 from ..spaceweather import Drivers, SpaceWeather, space_weather_argument
 from ..time import EpochsLike
+from . import calibrated as cal
 from ._inputs import broadcast_inputs
+from .calibrated import Preset, preset_argument
+from .correction import MeanCorrection
 from .field import FieldResolution, resolution_arg
 from .model import SampledModel
 
@@ -143,7 +146,15 @@ class Msis(SampledModel):
         version: ``"2.1"`` (default), ``"2.0"`` or ``"00"`` (NRLMSISE-00).
         space_weather: the :class:`~rhoprop.SpaceWeather` record giving the drivers, or
             a path to a CelesTrak record file (default: the bundled CelesTrak record).
-        uncertainty: :class:`DriverUncertainty` (default) or :class:`RelativeSigma`.
+        uncertainty: :class:`DriverUncertainty` or :class:`RelativeSigma` (default: the
+            preset's).
+        correction: :class:`~rhoprop.density.MeanCorrection` of the mean (default: the
+            preset's).
+        preset: ``"calibrated"`` (default): for NRLMSIS 2.1 and 2.0 the driver
+            uncertainty and mean correction calibrated on observed orbit-averaged densities
+            (:mod:`rhoprop.density.calibrated`: 0.854 x the model, sigma floor 11.4 %,
+            ap_relative 0.59); ``"paper"``, and NRLMSISE-00 under either preset: the
+            literature :class:`DriverUncertainty` and no correction.
         resolution: grid spacing of the field the propagators sample the model into
             (:class:`~rhoprop.density.FieldResolution`; None: its defaults, 1 h, 25 km,
             6 deg latitude, 15 deg longitude).
@@ -160,6 +171,8 @@ class Msis(SampledModel):
         space_weather: SpaceWeather | str | os.PathLike[str] | None = None,
         uncertainty: DriverUncertainty | RelativeSigma | None = None,
         *,
+        correction: MeanCorrection | None = None,
+        preset: Preset = "calibrated",
         resolution: FieldResolution | None = None,
     ) -> None:
         key = str(version)
@@ -167,14 +180,32 @@ class Msis(SampledModel):
             raise ValueError(f"unknown NRLMSIS version {version!r}; expected '2.1', '2.0' or '00'")
         self.version = _VERSIONS[key]
         self.space_weather = space_weather_argument(space_weather)
-        self.uncertainty = DriverUncertainty() if uncertainty is None else uncertainty
+        calibrated = preset_argument(preset) == "calibrated" and self.version != "0"
+        if uncertainty is None:
+            uncertainty = (
+                DriverUncertainty(
+                    model_floor=cal.MSIS_MODEL_FLOOR, ap_relative=cal.MSIS_AP_RELATIVE
+                )
+                if calibrated
+                else DriverUncertainty()
+            )
+        self.uncertainty = uncertainty
         if not isinstance(self.uncertainty, (DriverUncertainty, RelativeSigma)):
             raise TypeError("uncertainty must be a DriverUncertainty or RelativeSigma")
+        if correction is None:
+            correction = (
+                MeanCorrection(cal.MSIS_SCALE, cal.MSIS_F107_EXPONENT)
+                if calibrated
+                else MeanCorrection()
+            )
+        if not isinstance(correction, MeanCorrection):
+            raise TypeError("correction must be a MeanCorrection or None")
+        self.correction = correction
         self.resolution = resolution_arg(resolution)
 
     def __repr__(self) -> str:
         name = "00" if self.version == "0" else self.version
-        return f"Msis({name!r}, uncertainty={self.uncertainty!r})"
+        return f"Msis({name!r}, uncertainty={self.uncertainty!r}, correction={self.correction!r})"
 
     # -- direct evaluation ---------------------------------------------------------------
 
@@ -263,7 +294,8 @@ class Msis(SampledModel):
 
         mean, var = self._driver_variance(call, drivers)
         sigma = np.sqrt(var + (self._floor() * mean) ** 2)
-        return mean.reshape(shape), sigma.reshape(shape)
+        factor = self.correction.factor(drivers.f107, drivers.f107a)
+        return (mean * factor).reshape(shape), (sigma * factor).reshape(shape)
 
     # -- sampling into a field -------------------------------------------------------------
 
@@ -298,6 +330,7 @@ class Msis(SampledModel):
             "version": self.version,
             "uncertainty": {type(self.uncertainty).__name__: asdict(self.uncertainty)},
             "drivers": digest.hexdigest(),
+            **({} if self.correction.is_identity else {"correction": asdict(self.correction)}),
         }
 
     def _grid_values(
@@ -339,8 +372,9 @@ class Msis(SampledModel):
             return np.transpose(out, (0, 3, 2, 1))  # (nt, nalt, nlat, nlon)
 
         mean = grid(lat, lon, drivers.f107, drivers.f107a, drivers.ap)
+        ln_factor = np.log(self.correction.factor(drivers.f107, drivers.f107a))[:, None, None, None]
         if isinstance(self.uncertainty, RelativeSigma):
-            return np.log(mean), np.full(mean.shape, self.uncertainty.fraction)
+            return np.log(mean) + ln_factor, np.full(mean.shape, self.uncertainty.fraction)
         # Driver sensitivities vary smoothly in space: sample them on every k-th latitude
         # and longitude node and interpolate (k = 1 when the grid does not divide).
         klat = SENSITIVITY_STRIDE if (len(lat) - 1) % SENSITIVITY_STRIDE == 0 else 1
@@ -356,7 +390,7 @@ class Msis(SampledModel):
 
         base, var = self._driver_variance(call, drivers)
         rel = _refine(np.sqrt(var) / base, klat, klon)
-        return np.log(mean), np.sqrt(rel**2 + self._floor() ** 2)
+        return np.log(mean) + ln_factor, np.sqrt(rel**2 + self._floor() ** 2)
 
 
 def _refine(coarse: np.ndarray, klat: int, klon: int) -> np.ndarray:

@@ -14,6 +14,7 @@ import numpy.typing as npt
 from .. import _validate
 from ..time import EpochsLike
 from ._inputs import broadcast_inputs
+from .correction import MeanCorrection
 from .model import SampledModel
 
 _MJD_UNIX = 40587.0
@@ -67,6 +68,32 @@ class PointModel(SampledModel):
     #: The atlas grid starts at the models' floor.
     lowest_altitude = 90e3
     uncertainty: ActivitySigma
+    #: Correction of the mean: density x scale x (F10.7 / F10.7a) ** exponent, with the
+    #: first two columns of :meth:`drivers` (the daily F10.7 and its 81-day mean).
+    correction: MeanCorrection = MeanCorrection()
+
+    def _set_uncertainty(
+        self,
+        uncertainty: ActivitySigma | None,
+        correction: MeanCorrection | None,
+        preset: object,
+        paper: ActivitySigma,
+        calibrated: tuple[ActivitySigma, MeanCorrection],
+    ) -> None:
+        """Sets ``uncertainty`` and ``correction``: the given ones, else the preset's
+        (``"paper"``: ``paper`` and no correction; ``"calibrated"``: ``calibrated``)."""
+        from .calibrated import preset_argument
+
+        paper_preset = preset_argument(preset) == "paper"
+        if uncertainty is None:
+            uncertainty = paper if paper_preset else calibrated[0]
+        if not isinstance(uncertainty, ActivitySigma):
+            raise TypeError("uncertainty must be an ActivitySigma")
+        if correction is None:
+            correction = MeanCorrection() if paper_preset else calibrated[1]
+        if not isinstance(correction, MeanCorrection):
+            raise TypeError("correction must be a MeanCorrection or None")
+        self.uncertainty, self.correction = uncertainty, correction
 
     @abc.abstractmethod
     def drivers(self, times: np.ndarray) -> np.ndarray:
@@ -102,5 +129,6 @@ class PointModel(SampledModel):
             raise ValueError(f"alt = {al[below][0]} m is below {self.NAME}'s floor of 90 km")
         drivers = self.drivers(t)
         rho = self._evaluate(modified_julian_date(t), la, lo, al, drivers)
+        rho = rho * self.correction.factor(drivers[:, 0], drivers[:, 1])
         sigma = self.uncertainty.relative(self._activity(drivers)) * rho
         return rho.reshape(shape), sigma.reshape(shape)

@@ -12,7 +12,16 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _validate
-from ..density import DensityModel
+from ..density import (
+    JB2008_CALIBRATED,
+    JR_CALIBRATED,
+    DensityModel,
+    JacchiaRoberts,
+    Jb2008,
+    MeanCorrection,
+    Msis,
+    calibrated,
+)
 from ..options import UncertaintyMethod
 from ..propagation import (
     CcspResult,
@@ -216,6 +225,33 @@ class EnsembleResult:
         return ds
 
 
+def _family(model: object) -> str | None:
+    """The calibrated family a model belongs to (with its calibrated mean correction in
+    force), else None."""
+    if isinstance(model, Msis) and model.version in ("2.1", "2.0"):
+        name = "NRLMSIS 2.1"
+        expected = MeanCorrection(calibrated.MSIS_SCALE, calibrated.MSIS_F107_EXPONENT)
+    elif isinstance(model, Jb2008):
+        name, expected = "JB2008", JB2008_CALIBRATED[1]
+    elif isinstance(model, JacchiaRoberts):
+        name, expected = "Jacchia-Roberts", JR_CALIBRATED[1]
+    else:
+        return None
+    return name if model.correction == expected else None
+
+
+def default_weights(models: Mapping[str, object]) -> np.ndarray:
+    """Mixture weights of ``models``: :data:`rhoprop.density.calibrated.ENSEMBLE_WEIGHTS`
+    (by log score on observed orbit-averaged densities) when every model is a calibrated
+    family and they give a positive total, else equal."""
+    families = [_family(m) for m in models.values()]
+    if all(f is not None for f in families):
+        w = np.array([calibrated.ENSEMBLE_WEIGHTS[f] for f in families if f is not None])
+        if w.sum() > 0:
+            return w
+    return np.ones(len(families))
+
+
 def ensemble(
     state: OrbitState,
     spacecraft: Spacecraft,
@@ -235,10 +271,13 @@ def ensemble(
         state, spacecraft: the initial state and the object (``spacecraft.cd`` is Cd_ref,
             the drag coefficient that belongs to the reference model).
         models: {name: density model}; ``reference`` names the reference model.
-        method: ``"monte_carlo"`` (default; GaussMarkov 18 min unless ``kappa`` is given)
+        method: ``"monte_carlo"`` (default; the calibrated :class:`~rhoprop.kappa.TwoScale`
+            unless ``kappa`` is given)
             or ``"ccsp"``.
         weights: mixture weights per model, in the order of ``models`` or as a mapping
-            {model name: weight} (default equal).
+            {model name: weight}. Default: :func:`default_weights` (the weights calibrated
+            by log score on observed densities when every model is a calibrated NRLMSIS
+            2.x, JB2008 or Jacchia-Roberts; else equal).
         debias_window: s before the epoch over which each model's Cd is debiased against
             the reference (:func:`~rhoprop.debias_drag_coefficient`); ``cds`` overrides it
             per model.
@@ -268,7 +307,7 @@ def ensemble(
                 f"{list(weights)}"
             )
         weights = [weights[name] for name in names]
-    w = np.ones(len(names)) if weights is None else _validate.real_array("weights", weights)
+    w = default_weights(models) if weights is None else _validate.real_array("weights", weights)
     if w.shape != (len(names),) or not np.isfinite(w).all() or (w < 0).any() or w.sum() <= 0:
         raise ValueError(f"weights must be {len(names)} finite non-negative numbers, not all 0")
     cd: dict[str, float] = {}

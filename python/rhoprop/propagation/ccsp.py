@@ -3,6 +3,7 @@ consider parameter (paper section 4, as made unambiguous in docs/conventions.md,
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
@@ -10,12 +11,13 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from .. import _core, _validate
+from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..options import Perturbation
 from ..time import DurationLike, ut1_seconds
 from .dynamics import Dynamics, resolve, zonal_degree_argument
+from .kappa import Constant, GaussMarkov, KappaProcess, PiecewiseConstant, TwoScale
 from .montecarlo import drag_sigma_argument
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -59,7 +61,7 @@ def ccsp(
     *,
     update_interval: float | None = None,
     initial_covariance: npt.ArrayLike | None = None,
-    scaling: tuple[float, float] = (3.0, 3.0),
+    scaling: tuple[float, float] | None = None,
     perturbation: Perturbation = "additive",
     step: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
@@ -69,6 +71,7 @@ def ccsp(
     dynamics: Dynamics | None = None,
     output_times: npt.ArrayLike | None = None,
     coordinates: Coordinates = "equinoctial",
+    kappa: KappaProcess | None = None,
 ) -> CcspResult:
     """Propagates mean and covariance with the CCSP filter.
 
@@ -77,12 +80,16 @@ def ccsp(
     kappa held over an update interval. At each update the state covariance gains
     C C^T from the consider points' cross-covariance C, and new sigma points are drawn from
     the factor S = [[Chol(A), B^T], [0, sqrt(l2)]], B = C^T / sqrt(l2),
-    A = l1 P - B^T B (docs/conventions.md, "CCSP filter"; the paper prints the off-diagonal block
-    transposed, which mixes units). The result is the linearised covariance of a kappa
-    piecewise constant over each interval with correlation 1 / l2 between consecutive
-    intervals (``rp.kappa.PiecewiseConstant(update_interval, 1 / l2)``): its long-time
-    along-track spread is sqrt(2 dt / D) times that of a Monte Carlo with correlation time
-    D, i.e. 1.52x GaussMarkov(18 min) at 60-min updates and 0.44x at 5-min updates.
+    A = l1 (P - B^T B / l2) (docs/conventions.md, "CCSP filter"; the paper prints the
+    off-diagonal block transposed, which mixes units, and its A = l1 P - B^T B is this only
+    at its l1 = l2 = 3). The result is the linearised covariance of a kappa piecewise
+    constant over each interval with correlation 1 / l2 between consecutive intervals
+    (``rp.kappa.PiecewiseConstant(update_interval, 1 / l2)``); ``kappa`` chooses l2 (and
+    how the process splits between kappa and c) so that the filter stands for that
+    process: by default the calibrated :class:`~rhoprop.kappa.TwoScale`. With
+    ``scaling=(3, 3)`` (the paper's filter) the long-time along-track spread is
+    sqrt(2 dt / D) times that of a Monte Carlo with correlation time D, i.e. 1.52x
+    GaussMarkov(18 min) at 60-min updates and 0.44x at 5-min updates.
 
     Ballistic-coefficient uncertainty (``drag_sigma`` > 0): a second consider parameter
     c, the normalised error of Cd*A/m (a sigma point flies with Cd*A/m exp(drag_sigma c),
@@ -90,7 +97,7 @@ def ccsp(
     becomes [r, v, kappa, c]. c is a constant of the object, so its cross-covariance D
     with the state is carried whole from update to update (kappa's shrinks by 1 / l2):
     the factor is S = [[Chol(A), C / sqrt(l2), a sqrt(l2) D], [0, diag(sqrt(l2),
-    a sqrt(l2))]] with A = l1 (P - D D^T) - C C^T / l2 and a = 0.001 (one c point, a
+    a sqrt(l2))]] with A = l1 (P - D D^T - C C^T / l2^2) and a = 0.001 (one c point, a
     one-sided difference in the tangent-linear limit), and P = P_set1 + C C^T + D D^T after
     each update (derivation: docs/conventions.md). This is the covariance linearised in c: a Monte
     Carlo over the same log-normal Cd*A/m samples spreads about 1 + 3 drag_sigma^2 / 4
@@ -113,7 +120,10 @@ def ccsp(
             A number: updates every that many s whatever the orbit.
         initial_covariance: 6x6 state covariance (default: the paper's near-zero
             diag(eps^2) with eps = 1 mm and 1 um/s).
-        scaling: (lambda1 + n, lambda2 + p), default (3, 3).
+        scaling: (lambda1 + n, lambda2 + p). None (default): (3, 1 / c) with c the
+            update-to-update correlation of ``kappa``'s process. Given (the paper's is
+            (3, 3)) and ``kappa`` None: the paper's filter, the process
+            ``PiecewiseConstant(update_interval, 1 / lambda2)``.
         perturbation: ``"additive"`` or ``"lognormal"``.
         step: largest RK8 step, s (None: 180 s, the RK8 default; at most 1/20 of the
             orbital period).
@@ -142,6 +152,22 @@ def ccsp(
             straight-line points leave the orbit, and its along-track sigma outgrows the
             Monte Carlo it stands for past about 5 days: 1.2x at 7 days, 8.6x at 19;
             docs/conventions.md, "CCSP coordinates").
+        kappa: the density error the filter stands for (default None: the calibrated
+            :class:`~rhoprop.kappa.TwoScale`, as the Monte Carlo; ignored when
+            ``scaling`` is given). The filter carries one kappa held over each update,
+            correlated 1 / lambda2 from one update to the next, and the constant c of
+            ``drag_sigma``: a ``PiecewiseConstant`` (its interval must be the update
+            interval) or ``GaussMarkov`` is that kappa (correlation c = its own over the
+            mean update spacing); a ``TwoScale`` puts its fast term there (kappa scaled by
+            sqrt(1 - w)) and its slow one, a density scale that holds for days, into c
+            (``drag_sigma`` raised to hypot(drag_sigma, sqrt(w r) s), s the model's
+            density-weighted relative sigma over the initial orbit, r = :func:`slow_share`
+            of the run's span: the constant that drives the slow term's along-track
+            variance at the end, so the earlier outputs of a run longer than the slow
+            half-life are a little narrow: 0.83x the Monte Carlo's along-track sigma at
+            1-3 days of a 14-day run, 0.97x at its end); ``Constant`` goes whole into c.
+            The result's
+            ``drag_sigma`` is the one flown.
 
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -172,9 +198,13 @@ def ccsp(
         drag_sigma=drag_sigma,
         output_times=output_times,
         coordinates=coordinates,
+        kappa=kappa,
     )
+    flown = args.drag_sigma
 
     def run(atmosphere: AtmosphereLike) -> _CcspOutput:
+        nonlocal flown
+        flown = args.flown_drag_sigma(atmosphere, state)
         return _core.ccsp(
             atmosphere,
             args.epoch,
@@ -187,13 +217,14 @@ def ccsp(
             args.step,
             args.floor,
             args.degree,
-            args.drag_sigma,
+            flown,
             args.outputs if len(args.outputs) else None,
             args.coordinates,
+            args.kappa_scale,
         )
 
     out = run_in_field(model, state, span, args.floor, run)
-    return _result(state, out, args.drag_sigma)
+    return _result(state, out, flown)
 
 
 @dataclass(frozen=True)
@@ -210,6 +241,15 @@ class _Arguments:
     drag_sigma: float
     outputs: np.ndarray  # output times between updates, s (may be empty)
     coordinates: Coordinates
+    kappa_scale: float = 1.0
+    slow_fraction: float = 0.0
+
+    def flown_drag_sigma(self, atmosphere: AtmosphereLike, state: OrbitState) -> float:
+        """``drag_sigma`` with the slow density term folded in (see :func:`ccsp`)."""
+        if self.slow_fraction == 0.0:
+            return self.drag_sigma
+        s = orbit_relative_sigma(atmosphere, state, self.epoch)
+        return math.hypot(self.drag_sigma, math.sqrt(self.slow_fraction) * s)
 
 
 def _arguments(
@@ -220,7 +260,7 @@ def _arguments(
     *,
     update_interval: float | None,
     initial_covariance: Any,
-    scaling: tuple[float, float],
+    scaling: tuple[float, float] | None,
     step: float | None,
     floor_altitude: float,
     update_times: Any,
@@ -228,6 +268,7 @@ def _arguments(
     drag_sigma: float,
     output_times: Any = None,
     coordinates: str = "equinoctial",
+    kappa: KappaProcess | None = None,
 ) -> tuple[_Arguments, float]:
     """Checks the arguments of :func:`ccsp`; returns them for the core and the span, s."""
     if not isinstance(state, OrbitState):
@@ -267,8 +308,7 @@ def _arguments(
     check_memory(
         (len(times) + len(outputs) + 1) * OUTPUT_BYTES, DEFAULT_MAX_MEMORY, "the CCSP outputs"
     )
-    l1 = _validate.positive("scaling[0]", scaling[0])
-    l2 = _validate.positive("scaling[1]", scaling[1])
+    (l1, l2), kappa_scale, slow = consider_settings(kappa, scaling, times, update_interval)
     p0 = DEFAULT_INITIAL_COVARIANCE if initial_covariance is None else initial_covariance
     p0 = np.array(p0, dtype=float)
     if p0.shape != (6, 6):
@@ -284,8 +324,92 @@ def _arguments(
         drag_sigma=drag_sigma_argument(drag_sigma),
         outputs=outputs,
         coordinates=coordinates_argument(coordinates),
+        kappa_scale=kappa_scale,
+        slow_fraction=slow,
     )
     return args, span
+
+
+def consider_settings(
+    kappa: KappaProcess | None,
+    scaling: tuple[float, float] | None,
+    update_times: np.ndarray,
+    update_interval: float | None,
+) -> tuple[tuple[float, float], float, float]:
+    """((lambda1 + n, lambda2 + p), kappa_scale, slow_fraction) of a run: how the filter
+    stands for ``kappa`` (see :func:`ccsp`)."""
+    if scaling is not None:
+        if kappa is not None:
+            raise ValueError(
+                "give kappa or scaling, not both: scaling's lambda2 sets the correlation "
+                "of kappa between updates, which the kappa process sets too"
+            )
+        if len(scaling) != 2:
+            raise ValueError(f"scaling must be two numbers, got {scaling!r}")
+        l1 = _validate.positive("scaling[0]", scaling[0])
+        return (l1, _validate.positive("scaling[1]", scaling[1])), 1.0, 0.0
+    process = TwoScale() if kappa is None else kappa
+    if not isinstance(process, KappaProcess):
+        raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(process).__name__}")
+    # The nominal update interval: the given one, else the mean spacing of the updates.
+    spacing = (
+        float(update_interval)
+        if update_interval is not None
+        else float(update_times[-1]) / len(update_times)
+    )
+    scale, slow = 1.0, 0.0
+    if isinstance(process, PiecewiseConstant):
+        if update_interval is not None and abs(process.interval - update_interval) > 1e-9:
+            raise ValueError(
+                f"kappa = {process!r} holds kappa over {process.interval:g} s but the "
+                f"updates are {update_interval:g} s apart; make them equal"
+            )
+        c = process.correlation
+    elif isinstance(process, GaussMarkov):
+        c = 2.0 ** (-spacing / process.half_life)
+    elif isinstance(process, TwoScale):
+        c = 2.0 ** (-spacing / process.half_life)
+        scale = math.sqrt(1.0 - process.slow_fraction)
+        share = slow_share(process.slow_half_life, float(update_times[-1]))
+        slow = process.slow_fraction * share
+    elif isinstance(process, Constant):
+        c, scale, slow = 1.0 / 3.0, 0.0, 1.0
+    else:
+        raise ValueError(
+            f"the CCSP holds kappa over each update: it stands for a PiecewiseConstant, "
+            f"GaussMarkov, TwoScale or Constant process, not {type(process).__name__}"
+        )
+    if not c > 0:
+        raise ValueError(f"kappa's correlation between updates must be > 0, got {c:g}")
+    return (3.0, 1.0 / c), scale, slow
+
+
+def slow_share(half_life: float, span: float) -> float:
+    """The along-track variance at the end of ``span`` s that a unit Gauss-Markov density
+    term with ``half_life`` s drives, over that of a constant one: the double integral of
+    x y 2^(-|x - y| / half_life) over [0, span]^2 against (span^2 / 2)^2 (x, y the times
+    left to the end), midpoint rule on 400 nodes. 1 for a span short beside the
+    half-life; 0.58 for 14 days at 4.1 days."""
+    n = 400
+    x = (np.arange(n) + 0.5) / n * span
+    corr = np.exp2(-np.abs(x[:, None] - x[None, :]) / half_life)
+    return float(x @ corr @ x / x.sum() ** 2)
+
+
+def orbit_relative_sigma(atmosphere: AtmosphereLike, state: OrbitState, ut1: float) -> float:
+    """Density-weighted relative sigma sum(sigma) / sum(mean) of ``atmosphere`` at 24
+    points around the osculating orbit of ``state`` (at its epoch, UT1 s ``ut1``); at the
+    state's own position alone when the orbit is not elliptic or leaves the field."""
+    try:
+        elements = frames.to_equinoctial(state.state)
+        ring = np.tile(elements, (24, 1))
+        ring[:, 5] += np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+        positions = frames.from_equinoctial(ring, state.state)[:, :3]
+        mean, sigma = atmosphere.mean_sigma(np.full(24, ut1), np.ascontiguousarray(positions))
+    except ValueError:
+        mean, sigma = atmosphere.mean_sigma(np.full(1, ut1), state.position[None, :].copy())
+    total = float(np.sum(mean))
+    return float(np.sum(sigma)) / total if total > 0 else 0.0
 
 
 def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResult:
@@ -350,27 +474,31 @@ def ccsp_many(
             run["spacecraft"],
             model,
             None,
-            update_interval=DEFAULT_UPDATE_INTERVAL,
+            update_interval=None,
             initial_covariance=run.get("initial_covariance"),
-            scaling=(3.0, 3.0),
+            scaling=None,
             step=run.get("step"),
             floor_altitude=floor_altitude,
             update_times=run["update_times"],
             zonal_degree=zonal_degree,
             drag_sigma=run.get("drag_sigma", 0.0),
             output_times=run.get("output_times"),
+            kappa=run.get("kappa"),
         )
         prepared.append((state, run["spacecraft"], args, as_atmosphere(model, state, span)))
     results: list[CcspResult | Exception] = [RuntimeError("not run")] * len(prepared)
-    groups: dict[int, list[int]] = {}
-    for i, (_s, _c, _a, atmosphere) in enumerate(prepared):
-        groups.setdefault(id(atmosphere), []).append(i)
+    groups: dict[tuple[int, tuple[float, float], float], list[int]] = {}
+    for i, (_s, _c, a, atmosphere) in enumerate(prepared):
+        # One core call per atmosphere and consider settings (the objects' update
+        # spacings set lambda2 for a kappa process).
+        groups.setdefault((id(atmosphere), a.scaling, a.kappa_scale), []).append(i)
     for members in groups.values():
         atmosphere = prepared[members[0]][3]
         first = prepared[members[0]][2]
+        flown = {i: prepared[i][2].flown_drag_sigma(atmosphere, prepared[i][0]) for i in members}
         objects = [
-            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, a.drag_sigma, a.outputs)
-            for s, c, a, _ in (prepared[i] for i in members)
+            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, flown[i], a.outputs)
+            for i, (s, c, a, _) in ((i, prepared[i]) for i in members)
         ]
         outs = _core.ccsp_many(
             atmosphere,
@@ -381,10 +509,11 @@ def ccsp_many(
             first.degree,
             progress,
             coordinates,
+            first.kappa_scale,
         )
         for i, out in zip(members, outs, strict=True):
-            state, _c, args, _atm = prepared[i]
-            results[i] = out if isinstance(out, Exception) else _result(state, out, args.drag_sigma)
+            state = prepared[i][0]
+            results[i] = out if isinstance(out, Exception) else _result(state, out, flown[i])
     return results
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass, fields
 from typing import ClassVar
 
 from .. import _validate
+from ..density import calibrated as _CAL
 
 
 class KappaProcess:
@@ -19,11 +20,10 @@ class KappaProcess:
 
     kind: ClassVar[str] = ""
 
-    def _spec(self) -> tuple[str, float, float]:
-        """(kind, a, b) for the core: the kind and up to two parameters, in field order."""
+    def _spec(self) -> tuple[str, list[float]]:
+        """(kind, parameters) for the core: the kind and its parameters in field order."""
         values = [float(getattr(self, f.name)) for f in fields(self)]  # type: ignore[arg-type]
-        a, b = [*values, 0.0, 0.0][:2]
-        return (self.kind, a, b)
+        return (self.kind, values)
 
     def correlation_time(self) -> float:
         """Integral of the autocorrelation, D (s): the long-time along-track variance grows
@@ -147,9 +147,59 @@ class PiecewiseConstant(KappaProcess):
         return self.interval * (1 + self.correlation) / (1 - self.correlation)
 
 
+@dataclass(frozen=True)
+class TwoScale(KappaProcess):
+    """Sum of two independent unit Gauss-Markov terms, sqrt(1 - w) f + sqrt(w) s: f with
+    ``half_life`` s, s with ``slow_half_life`` s, w = ``slow_fraction``; exact
+    discretisation on nodes every ``interval`` s (default ``min(180 s, half_life / 6)``),
+    linear between them. Unit variance, correlation (1 - w) 2^(-lag / half_life) +
+    w 2^(-lag / slow_half_life).
+
+    The default is the process calibrated on observed orbit-averaged densities of CHAMP
+    and GRACE-FO in 34 storms (docs/density-calibration.md,
+    ``benches/density_calibration.py``): model errors that decorrelate within hours in
+    part and persist through a storm window in part, where the paper's 18-minute process
+    decorrelated within an orbit. It is the Monte Carlo's default; the paper study keeps
+    ``GaussMarkov(1080)``."""
+
+    kind: ClassVar[str] = "two_scale"
+
+    half_life: float = _CAL.KAPPA_HALF_LIFE
+    slow_half_life: float = _CAL.KAPPA_SLOW_HALF_LIFE
+    slow_fraction: float = _CAL.KAPPA_SLOW_FRACTION
+    interval: float | None = None
+
+    def __post_init__(self) -> None:
+        half_life = _validate.positive("half_life", self.half_life)
+        _validate.positive("slow_half_life", self.slow_half_life)
+        w = _validate.real("slow_fraction", self.slow_fraction)
+        if not 0 <= w <= 1:
+            raise ValueError(f"slow_fraction must lie in [0, 1], got {w}")
+        interval = min(180.0, half_life / 6.0) if self.interval is None else self.interval
+        object.__setattr__(self, "interval", _validate.positive("interval", interval))
+
+    def node_spacing(self) -> float:
+        return float(self.interval)  # type: ignore[arg-type]
+
+    def correlation_time(self) -> float:
+        w = self.slow_fraction
+        fast = GaussMarkov(self.half_life, self.interval).correlation_time()
+        slow = GaussMarkov(self.slow_half_life, self.interval).correlation_time()
+        return (1 - w) * fast + w * slow
+
+    def correlation(self, lag: float) -> float:
+        """Correlation of kappa at a lag of ``lag`` s (of the continuous process)."""
+        w = self.slow_fraction
+        return float(
+            (1 - w) * 2.0 ** (-abs(lag) / self.half_life)
+            + w * 2.0 ** (-abs(lag) / self.slow_half_life)
+        )
+
+
 #: The processes by kind name.
 KINDS: dict[str, type[KappaProcess]] = {
-    cls.kind: cls for cls in (White, Interpolated, GaussMarkov, Constant, PiecewiseConstant)
+    cls.kind: cls
+    for cls in (White, Interpolated, GaussMarkov, Constant, PiecewiseConstant, TwoScale)
 }
 
 __all__ = [
@@ -159,5 +209,6 @@ __all__ = [
     "Interpolated",
     "KappaProcess",
     "PiecewiseConstant",
+    "TwoScale",
     "White",
 ]

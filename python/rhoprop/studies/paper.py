@@ -113,7 +113,7 @@ def method_comparison(
     """
     state = state or scenarios.paper_state()
     spacecraft = spacecraft or scenarios.paper_spacecraft()
-    model = model if model is not None else Msis("2.1")
+    model = model if model is not None else Msis("2.1", preset="paper")
     methods = methods or METHODS
     results, traces, mean_trace, stds = {}, {}, {}, {}
     for key, process in methods.items():
@@ -249,8 +249,10 @@ def ccsp_vs_monte_carlo(
     spacecraft = spacecraft or scenarios.paper_spacecraft()
     if reference is None or second is None:
         sw = SpaceWeather()
-        reference = reference if reference is not None else Msis("2.1", space_weather=sw)
-        second = second if second is not None else Msis("00", space_weather=sw)
+        reference = (
+            reference if reference is not None else Msis("2.1", space_weather=sw, preset="paper")
+        )
+        second = second if second is not None else Msis("00", space_weather=sw, preset="paper")
     if second_cd is None:
         second_cd = debias_drag_coefficient(state, spacecraft, reference, second)
     first_name, second_name = model_label(reference), model_label(second)
@@ -267,10 +269,20 @@ def ccsp_vs_monte_carlo(
         craft = Spacecraft(cd, spacecraft.area_to_mass)
         t0 = time.perf_counter()
         mc = monte_carlo(
-            state, craft, model, duration, n=n, seed=seed, output_step=None, progress=progress
+            state,
+            craft,
+            model,
+            duration,
+            n=n,
+            kappa=_GAUSS_MARKOV_18MIN,
+            seed=seed,
+            output_step=None,
+            progress=progress,
         )
         t1 = time.perf_counter()
-        cc = ccsp(state, craft, model, duration, update_interval=update_interval)
+        cc = ccsp(
+            state, craft, model, duration, update_interval=update_interval, scaling=(3.0, 3.0)
+        )
         t2 = time.perf_counter()
         if ref_orbit is None:
             ref_orbit = (mc.reference_positions[-1], mc.reference_velocities[-1])
@@ -311,16 +323,24 @@ def case_ensembles(
     for case in cases or scenarios.CASE_EPOCHS:
         state = scenarios.paper_state(scenarios.CASE_EPOCHS[case])
         options: dict[str, Any] = (
-            {"n": n, "seed": seed, "output_step": None, "progress": progress}
+            {
+                "n": n,
+                "kappa": _GAUSS_MARKOV_18MIN,
+                "seed": seed,
+                "output_step": None,
+                "progress": progress,
+            }
             if method == "monte_carlo"
             else {}
         )
+        models = scenarios.case_models(case, record, preset="paper")
         out[case] = ensemble(
             state,
             scenarios.paper_spacecraft(),
-            scenarios.case_models(case, record),
+            models,
             scenarios.REFERENCE_MODEL,
             method=method,
+            weights=np.ones(len(models)),
             duration=duration,
             **options,
         )

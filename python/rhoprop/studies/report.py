@@ -64,7 +64,12 @@ def run_paper(
 
     _stage("Method comparison (paper Fig. 4), NRLMSIS 2.1, Case I", start)
     comparison = method_comparison(
-        state, craft, Msis("2.1", space_weather=record), duration, n=members, seed=seed
+        state,
+        craft,
+        Msis("2.1", space_weather=record, preset="paper"),
+        duration,
+        n=members,
+        seed=seed,
     )
     with folder.path("method_comparison.png") as tmp:
         comparison.figure(tmp)
@@ -94,8 +99,8 @@ def run_paper(
     versus = ccsp_vs_monte_carlo(
         state,
         craft,
-        Msis("2.1", space_weather=sw),
-        Msis("00", space_weather=sw),
+        Msis("2.1", space_weather=sw, preset="paper"),
+        Msis("00", space_weather=sw, preset="paper"),
         duration,
         n=members,
         seed=seed,
@@ -276,7 +281,7 @@ def _paper_orbits(
     ref = None
     for version in ("2.1", "2.0", "00"):
         t0 = time.perf_counter()
-        tr = propagate(state, craft, Msis(version, space_weather=record), duration)
+        tr = propagate(state, craft, Msis(version, space_weather=record, preset="paper"), duration)
         wall = time.perf_counter() - t0
         ref = tr if ref is None else ref
         along = frames.to_rtn(tr.positions[-1], ref.positions[-1], ref.velocities[-1])[1]

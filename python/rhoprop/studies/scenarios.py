@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..density import DensityModel, Exponential, JacchiaRoberts, Jb2008, Jb2008Indices, Msis
+from ..density.calibrated import Preset
 from ..propagation import OrbitState, Spacecraft
 from ..spaceweather import SpaceWeather
 from ..time import EpochLike
@@ -89,33 +90,39 @@ _FALLBACK = (
 )
 
 
-def case_models(case: str, record: SpaceWeather | None = None) -> dict[str, DensityModel]:
+def case_models(
+    case: str, record: SpaceWeather | None = None, *, preset: Preset = "calibrated"
+) -> dict[str, DensityModel]:
     """The paper's three stand-in models for a case, reference first (see
     :func:`model_choice` and :func:`default_models`). The simulated cases hold each
     family's geomagnetic driver at its long-term mean (ap/Kp over 2000-2019 from the
-    record; dTc over the JB2008 file's years within 2000-2019)."""
-    return default_models(case_space_weather(case, record), mean_dtc=case.endswith("-simulated"))
+    record; dTc over the JB2008 file's years within 2000-2019). ``preset`` is the models'
+    (the paper study passes ``"paper"``)."""
+    return default_models(
+        case_space_weather(case, record), mean_dtc=case.endswith("-simulated"), preset=preset
+    )
 
 
 def default_models(
-    record: SpaceWeather | None = None, *, mean_dtc: bool = False
+    record: SpaceWeather | None = None, *, mean_dtc: bool = False, preset: Preset = "calibrated"
 ) -> dict[str, DensityModel]:
     """The default model families on ``record``, reference first: NRLMSIS 2.1 (driver
     uncertainty), JB2008 and Jacchia-Roberts 1971 (activity-dependent uncertainty) when
     JB2008 index files are available, else NRLMSIS 2.1, Jacchia-Roberts 1971 and
     NRLMSISE-00. ``mean_dtc`` holds JB2008's dTc at its 2000-2019 mean. NRLMSIS 2.0 (equal
-    to 2.1 in mass density) is out of the default; use ``Msis("2.0")`` explicitly."""
+    to 2.1 in mass density) is out of the default; use ``Msis("2.0")`` explicitly.
+    ``preset``: the models' settings (:data:`rhoprop.density.PRESETS`)."""
     sw = record if record is not None else SpaceWeather()
     names, _, indices = model_choice()
-    models: dict[str, DensityModel] = {"NRLMSIS 2.1": Msis("2.1", space_weather=sw)}
+    models: dict[str, DensityModel] = {"NRLMSIS 2.1": Msis("2.1", space_weather=sw, preset=preset)}
     for name in names[1:]:
         if name == "JB2008" and indices is not None:
             dtc = indices.mean_dtc(*MEAN_YEARS) if mean_dtc else None
-            models[name] = Jb2008(indices, dtc=dtc)
+            models[name] = Jb2008(indices, dtc=dtc, preset=preset)
         elif name == "Jacchia-Roberts 1971":
-            models[name] = JacchiaRoberts(sw)
+            models[name] = JacchiaRoberts(sw, preset=preset)
         elif name == "NRLMSISE-00":
-            models[name] = Msis("00", space_weather=sw)
+            models[name] = Msis("00", space_weather=sw, preset=preset)
     return models
 
 

@@ -53,6 +53,12 @@ pub struct CcspConfig {
     pub output_times: Vec<f64>,
     /// (lambda1 + n, lambda2 + p), both > 0; the paper uses (3, 3).
     pub scaling: (f64, f64),
+    /// Standard deviation of the density consider parameter kappa (1 in the paper's
+    /// filter): a sigma point's kappa is this times its drawn value, so the density
+    /// term of the covariance scales with its square. Less than 1 when only part of the
+    /// density error is carried by the per-update kappa (the fast term of a two-scale
+    /// process; its slow term goes into `drag_sigma`).
+    pub kappa_scale: f64,
     pub perturbation: Perturbation,
     pub method: FixedMethod,
     /// Largest integration step, s.
@@ -132,13 +138,18 @@ type Point = [f64; 8];
 /// The scaled block factor of docs/conventions.md, "CCSP filter" generalised to the two consider
 /// parameters [kappa, c]:
 /// S = [[Chol(A), B^T], [0, diag(sqrt(l2), alpha sqrt(l2))]] with
-/// B^T = [C / sqrt(l2), alpha sqrt(l2) D] and A = l1 `pc` - C C^T / l2, where
+/// B^T = [C / sqrt(l2), alpha sqrt(l2) D] and A = l1 (`pc` - C C^T / l2^2), where
 /// `pc` = P - D D^T is the state covariance without the part explained by c (it includes
 /// C C^T), `c` the cross-covariance with kappa and `d` the cross-covariance with c (both
 /// of unit variance), `alpha` the scaling of the c points ([`DRAG_ALPHA`]). Hence
-/// S S^T = [[l1 pc + a^2 l2 D D^T, C, a^2 l2 D], [C^T, l2, 0], [a^2 l2 D^T, 0, a^2 l2]]
-/// (a = alpha): kappa's cross block unscaled as in docs/conventions.md, "CCSP filter" (the 1 / l2 forgetting per
-/// update), c's scaled like its variance (carried in full). With D = 0 the first seven
+/// S S^T = [[l1 pc - (l1 / l2 - 1) C C^T / l2 + a^2 l2 D D^T, C, a^2 l2 D], [C^T, l2, 0],
+/// [a^2 l2 D^T, 0, a^2 l2]] (a = alpha): kappa's cross block unscaled as in
+/// docs/conventions.md, "CCSP filter" (the 1 / l2 forgetting per update), c's scaled like
+/// its variance (carried in full). With the weights 1 / (2 l1) of the state points and
+/// 1 / (2 l2) of the kappa points, the points hold the state covariance pc + D D^T whatever
+/// l1 and l2; the paper's A = l1 pc - C C^T / l2 held it only at l1 = l2 (its (3, 3), where
+/// both forms are the same bits), and at l2 = 1.17 (correlation 0.85) inflated the
+/// along-track sigma 1.7x over the Monte Carlo of its process. With D = 0 the first seven
 /// rows and columns are the p = 1 factor exactly. `t` names the epoch in errors.
 pub fn factor(
     pc: &Matrix6<f64>,
@@ -150,7 +161,7 @@ pub fn factor(
     t: f64,
 ) -> Result<Matrix8, CoreError> {
     let bt = c / l2.sqrt();
-    let a = pc * l1 - bt * bt.transpose();
+    let a = pc * l1 - bt * bt.transpose() * (l1 / l2);
     let a = (a + a.transpose()) * 0.5;
     let chol = Cholesky::new(a).ok_or_else(|| CoreError::NotPositiveDefinite {
         what: "CCSP covariance ((lambda1+n) P - B^T B)",
@@ -249,6 +260,13 @@ fn run<A: Atmosphere + ?Sized>(
     positive("step", cfg.max_step)?;
     positive("scaling[0] (lambda1 + n)", cfg.scaling.0)?;
     positive("scaling[1] (lambda2 + p)", cfg.scaling.1)?;
+    if !(cfg.kappa_scale.is_finite() && cfg.kappa_scale >= 0.0) {
+        return Err(CoreError::invalid(
+            "kappa_scale",
+            cfg.kappa_scale,
+            "must be finite and >= 0",
+        ));
+    }
     let drag_on = check_drag_sigma(cfg.drag_sigma)? > 0.0;
     let (l1, l2) = cfg.scaling;
     // UKF weights: w0 = lambda / (n + lambda), wi = 1 / (2 (n + lambda)).
@@ -778,7 +796,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for SigmaBatch<'_, A, W> {
             for c in 0..6 {
                 y[c][l] = pt[c];
             }
-            kappa.k0[l] = pt[6];
+            kappa.k0[l] = pt[6] * cfg.kappa_scale;
             drag[l] = problem.drag * drag_factor(cfg.drag_sigma, pt[7]);
         }
         let mut dynamics = Dynamics::<A, W>::for_problem(atmosphere, problem, drag);
@@ -834,7 +852,8 @@ mod tests {
             let sst = s * s.transpose();
             let a2 = alpha * alpha;
             let scale = (pc * l1 + d * d.transpose() * (a2 * l2)).abs().max();
-            let tl = sst.fixed_view::<6, 6>(0, 0) - pc * l1 - d * d.transpose() * (a2 * l2);
+            let held = pc * l1 - c * c.transpose() * ((l1 / l2 - 1.0) / l2);
+            let tl = sst.fixed_view::<6, 6>(0, 0) - held - d * d.transpose() * (a2 * l2);
             prop_assert!(tl.abs().max() < 1e-9 * scale);
             prop_assert!((sst.fixed_view::<6, 1>(0, 6) - c).abs().max() < 1e-12);
             let cross = sst.fixed_view::<6, 1>(0, 7) - d * (a2 * l2);
@@ -886,6 +905,7 @@ mod tests {
             update_times: vec![600.0, 1200.0, 3600.0, 7200.0],
             output_times: vec![],
             scaling: (3.0, 3.0),
+            kappa_scale: 1.0,
             perturbation: Perturbation::Additive,
             method: FixedMethod::Rk8,
             max_step: 180.0,
@@ -952,6 +972,33 @@ mod tests {
         let out = ccsp(&atm, &cfg, &p).unwrap();
         assert_eq!(out.times, vec![0.0, 3600.0, 7200.0]);
         assert_eq!(p.done.load(Ordering::Relaxed), 2);
+    }
+
+    #[test]
+    fn kappa_scale_scales_the_density_covariance_by_its_square() {
+        // The density term of the covariance is linear in kappa's variance to first order:
+        // with kappa at half scale the position variance (grown from 1 mm^2 to ~(2 km)^2
+        // in 3 days) is a quarter, up to the sigma points' nonlinearity (< 1 %).
+        use crate::density::Exponential;
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        let hours: Vec<f64> = (1..=72).map(|h| h as f64 * 3600.0).collect();
+        let trace = |scale: f64| {
+            let cfg = CcspConfig {
+                kappa_scale: scale,
+                ..paper_config(hours.clone(), 0.0)
+            };
+            let out = ccsp(&atm, &cfg, &Progress::default()).unwrap();
+            let p = out.covariances.last().unwrap();
+            (0..3).map(|i| p[i][i]).sum::<f64>()
+        };
+        let (full, half) = (trace(1.0), trace(0.5));
+        assert!(full > 1e6, "{full}");
+        assert!((half / full - 0.25).abs() < 0.0025, "{}", half / full);
+        let bad = CcspConfig {
+            kappa_scale: -1.0,
+            ..paper_config(hours.clone(), 0.0)
+        };
+        assert!(ccsp(&atm, &bad, &Progress::default()).is_err());
     }
 
     /// Along-track 1-sigma (m) of `positions` (members x 3) about their mean, in the RTN
@@ -1058,6 +1105,7 @@ mod tests {
             update_times,
             output_times: vec![],
             scaling: (3.0, 3.0),
+            kappa_scale: 1.0,
             perturbation: Perturbation::Additive,
             method: FixedMethod::Rk8,
             max_step: 180.0,

@@ -21,23 +21,47 @@ pub enum KappaProcess {
     /// N(0,1) held over each `interval`, AR(1) with `correlation` across intervals (the
     /// process the CCSP filter is equivalent to).
     PiecewiseConstant { interval: f64, correlation: f64 },
+    /// Sum of two independent unit Gauss-Markov terms, sqrt(1 - w) f + sqrt(w) s, f with
+    /// `half_life` and s with `slow_half_life` (s), w = `slow_fraction` in [0, 1], on nodes
+    /// every `interval` s, linear between them: the process calibrated on observed
+    /// densities, whose errors decorrelate within hours in part and persist for days in
+    /// part (docs/density-calibration.md).
+    TwoScale {
+        half_life: f64,
+        slow_half_life: f64,
+        slow_fraction: f64,
+        interval: f64,
+    },
+}
+
+/// A node of a kappa path: `fast` is kappa itself for every process but
+/// [`KappaProcess::TwoScale`], whose two hidden terms are `fast` and `slow`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct KappaNode {
+    pub fast: f64,
+    pub slow: f64,
 }
 
 impl KappaProcess {
     /// Names of the kinds for [`KappaProcess::from_spec`], as the Python API and scenario
     /// files spell them.
-    pub const KINDS: [&'static str; 5] = [
+    pub const KINDS: [&'static str; 6] = [
         "white",
         "interpolated",
         "gauss_markov",
         "constant",
         "piecewise_constant",
+        "two_scale",
     ];
 
-    /// The process named `kind` (one of [`KappaProcess::KINDS`]) with parameters `a`
-    /// (step, interval or half-life, s) and `b` (correlation of "piecewise_constant", node
-    /// interval of "gauss_markov", s).
-    pub fn from_spec(kind: &str, a: f64, b: f64) -> Result<Self, CoreError> {
+    /// The process named `kind` (one of [`KappaProcess::KINDS`]) with its parameters in
+    /// field order (step, interval or half-life first, s; then the correlation of
+    /// "piecewise_constant" or the node interval of "gauss_markov"; "two_scale" takes
+    /// half_life, slow_half_life, slow_fraction, interval). Missing ones read as 0 and
+    /// are refused by [`KappaProcess::check`].
+    pub fn from_spec(kind: &str, params: &[f64]) -> Result<Self, CoreError> {
+        let p = |i: usize| params.get(i).copied().unwrap_or(0.0);
+        let (a, b) = (p(0), p(1));
         Ok(match kind {
             "white" => Self::White { step: a },
             "interpolated" => Self::Interpolated { interval: a },
@@ -49,6 +73,12 @@ impl KappaProcess {
             "piecewise_constant" => Self::PiecewiseConstant {
                 interval: a,
                 correlation: b,
+            },
+            "two_scale" => Self::TwoScale {
+                half_life: a,
+                slow_half_life: b,
+                slow_fraction: p(2),
+                interval: p(3),
             },
             other => {
                 return Err(CoreError::UnknownName {
@@ -89,6 +119,24 @@ impl KappaProcess {
                 }
                 Ok(())
             }
+            Self::TwoScale {
+                half_life,
+                slow_half_life,
+                slow_fraction,
+                interval,
+            } => {
+                positive("TwoScale half_life", half_life)?;
+                positive("TwoScale slow_half_life", slow_half_life)?;
+                positive("TwoScale interval", interval)?;
+                if !(0.0..=1.0).contains(&slow_fraction) {
+                    return Err(CoreError::invalid(
+                        "TwoScale slow_fraction",
+                        slow_fraction,
+                        "must lie in [0, 1]",
+                    ));
+                }
+                Ok(())
+            }
         }
     }
 
@@ -99,14 +147,18 @@ impl KappaProcess {
             Self::White { step } => Some(step),
             Self::Interpolated { interval }
             | Self::PiecewiseConstant { interval, .. }
-            | Self::GaussMarkov { interval, .. } => Some(interval),
+            | Self::GaussMarkov { interval, .. }
+            | Self::TwoScale { interval, .. } => Some(interval),
             Self::Constant => None,
         }
     }
 
     /// Whether kappa is linear (true) or held constant (false) between nodes.
     pub fn is_linear(&self) -> bool {
-        matches!(self, Self::Interpolated { .. } | Self::GaussMarkov { .. })
+        matches!(
+            self,
+            Self::Interpolated { .. } | Self::GaussMarkov { .. } | Self::TwoScale { .. }
+        )
     }
 
     /// The integration step: the largest step <= `max_step` that divides the node spacing
@@ -118,25 +170,52 @@ impl KappaProcess {
         }
     }
 
-    /// First node value.
-    pub fn first(&self, stream: &mut MemberStream) -> f64 {
-        stream.normal()
+    /// First node (one normal draw; two for TwoScale, fast first).
+    pub fn first(&self, stream: &mut MemberStream) -> KappaNode {
+        let fast = stream.normal();
+        let slow = match self {
+            Self::TwoScale { .. } => stream.normal(),
+            _ => 0.0,
+        };
+        KappaNode { fast, slow }
     }
 
-    /// Node value following `prev` after `dt` s.
-    pub fn next(&self, prev: f64, dt: f64, stream: &mut MemberStream) -> f64 {
+    /// Kappa at a node.
+    pub fn value(&self, node: &KappaNode) -> f64 {
         match *self {
-            Self::White { .. } | Self::Interpolated { .. } => stream.normal(),
-            Self::GaussMarkov { half_life, .. } => {
-                let a = (-std::f64::consts::LN_2 / half_life * dt).exp();
-                a * prev + (1.0 - a * a).sqrt() * stream.normal()
+            Self::TwoScale { slow_fraction, .. } => {
+                (1.0 - slow_fraction).sqrt() * node.fast + slow_fraction.sqrt() * node.slow
             }
-            Self::PiecewiseConstant { correlation, .. } => {
-                correlation * prev + (1.0 - correlation * correlation).sqrt() * stream.normal()
-            }
-            Self::Constant => prev,
+            _ => node.fast,
         }
     }
+
+    /// Node following `prev` after `dt` s.
+    pub fn next(&self, prev: &KappaNode, dt: f64, stream: &mut MemberStream) -> KappaNode {
+        let fast = match *self {
+            Self::White { .. } | Self::Interpolated { .. } => stream.normal(),
+            Self::GaussMarkov { half_life, .. } | Self::TwoScale { half_life, .. } => {
+                gauss_markov_step(prev.fast, half_life, dt, stream)
+            }
+            Self::PiecewiseConstant { correlation, .. } => {
+                correlation * prev.fast + (1.0 - correlation * correlation).sqrt() * stream.normal()
+            }
+            Self::Constant => prev.fast,
+        };
+        let slow = match *self {
+            Self::TwoScale { slow_half_life, .. } => {
+                gauss_markov_step(prev.slow, slow_half_life, dt, stream)
+            }
+            _ => 0.0,
+        };
+        KappaNode { fast, slow }
+    }
+}
+
+/// Exact step of a unit Gauss-Markov process over `dt` s.
+fn gauss_markov_step(prev: f64, half_life: f64, dt: f64, stream: &mut MemberStream) -> f64 {
+    let a = (-std::f64::consts::LN_2 / half_life * dt).exp();
+    a * prev + (1.0 - a * a).sqrt() * stream.normal()
 }
 
 /// Kappa of `W` lanes on the current node segment [t0, t1]. The lane arrays first, so
@@ -196,10 +275,10 @@ mod tests {
             .map(|m| {
                 let mut s = MemberStream::new(11, m);
                 let mut k = p.first(&mut s);
-                let mut path = vec![k];
+                let mut path = vec![p.value(&k)];
                 for _ in 1..nodes {
-                    k = p.next(k, dt, &mut s);
-                    path.push(k);
+                    k = p.next(&k, dt, &mut s);
+                    path.push(p.value(&k));
                 }
                 path
             })
@@ -251,16 +330,19 @@ mod tests {
     #[test]
     fn every_kind_name_parses() {
         for kind in KappaProcess::KINDS {
-            assert!(KappaProcess::from_spec(kind, 60.0, 0.5).is_ok(), "{kind}");
+            assert!(
+                KappaProcess::from_spec(kind, &[60.0, 0.5, 0.5, 10.0]).is_ok(),
+                "{kind}"
+            );
         }
         assert_eq!(
-            KappaProcess::from_spec("gauss_markov", 1080.0, 180.0).unwrap(),
+            KappaProcess::from_spec("gauss_markov", &[1080.0, 180.0]).unwrap(),
             KappaProcess::GaussMarkov {
                 half_life: 1080.0,
                 interval: 180.0
             }
         );
-        let e = KappaProcess::from_spec("brownian", 1.0, 0.0).unwrap_err();
+        let e = KappaProcess::from_spec("brownian", &[1.0, 0.0]).unwrap_err();
         assert!(
             e.to_string()
                 .starts_with("unknown kappa process \"brownian\"; expected one of white,"),
@@ -284,5 +366,30 @@ mod tests {
         .check()
         .is_err());
         assert!(KappaProcess::White { step: 0.0 }.check().is_err());
+    }
+
+    #[test]
+    fn two_scale_correlation_is_the_weighted_sum_of_its_terms() {
+        // 4000 members: the variance's standard error is 0.022, a correlation's about
+        // 0.014; tolerances are about 4 of them. Half-lives 1 h and 10 h, w = 0.4: at a lag
+        // of 1 h the correlation is 0.6 * 0.5 + 0.4 * 2^-0.1 = 0.6732, at 10 h
+        // 0.6 * 2^-10 + 0.4 * 0.5 = 0.2006.
+        let p = KappaProcess::TwoScale {
+            half_life: 3600.0,
+            slow_half_life: 36000.0,
+            slow_fraction: 0.4,
+            interval: 600.0,
+        };
+        p.check().unwrap();
+        let ps = paths(p, 4000, 121, 600.0);
+        let var = ps.iter().map(|p| p[100] * p[100]).sum::<f64>() / ps.len() as f64;
+        assert!((var - 1.0).abs() < 0.09, "{var}");
+        let corr = |lag: usize| ps.iter().map(|p| p[20] * p[20 + lag]).sum::<f64>() / 4000.0;
+        let one = 0.6 * 0.5 + 0.4 * 2f64.powf(-0.1);
+        let ten = 0.6 * 2f64.powi(-10) + 0.4 * 0.5;
+        assert!((corr(6) - one).abs() < 0.06, "{}", corr(6));
+        assert!((corr(60) - ten).abs() < 0.06, "{}", corr(60));
+        let bad = KappaProcess::from_spec("two_scale", &[3600.0, 36000.0, 1.5, 600.0]);
+        assert!(bad.unwrap().check().is_err());
     }
 }

@@ -9,7 +9,7 @@ use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{positive, CoreError};
 use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
-use crate::kappa::{KappaLanes, KappaProcess};
+use crate::kappa::{KappaLanes, KappaNode, KappaProcess};
 use crate::problem::{check_drag_sigma, check_state, drag_factor, Problem};
 use crate::progress::Progress;
 use crate::rng::MemberStream;
@@ -295,12 +295,16 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
             k1: [0.0; W],
             linear: cfg.kappa.is_linear(),
         };
+        // The newest node of each lane (k1 when kappa is linear, k0 when held).
+        let mut nodes = [KappaNode::default(); W];
         for l in 0..W {
-            kappa.k0[l] = cfg.kappa.first(&mut streams[l]);
+            nodes[l] = cfg.kappa.first(&mut streams[l]);
+            kappa.k0[l] = cfg.kappa.value(&nodes[l]);
             if kappa.linear {
-                kappa.k1[l] = cfg
+                nodes[l] = cfg
                     .kappa
-                    .next(kappa.k0[l], spacing.unwrap_or(h), &mut streams[l]);
+                    .next(&nodes[l], spacing.unwrap_or(h), &mut streams[l]);
+                kappa.k1[l] = cfg.kappa.value(&nodes[l]);
             }
         }
         dynamics.kappa = kappa;
@@ -310,6 +314,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
             lanes,
             nt,
             streams,
+            nodes,
             spacing,
             per_node: spacing.map_or(usize::MAX, |d| ((d / h).round() as usize).max(1)),
             frozen: [None; W],
@@ -337,6 +342,8 @@ struct Members<'a, const W: usize> {
     /// Output times.
     nt: usize,
     streams: [MemberStream; W],
+    /// The newest kappa node of each lane.
+    nodes: [KappaNode; W],
     /// Kappa node spacing, s (None: no nodes after t = 0).
     spacing: Option<f64>,
     /// Grid steps per kappa node.
@@ -366,11 +373,13 @@ impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> fo
             kl.t0 = t;
             kl.t1 = t + d;
             for l in 0..W {
+                let process = &self.cfg.kappa;
+                self.nodes[l] = process.next(&self.nodes[l], d, &mut self.streams[l]);
                 if kl.linear {
                     kl.k0[l] = kl.k1[l];
-                    kl.k1[l] = self.cfg.kappa.next(kl.k0[l], d, &mut self.streams[l]);
+                    kl.k1[l] = process.value(&self.nodes[l]);
                 } else {
-                    kl.k0[l] = self.cfg.kappa.next(kl.k0[l], d, &mut self.streams[l]);
+                    kl.k0[l] = process.value(&self.nodes[l]);
                 }
             }
         }

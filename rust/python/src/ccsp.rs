@@ -19,7 +19,7 @@ use rhoprop_core::integrators::FixedMethod;
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
     scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0,
-    output_times = None, coordinates = "equinoctial"))]
+    output_times = None, coordinates = "equinoctial", kappa_scale = 1.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -37,6 +37,7 @@ pub fn ccsp<'py>(
     drag_sigma: f64,
     output_times: Option<PyReadonlyArray1<'py, f64>>,
     coordinates: &str,
+    kappa_scale: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
@@ -51,6 +52,7 @@ pub fn ccsp<'py>(
             None => Vec::new(),
         },
         scaling,
+        kappa_scale,
         perturbation,
         method: FixedMethod::Rk8,
         max_step: step,
@@ -87,7 +89,7 @@ type ObjectArgs<'py> = (
 /// the call and is raised.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, objects, scaling, perturbation, floor_altitude,
-    zonal_degree = 2, progress = None, coordinates = "equinoctial"))]
+    zonal_degree = 2, progress = None, coordinates = "equinoctial", kappa_scale = 1.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp_many<'py>(
     py: Python<'py>,
@@ -99,6 +101,7 @@ pub fn ccsp_many<'py>(
     zonal_degree: u8,
     progress: Option<Py<PyAny>>,
     coordinates: &str,
+    kappa_scale: f64,
 ) -> PyResult<Bound<'py, PyList>> {
     let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
@@ -123,6 +126,7 @@ pub fn ccsp_many<'py>(
                         crate::arrays::vector("output_times", outputs)?.to_vec()
                     },
                     scaling,
+                    kappa_scale,
                     perturbation,
                     method: FixedMethod::Rk8,
                     max_step: *step,

@@ -32,7 +32,7 @@ pub fn monte_carlo<'py>(
     state: PyReadonlyArray1<'py, f64>,
     drag: f64,
     output_times: PyReadonlyArray1<'py, f64>,
-    kappa: (String, f64, f64),
+    kappa: (String, Vec<f64>),
     perturbation: &str,
     method: &str,
     step: f64,
@@ -58,7 +58,7 @@ pub fn monte_carlo<'py>(
     let cfg = MonteCarloConfig {
         problem: crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree)?,
         initial_factor,
-        kappa: KappaProcess::from_spec(&kappa.0, kappa.1, kappa.2).map_err(to_py)?,
+        kappa: KappaProcess::from_spec(&kappa.0, &kappa.1).map_err(to_py)?,
         perturbation,
         method,
         max_step: step,
