@@ -130,6 +130,7 @@ fn runs(c: &mut Criterion) {
         update_times: (1..=72).map(|i| i as f64 * 3600.0).collect(),
         output_times: vec![],
         scaling: (3.0, 3.0),
+        kappa_scale: 1.0,
         perturbation: Perturbation::Additive,
         method: FixedMethod::Rk8,
         max_step: 180.0,
