@@ -485,3 +485,34 @@ def test_default_start_is_not_moved_by_one_element_set_dated_ahead(shell):
     assert default_start(cat) <= newest
     epochs = np.sort([o.state.epoch for o in cat])
     assert default_start(cat) == epochs[int(0.99 * (len(epochs) - 1))]
+
+
+def test_a_stop_on_the_step_grid_does_not_underflow(test_data, tmp_path):
+    # INMARSAT 3-F5's epoch lies 858.740832 s before the start: the adaptive run from its
+    # epoch to the start took a last step whose t + (t_end - t) rounded to one ulp short
+    # of the start, then a 1.1e-13 s step: StepUnderflowError aborted the whole screen.
+    lines = (
+        gzip.decompress((test_data / "catalogs" / "celestrak_active_20231113.txt.gz").read_bytes())
+        .decode()
+        .splitlines()
+    )
+    names = {"INMARSAT 3-F5", "INMARSAT 4-F1"}
+    text = "".join(
+        "\n".join(lines[i : i + 3]) + "\n"
+        for i in range(len(lines) - 2)
+        if lines[i].strip() in names and lines[i + 1].startswith("1 ")
+    )
+    path = tmp_path / "geo.tle"
+    path.write_text(text)
+    objs = catalog.load(path)
+    assert len(objs) == 2
+    gap = seconds_between(objs.objects[0].state.epoch, np.datetime64("2023-11-13T12:00"))
+    assert gap == pytest.approx(858.740832, abs=1e-6)
+    result = screen_all(
+        objs,
+        rp.density.Msis(),
+        start="2023-11-13T12:00",
+        end="2023-11-14T12:00",
+        distance=5e3,
+    )
+    assert result.counts["screened"] == 2 and not result.skipped

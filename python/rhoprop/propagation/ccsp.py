@@ -158,7 +158,7 @@ def ccsp(
             correlated 1 / lambda2 from one update to the next, and the constant c of
             ``drag_sigma``: a ``PiecewiseConstant`` (its interval must be the update
             interval) or ``GaussMarkov`` is that kappa (correlation c = its own over the
-            mean update spacing); a ``TwoScale`` puts its fast term there (kappa scaled by
+            update interval, or the longest spacing of ``update_times``); a ``TwoScale`` puts its fast term there (kappa scaled by
             sqrt(1 - w)) and its slow one, a density scale that holds for days, into c
             (``drag_sigma`` raised to hypot(drag_sigma, sqrt(w r) s), s the model's
             density-weighted relative sigma over the initial orbit, r = :func:`slow_share`
@@ -351,11 +351,13 @@ def consider_settings(
     process = TwoScale() if kappa is None else kappa
     if not isinstance(process, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(process).__name__}")
-    # The nominal update interval: the given one, else the mean spacing of the updates.
+    # The nominal update interval: the given one, else the longest spacing of the updates
+    # (hourly for the default schedule, whose last interval may be shorter; a revolution
+    # for an eccentric orbit's apogee updates).
     spacing = (
         float(update_interval)
         if update_interval is not None
-        else float(update_times[-1]) / len(update_times)
+        else float(np.max(np.diff(update_times, prepend=0.0)))
     )
     scale, slow = 1.0, 0.0
     if isinstance(process, PiecewiseConstant):

@@ -111,7 +111,11 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
                 t,
             });
         }
-        if t + h > t_end || t_end - (t + h) < 1e-12 * t_end.abs().max(1.0) {
+        // The last step lands on t_end exactly (below): t + (t_end - t) can round to just
+        // short of t_end when t < t_end / 2, which left a step of 1e-13 s that underflowed
+        // (a GEO object whose epoch lay 858.740832 s before the screening start).
+        let last = t + h > t_end || t_end - (t + h) < 1e-12 * t_end.abs().max(1.0);
+        if last {
             h = t_end - t;
         }
         if h <= 1e-12 * t.abs().max(1.0) {
@@ -153,7 +157,7 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
         }
 
         // Accepted: FSAL stage f(t + h, y_new) goes to k[12].
-        let t_new = t + h;
+        let t_new = if last { t_end } else { t + h };
         rhs.eval(t_new, &y_new, &mut k[12])?;
         if next_out < outputs.len() && outputs[next_out] <= t_new {
             // Three extra stages for the dense output.
