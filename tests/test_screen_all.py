@@ -516,3 +516,41 @@ def test_a_stop_on_the_step_grid_does_not_underflow(test_data, tmp_path):
         distance=5e3,
     )
     assert result.counts["screened"] == 2 and not result.skipped
+
+
+def test_minima_at_the_window_ends_are_events():
+    # Two objects on circular orbits 1 m apart in radius and 100 m apart along-track: the
+    # lower one drifts 1.7 mm/s forward, so the distance grows all window when it starts
+    # ahead (closest approach: the window's start) and falls all window when it starts
+    # behind (closest approach after the window's end). Neither had an event (no sign
+    # change of r . v inside the window); both are now events flagged with their edge,
+    # without a short-encounter Pc.
+    start = np.datetime64("2024-03-01T00:00")
+    end = start + np.timedelta64(6, "h")
+    craft = rp.Spacecraft(2.2, 0.01)
+    r = 6778e3
+    x, u = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
+
+    def circular(radius: float, along: float) -> rp.OrbitState:
+        phi = along / radius  # > 0: ahead
+        v = np.sqrt(MU / radius)
+        pos = radius * (np.cos(phi) * x + np.sin(phi) * u)
+        return rp.OrbitState(start, pos, v * (-np.sin(phi) * x + np.cos(phi) * u))
+
+    a = circular(r, 0.0)
+    for along, edge in ((100.0, "start"), (-100.0, "end")):
+        b = circular(r - 1.0, along)
+        res = screen_all(
+            [(a, craft, "a"), (b, craft, "b")], MODEL, start=start, end=end, distance=5e3
+        )
+        assert [e.edge for e in res.events] == [edge], res.events
+        event = res.events[0]
+        assert event.tca == (start if edge == "start" else end)
+        gap = np.linalg.norm(event.relative_position)
+        if edge == "start":
+            assert gap == pytest.approx(np.hypot(1.0, 100.0), abs=0.01)
+        else:  # 6 h at 1.5 n (1 m) = 1.7 mm/s closes about 37 m
+            assert 55.0 < gap < 70.0
+        table = res.table()
+        assert table["edge"][0] == edge and np.isnan(table["pc"][0])
+        assert "window's " + edge in table["pc_note"][0]

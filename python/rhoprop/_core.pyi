@@ -329,10 +329,14 @@ def screen_approaches(
     zonal_degree: int,
     distance: float,
     progress: Callable[[int], object] | None = None,
-) -> tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32], _F64, _F64, _F64]:
+    window_start: bool = False,
+    window_end: bool = False,
+) -> tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32], _F64, _F64, _F64, npt.NDArray[np.uint8]]:
     """Minima of the distance within ``distance`` in candidate intervals (i, j, k), on the
     quintic Hermite interpolant with the gravity acceleration -> (i, j, t s, states of i
-    (m, 6), states of j (m, 6))."""
+    (m, 6), states of j (m, 6), edge: 0 inside, 1 at the window's start, 2 at its end;
+    the ends count where ``window_start`` / ``window_end`` say the grid's are the
+    window's own)."""
 
 def pc_pairs(
     members1: _F64, members2: _F64, hard_body_radius: float

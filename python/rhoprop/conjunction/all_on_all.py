@@ -14,7 +14,7 @@ import time
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -75,6 +75,11 @@ STAGE_UNITS = {
 }
 #: Events of one pair closer in time than this are one event (found from two chunks), s.
 SAME_EVENT = 1e-3
+
+
+#: The core's edge codes (``screen_approaches``): a minimum inside the window, at its
+#: start, at its end.
+EDGES: tuple[Literal["start", "end"] | None, ...] = (None, "start", "end")
 
 
 @dataclass(frozen=True)
@@ -144,7 +149,8 @@ class AllOnAllResult:
 
     def table(self) -> dict[str, np.ndarray]:
         """The events as columns (one row per event, in order): names and ids, TCA
-        (datetime64[ns] UTC), miss distance m, relative speed m/s, hard-body radius m,
+        (datetime64[ns] UTC), miss distance m, relative speed m/s, ``edge`` ("start" /
+        "end" for a minimum at the window's start / end, else ""), hard-body radius m,
         mixture Pc, Pc per model (``pc_<model name>``), the member Monte Carlo's mixed Pc
         (NaN where not run) and the Pc note."""
         ev = self.events
@@ -156,6 +162,7 @@ class AllOnAllResult:
             "tca": np.array([e.tca for e in ev], dtype="datetime64[ns]"),
             "miss_distance": np.array([e.miss_distance for e in ev], dtype=float),
             "relative_speed": np.array([e.relative_speed for e in ev], dtype=float),
+            "edge": np.array(["" if e.edge is None else e.edge for e in ev], dtype=object),
             "hard_body_radius": np.asarray(self.hard_body_radius, dtype=float),
             "pc": np.asarray(self.pc, dtype=float),
         }
@@ -702,7 +709,7 @@ class _Run:
             self._tell("refinement", int(done), total)
 
         c = cand.astype(np.uint32)
-        i, j, t, s1, s2 = _core.screen_approaches(
+        i, j, t, s1, s2, edge = _core.screen_approaches(
             chunk.times,
             chunk.pos,
             chunk.vel,
@@ -713,12 +720,15 @@ class _Run:
             self.cfg.degree,
             self.cfg.limit,
             tick if self.report is not None else None,
+            window_start=bool(chunk.times[0] == 0.0),
+            window_end=bool(chunk.times[-1] == self.cfg.span),
         )
         self._tell("refinement", total, total)
         out: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
         for m in range(len(t)):
             a, b = self.objs[int(i[m])], self.objs[int(j[m])]
-            event = _event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy())
+            where = EDGES[int(edge[m])]
+            event = _event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy(), where)
             out[int(i[m]), int(j[m])].append(event)
         return out
 

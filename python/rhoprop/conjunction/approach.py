@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 
@@ -65,6 +65,10 @@ class CloseApproach:
             m and m/s.
         name1, name2: the objects' names.
         id1, id2: the objects' ids (NORAD catalog numbers for catalog objects), or None.
+        edge: ``None`` for a minimum inside the window; ``"start"`` when the distance grows
+            from the window's start, ``"end"`` when it still falls at the window's end
+            (the closest approach may lie outside the window; ``tca`` is the window's
+            start or end). The all-on-all screen reports these.
     """
 
     tca: np.datetime64
@@ -76,6 +80,7 @@ class CloseApproach:
     name2: str = "object 2"
     id1: int | None = None
     id2: int | None = None
+    edge: Literal["start", "end"] | None = None
 
     @property
     def relative_position(self) -> np.ndarray:
@@ -267,7 +272,13 @@ class _Named(Protocol):
 
 
 def _event(
-    dyn: _Dynamics, a: _Named, b: _Named, tca: float, s1: np.ndarray, s2: np.ndarray
+    dyn: _Dynamics,
+    a: _Named,
+    b: _Named,
+    tca: float,
+    s1: np.ndarray,
+    s2: np.ndarray,
+    edge: Literal["start", "end"] | None = None,
 ) -> CloseApproach:
     rel = s2 - s1
     s1.flags.writeable = False
@@ -282,6 +293,7 @@ def _event(
         name2=b.name,
         id1=a.object_id,
         id2=b.object_id,
+        edge=edge,
     )
 
 

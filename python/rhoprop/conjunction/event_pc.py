@@ -368,7 +368,13 @@ def _object_moments(
 def _pc_one(
     ev: CloseApproach, moments: _Moments, name: str, e: int, hbr: float
 ) -> tuple[float, str]:
-    """The event's 2-D Pc under one model, and a note."""
+    """The event's 2-D Pc under one model, and a note (NaN where the short-encounter model
+    cannot be applied: a minimum at the window's edge, or no relative motion)."""
+    if ev.edge is not None:
+        return float("nan"), (
+            f"minimum at the window's {ev.edge}: no short-encounter Pc (the closest "
+            "approach may lie outside the window)"
+        )
     parts = []
     for side, state in ((0, ev.state1), (1, ev.state2)):
         off, cov, note = moments[name, e, side]
@@ -377,5 +383,8 @@ def _pc_one(
         basis = frames.rtn_basis(state[:3], state[3:])
         parts.append((state[:3] + basis.T @ off, state[3:], basis.T @ cov[:3, :3] @ basis, note))
     (r1, v1, c1, n1), (r2, v2, c2, n2) = parts
-    res = pc_2d(r1, v1, c1, r2, v2, c2, hbr)
+    try:
+        res = pc_2d(r1, v1, c1, r2, v2, c2, hbr)
+    except ValueError as err:  # e.g. no relative motion: the model does not apply
+        return float("nan"), f"{name}: no short-encounter Pc ({err})"
     return float(res.pc), n1 or n2

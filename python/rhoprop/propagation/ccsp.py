@@ -158,8 +158,9 @@ def ccsp(
             correlated 1 / lambda2 from one update to the next, and the constant c of
             ``drag_sigma``: a ``PiecewiseConstant`` (its interval must be the update
             interval) or ``GaussMarkov`` is that kappa (correlation c = its own over the
-            update interval, or the longest spacing of ``update_times``); a ``TwoScale`` puts its fast term there (kappa scaled by
-            sqrt(1 - w)) and its slow one, a density scale that holds for days, into c
+            update interval, or the longest spacing of ``update_times``); a ``TwoScale``
+            puts its fast term there (kappa scaled by sqrt(1 - w)) and its slow one, a
+            density scale that holds for days, into c
             (``drag_sigma`` raised to hypot(drag_sigma, sqrt(w r) s), s the model's
             density-weighted relative sigma over the initial orbit, r = :func:`slow_share`
             of the run's span: the constant that drives the slow term's along-track

@@ -26,7 +26,10 @@
 //! interval in LEO is h^6/46080 |r^(6)| ~ 1e-5 m, and the drag acceleration it leaves
 //! out moves it by ~|a_drag| h^2/64 (millimetres; centimetres just before decay), so no
 //! re-propagation is needed. The minima are the sign changes from - to + of
-//! f = r_rel . v_rel on 32 sub-intervals, bisected to 1e-12 of the interval.
+//! f = r_rel . v_rel on 32 sub-intervals, bisected to 1e-12 of the interval. At the
+//! window's own ends the distance has a minimum where it grows from the start (f >= 0)
+//! or still falls at the end (f < 0): those are minima too, marked as [`Edge`]s (the
+//! closest approach may lie outside the window).
 
 use crate::constants::{J2, MU, R_EARTH};
 use crate::dynamics::{zonal_acceleration, MAX_ZONAL_DEGREE};
@@ -324,6 +327,24 @@ pub struct Approach {
     pub t: f64,
     pub state_i: [f64; 6],
     pub state_j: [f64; 6],
+    pub edge: Edge,
+}
+
+/// Where a minimum lies: inside the window (r . v changes sign from - to +), or at one of
+/// its ends, where the distance grows from the start or still falls at the end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Edge {
+    Interior = 0,
+    Start = 1,
+    End = 2,
+}
+
+/// Which ends of the tracks' grid are the screening window's own (a chunk of a longer
+/// window has neither or one), where a minimum at the end is reported as an [`Edge`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct WindowEnds {
+    pub start: bool,
+    pub end: bool,
 }
 
 /// Gravity acceleration (m/s^2) at inertial position `p` (m): two-body, J2 and the zonal
@@ -391,6 +412,7 @@ pub fn approaches(
     cand: (&[u32], &[u32], &[u32]),
     degree: u8,
     distance: f64,
+    ends: WindowEnds,
     progress: &Progress,
 ) -> Result<Vec<Approach>, CoreError> {
     let (ci, cj, ck) = cand;
@@ -408,7 +430,14 @@ pub fn approaches(
         ));
     }
     positive("distance", distance)?;
-    minima(tracks, cand, &|p| gravity(p, degree), distance, progress)
+    minima(
+        tracks,
+        cand,
+        &|p| gravity(p, degree),
+        distance,
+        ends,
+        progress,
+    )
 }
 
 /// [`approaches`] with the acceleration at the samples given by `accel`.
@@ -417,6 +446,7 @@ fn minima(
     cand: (&[u32], &[u32], &[u32]),
     accel: &(dyn Fn([f64; 3]) -> [f64; 3] + Sync),
     distance: f64,
+    window: WindowEnds,
     progress: &Progress,
 ) -> Result<Vec<Approach>, CoreError> {
     let nt = tracks.times.len();
@@ -454,7 +484,22 @@ fn minima(
                     .sum::<f64>()
             };
             let mut out = Vec::new();
+            let at = |s: f64, edge: Edge| {
+                let (x, y) = state(s);
+                let miss = norm(sub([y[0], y[1], y[2]], [x[0], x[1], x[2]]));
+                (miss <= distance).then_some(Approach {
+                    i: i as u32,
+                    j: j as u32,
+                    t: t0 + s * h,
+                    state_i: x,
+                    state_j: y,
+                    edge,
+                })
+            };
             let mut prev = f(0.0);
+            if window.start && k == 0 && prev >= 0.0 {
+                out.extend(at(0.0, Edge::Start));
+            }
             for m in 1..=ROOT_SAMPLES {
                 let (lo0, hi0) = ((m - 1) as f64, m as f64);
                 let next = f(hi0 / ROOT_SAMPLES as f64);
@@ -468,20 +513,12 @@ fn minima(
                             hi = mid;
                         }
                     }
-                    let s = 0.5 * (lo + hi);
-                    let (x, y) = state(s);
-                    let miss = norm(sub([y[0], y[1], y[2]], [x[0], x[1], x[2]]));
-                    if miss <= distance {
-                        out.push(Approach {
-                            i: i as u32,
-                            j: j as u32,
-                            t: t0 + s * h,
-                            state_i: x,
-                            state_j: y,
-                        });
-                    }
+                    out.extend(at(0.5 * (lo + hi), Edge::Interior));
                 }
                 prev = next;
+            }
+            if window.end && k + 2 == nt && prev < 0.0 {
+                out.extend(at(1.0, Edge::End));
             }
             progress.add(1);
             Ok(out)
@@ -830,7 +867,15 @@ mod tests {
             let r3 = norm(p).powi(3);
             p.map(|x| -MU * x / r3)
         };
-        let found = minima(&tracks, (&c.i, &c.j, &c.k), &kepler, 20e3, &p).unwrap();
+        let found = minima(
+            &tracks,
+            (&c.i, &c.j, &c.k),
+            &kepler,
+            20e3,
+            WindowEnds::default(),
+            &p,
+        )
+        .unwrap();
         assert!(found.len() >= 36, "{}", found.len());
         for a in &found {
             let (oi, oj) = (orbits[a.i as usize], orbits[a.j as usize]);
@@ -854,6 +899,61 @@ mod tests {
             assert!((miss - best).abs() < 1e-3, "miss {miss} vs {best}");
             assert!((a.t - tb).abs() < 1e-5, "tca {} vs {tb}", a.t);
         }
+    }
+
+    #[test]
+    fn minima_at_the_window_ends_are_reported_as_edges() {
+        // Two pairs that stay within the distance all window: 50 m apart radially and 100 m
+        // along-track at the start, drifting apart (the closest approach is the start), and a
+        // pair closing along-track to the end. Inside the window r . v never changes sign,
+        // so neither had an event; as the window's ends they are Edge::Start / Edge::End.
+        let (step, t_end) = (60.0, 6000.0);
+        let a = 7e6;
+        let gap = 1000.0 / (a + 50.0);
+        let orbits = [
+            Orbit::circle(a, 0.9, 0.3, 0.1),
+            Orbit::circle(a + 50.0, 0.9, 0.3, 0.1 - 100.0 / (a + 50.0)),
+            Orbit::circle(a, 1.2, 2.0, 0.5),
+            Orbit::circle(a + 50.0, 1.2, 2.0, 0.5 + gap),
+        ];
+        let times = owned_times(t_end, step);
+        let owned = Owned::new(times.clone(), &sample(&orbits, &times));
+        let tracks = owned.tracks();
+        let p = Progress::default();
+        let c = candidates(&tracks, &settings(20e3), &p).unwrap();
+        let kepler = |p: [f64; 3]| {
+            let r3 = norm(p).powi(3);
+            p.map(|x| -MU * x / r3)
+        };
+        let cand = (c.i.as_slice(), c.j.as_slice(), c.k.as_slice());
+        let run = |ends| minima(&tracks, cand, &kepler, 20e3, ends, &p).unwrap();
+        let inner = run(WindowEnds::default());
+        assert!(inner.is_empty(), "{inner:?}");
+        let found = run(WindowEnds {
+            start: true,
+            end: true,
+        });
+        assert_eq!(found.len(), 2, "{found:?}");
+        let d = |o: usize, q: usize, t: f64| norm(sub(orbits[q].at(t).0, orbits[o].at(t).0));
+        let miss = |x: &Approach| {
+            norm(sub(
+                [x.state_j[0], x.state_j[1], x.state_j[2]],
+                [x.state_i[0], x.state_i[1], x.state_i[2]],
+            ))
+        };
+        let (first, last) = (&found[0], &found[1]);
+        assert_eq!(
+            (first.i, first.j, first.edge, first.t),
+            (0, 1, Edge::Start, 0.0)
+        );
+        assert!((miss(first) - d(0, 1, 0.0)).abs() < 1e-6, "{}", miss(first));
+        assert!(d(0, 1, 0.0) < 112.0 && d(0, 1, step) > d(0, 1, 0.0));
+        assert_eq!(
+            (last.i, last.j, last.edge, last.t),
+            (2, 3, Edge::End, t_end)
+        );
+        assert!((miss(last) - d(2, 3, t_end)).abs() < 1e-3, "{}", miss(last));
+        assert!(d(2, 3, t_end) < d(2, 3, t_end - step));
     }
 
     #[test]

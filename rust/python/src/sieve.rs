@@ -25,6 +25,7 @@ type ApproachesOut<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<u8>>,
 );
 
 /// A C-contiguous (n, nt, 3) array as rows of 3.
@@ -132,11 +133,13 @@ pub fn screen_candidates<'py>(
 
 /// The minima of the distance within `distance` in candidate intervals (i, j, k) of
 /// tracks as for `screen_candidates`, on the quintic Hermite interpolant with the gravity
-/// acceleration of zonal degree `zonal_degree`. Returns (i, j, t s, states of i (m, 6),
-/// states of j (m, 6)) in the candidates' order. GIL released; Ctrl-C cancels it.
+/// acceleration of zonal degree `zonal_degree`. `window_start` / `window_end`: the grid's
+/// first / last time is the screening window's own, where a minimum at the end counts.
+/// Returns (i, j, t s, states of i (m, 6), states of j (m, 6), edge: 0 inside the window,
+/// 1 at its start, 2 at its end) in the candidates' order. GIL released; Ctrl-C cancels it.
 #[pyfunction]
 #[pyo3(signature = (times, positions, velocities, samples, i, j, k, zonal_degree, distance,
-    progress=None))]
+    progress=None, window_start=false, window_end=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn screen_approaches<'py>(
     py: Python<'py>,
@@ -150,6 +153,8 @@ pub fn screen_approaches<'py>(
     zonal_degree: u8,
     distance: f64,
     progress: Option<Py<PyAny>>,
+    window_start: bool,
+    window_end: bool,
 ) -> PyResult<ApproachesOut<'py>> {
     let g = Grid::new(&times, &samples, &positions, &velocities, None)?;
     let tracks = g.tracks(&positions, &velocities)?;
@@ -159,7 +164,11 @@ pub fn screen_approaches<'py>(
         k.as_array().to_vec(),
     );
     let found = long_call(py, progress, |p| {
-        sieve::approaches(&tracks, (&ci, &cj, &ck), zonal_degree, distance, p)
+        let ends = sieve::WindowEnds {
+            start: window_start,
+            end: window_end,
+        };
+        sieve::approaches(&tracks, (&ci, &cj, &ck), zonal_degree, distance, ends, p)
     })?;
     let states = |f: &dyn Fn(&sieve::Approach) -> [f64; 6]| {
         Array2::from_shape_fn((found.len(), 6), |(m, q)| f(&found[m])[q])
@@ -183,5 +192,10 @@ pub fn screen_approaches<'py>(
             .into_pyarray(py),
         si.into_pyarray(py),
         sj.into_pyarray(py),
+        found
+            .iter()
+            .map(|a| a.edge as u8)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
     ))
 }
