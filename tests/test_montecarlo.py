@@ -401,3 +401,15 @@ def test_a_too_fine_field_resolution_is_refused_before_allocating():
     band = rp.density.altitude_band(state.position, state.velocity)
     with pytest.raises(ValueError, match=r"is too fine: the field would hold about 9\.7 GB"):
         model.field(state.epoch, "2002-09-07T02:00", altitude_range=band)
+
+
+@pytest.mark.parametrize("area_to_mass", [1e6, 1e10])
+def test_members_the_step_cannot_carry_are_an_error_not_survivors(setup, area_to_mass):
+    # Cd*A/m of 1e6-1e10 m^2/kg: a drag of 1e2-1e6 m/s^2 at 400 km, which the 180-s RK8
+    # step flung out to 1e10-1e12 m, counted "not decayed". Drag cannot add energy: an
+    # error naming the member and the remedy.
+    state, _ = setup
+    craft = rp.Spacecraft(1.0, area_to_mass)
+    model = rp.scenarios.benchmark_exponential(0.2)
+    with pytest.raises(ValueError, match=r"member \d+ is invalid: its orbital energy rose"):
+        rp.monte_carlo(state, craft, model, 86400.0, n=8, progress=False, output_step=None)

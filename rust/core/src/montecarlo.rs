@@ -4,7 +4,8 @@
 //! (structure of arrays), batches in parallel with rayon, each batch run through the SIMD
 //! [`dispatch`]. Memory grows with members x output times, never with steps.
 
-use crate::decay::{crossing, lane_step, may_cross_lanes};
+use crate::constants::R_EARTH;
+use crate::decay::{crossing, energy_rose_lanes, lane_step, may_cross_lanes};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{positive, CoreError};
@@ -311,6 +312,8 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
 
         let mut members = Members {
             cfg,
+            first,
+            h,
             lanes,
             nt,
             streams,
@@ -333,10 +336,18 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
     }
 }
 
+/// Altitude (m, over the equatorial radius) below which a member whose step failed (its
+/// energy rose) is counted decayed at the step's start: the drag that breaks a 180-s step
+/// there ends the orbit within minutes anyway.
+pub const RUNAWAY_DECAY_ALTITUDE: f64 = 200e3;
+
 /// The members' side of a batch run: kappa nodes before steps, decay after them, the
 /// record at outputs.
 struct Members<'a, const W: usize> {
     cfg: &'a MonteCarloConfig,
+    /// Index of the batch's first member, and the integration step, s (for errors).
+    first: usize,
+    h: f64,
     /// Lanes that hold real members.
     lanes: usize,
     /// Output times.
@@ -409,6 +420,36 @@ impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> fo
                 dynamics.drag[l] = 0.0;
                 dynamics.generation += 1;
             }
+        }
+        // Drag only takes energy: a live lane whose energy rose in a step was not
+        // integrated (a drag too strong for the fixed step flung it out; it was counted a
+        // survivor 5e10 m away). Below RUNAWAY_DECAY_ALTITUDE its reentry is at hand: it
+        // decays at the step's start. Higher up the drag is absurd for the step: an error.
+        let rose = energy_rose_lanes(t0, &prev, t, y);
+        for l in 0..self.lanes {
+            if !rose[l] || self.frozen[l].is_some() {
+                continue;
+            }
+            let start: [f64; 6] = std::array::from_fn(|c| prev[c][l]);
+            let radius = (start[0] * start[0] + start[1] * start[1] + start[2] * start[2]).sqrt();
+            if radius - R_EARTH < RUNAWAY_DECAY_ALTITUDE {
+                self.frozen[l] = Some(start);
+                self.out.decay[l] = t0;
+                dynamics.drag[l] = 0.0;
+                dynamics.generation += 1;
+                continue;
+            }
+            return Err(CoreError::rejected(
+                format!("member {}", self.first + l),
+                format!(
+                    "its orbital energy rose in the step ending at t = {t} s, {:.0} km up, \
+                     which drag cannot do: its drag (Cd*A/m = {:.3e} m^2/kg) is too strong \
+                     for the fixed step of {} s; lower Cd*A/m or drag_sigma, or the step",
+                    (radius - R_EARTH) / 1e3,
+                    dynamics.drag[l],
+                    self.h
+                ),
+            ));
         }
         self.last = (t, *y);
         Ok(if self.frozen[..self.lanes].iter().all(Option::is_some) {
@@ -521,6 +562,25 @@ mod tests {
             record_density: true,
             drag_sigma: 0.0,
         }
+    }
+
+    #[test]
+    fn a_member_the_step_cannot_carry_is_an_error_not_a_survivor() {
+        // Cd*A/m = 1e8 m^2/kg: a drag acceleration of ~1e4 m/s^2 at 400 km, which the
+        // 180-s RK8 step flung out to ~1e10 m, counted "not decayed". Its energy rises in a
+        // step, which drag cannot do: an error naming the member.
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
+        let mut cfg = config(4, KappaProcess::Constant);
+        cfg.problem.drag = 1e8;
+        let e = monte_carlo(&atm, &cfg, &Progress::default()).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("member 0 is invalid: its orbital energy rose"),
+            "{e}"
+        );
+        // A plausible drag runs as before.
+        cfg.problem.drag = 3.0912 * 0.0015;
+        assert!(monte_carlo(&atm, &cfg, &Progress::default()).is_ok());
     }
 
     #[test]
