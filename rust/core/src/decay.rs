@@ -95,25 +95,19 @@ pub fn may_cross_lanes<const W: usize>(
     out
 }
 
-/// Lanes whose specific orbital energy v^2/2 - mu/r rose in a step from `prev` at `t0` to
-/// `y` at `t1` (forward; fell, backward) by more than 1e-3 of its size, or became
-/// non-finite: drag only takes energy and the rest of the field (J2..Jn, the Sun and Moon,
-/// the tesseral terms) moves it by less than 1e-6 per step, so such a lane was not
-/// integrated.
-pub fn energy_rose_lanes<const W: usize>(
-    t0: f64,
-    prev: &State<W>,
-    t1: f64,
-    y: &State<W>,
-) -> [bool; W] {
+/// Lanes bound at `prev` (specific energy v^2/2 - mu/r < 0) and unbound (energy >= 0)
+/// or non-finite at `y`, one step later: neither drag nor the rest of the field (J2..Jn,
+/// the Sun and Moon, the tesseral terms) unbinds an orbit in a step, so such a lane was
+/// not integrated (a drag far too strong for the step flings it out). A fixed step's
+/// ordinary energy error (a HEO's perigee pass at 180 s) never gets there.
+pub fn unbound_lanes<const W: usize>(prev: &State<W>, y: &State<W>) -> [bool; W] {
     let energy = |s: &State<W>, l: usize| {
         let r = (s[0][l] * s[0][l] + s[1][l] * s[1][l] + s[2][l] * s[2][l]).sqrt();
         0.5 * (s[3][l] * s[3][l] + s[4][l] * s[4][l] + s[5][l] * s[5][l]) - MU / r
     };
-    let sign = if t1 >= t0 { 1.0 } else { -1.0 };
     std::array::from_fn(|l| {
         let (e0, e1) = (energy(prev, l), energy(y, l));
-        !e1.is_finite() || sign * (e1 - e0) > 1e-3 * e0.abs()
+        e0 < 0.0 && (e1 >= 0.0 || e1.is_nan())
     })
 }
 

@@ -5,7 +5,7 @@
 //! [`dispatch`]. Memory grows with members x output times, never with steps.
 
 use crate::constants::R_EARTH;
-use crate::decay::{crossing, energy_rose_lanes, lane_step, may_cross_lanes};
+use crate::decay::{crossing, lane_step, may_cross_lanes, unbound_lanes};
 use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, Perturbation, State};
 use crate::error::{positive, CoreError};
@@ -337,7 +337,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> Kernel for Batch<'_, A, W> {
 }
 
 /// Altitude (m, over the equatorial radius) below which a member whose step failed (its
-/// energy rose) is counted decayed at the step's start: the drag that breaks a 180-s step
+/// orbit came out unbound) is counted decayed at the step's start: the drag that breaks a 180-s step
 /// there ends the orbit within minutes anyway.
 pub const RUNAWAY_DECAY_ALTITUDE: f64 = 200e3;
 
@@ -421,13 +421,13 @@ impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> fo
                 dynamics.generation += 1;
             }
         }
-        // Drag only takes energy: a live lane whose energy rose in a step was not
-        // integrated (a drag too strong for the fixed step flung it out; it was counted a
-        // survivor 5e10 m away). Below RUNAWAY_DECAY_ALTITUDE its reentry is at hand: it
-        // decays at the step's start. Higher up the drag is absurd for the step: an error.
-        let rose = energy_rose_lanes(t0, &prev, t, y);
+        // A live lane whose bound orbit came out unbound from a step was not integrated (a
+        // drag too strong for the fixed step flung it out; it was counted a survivor 5e10 m
+        // away). Below RUNAWAY_DECAY_ALTITUDE its reentry is at hand: it decays at the
+        // step's start. Higher up the drag is absurd for the step: an error.
+        let flung = unbound_lanes(&prev, y);
         for l in 0..self.lanes {
-            if !rose[l] || self.frozen[l].is_some() {
+            if !flung[l] || self.frozen[l].is_some() {
                 continue;
             }
             let start: [f64; 6] = std::array::from_fn(|c| prev[c][l]);
@@ -442,9 +442,10 @@ impl<A: Atmosphere + ?Sized, const W: usize> StepHooks<W, Dynamics<'_, A, W>> fo
             return Err(CoreError::rejected(
                 format!("member {}", self.first + l),
                 format!(
-                    "its orbital energy rose in the step ending at t = {t} s, {:.0} km up, \
-                     which drag cannot do: its drag (Cd*A/m = {:.3e} m^2/kg) is too strong \
-                     for the fixed step of {} s; lower Cd*A/m or drag_sigma, or the step",
+                    "its orbit came out unbound from the step ending at t = {t} s, {:.0} km \
+                     up, which drag cannot do: its drag (Cd*A/m = {:.3e} m^2/kg) is too \
+                     strong for the fixed step of {} s; lower Cd*A/m or drag_sigma, or the \
+                     step",
                     (radius - R_EARTH) / 1e3,
                     dynamics.drag[l],
                     self.h
@@ -567,15 +568,15 @@ mod tests {
     #[test]
     fn a_member_the_step_cannot_carry_is_an_error_not_a_survivor() {
         // Cd*A/m = 1e8 m^2/kg: a drag acceleration of ~1e4 m/s^2 at 400 km, which the
-        // 180-s RK8 step flung out to ~1e10 m, counted "not decayed". Its energy rises in a
-        // step, which drag cannot do: an error naming the member.
+        // 180-s RK8 step flung out to ~1e10 m, counted "not decayed". Its orbit comes out
+        // unbound from a step, which drag cannot do: an error naming the member.
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
         let mut cfg = config(4, KappaProcess::Constant);
         cfg.problem.drag = 1e8;
         let e = monte_carlo(&atm, &cfg, &Progress::default()).unwrap_err();
         assert!(
             e.to_string()
-                .starts_with("member 0 is invalid: its orbital energy rose"),
+                .starts_with("member 0 is invalid: its orbit came out unbound"),
             "{e}"
         );
         // A plausible drag runs as before.
