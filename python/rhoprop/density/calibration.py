@@ -301,13 +301,6 @@ def _orbit_relative_sigma(
     return activity
 
 
-def corrected_residuals(fs: FamilySamples, fit: FamilyFit, orbits: ObservedOrbits) -> np.ndarray:
-    """(n,) ln(observed / corrected model orbit average)."""
-    corr = np.log(fit.scale) + fit.f107_exponent * np.log(fs.f107 / fs.f107a)
-    out: np.ndarray = _log_ratio(fs, orbits) - corr
-    return out
-
-
 def empirical_correlation(
     z: list[np.ndarray], orbits: ObservedOrbits
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
