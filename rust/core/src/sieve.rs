@@ -850,6 +850,12 @@ mod tests {
         }
     }
 
+    /// Two-body acceleration at `p`, the exact orbits' own (m/s^2).
+    fn kepler(p: [f64; 3]) -> [f64; 3] {
+        let r3 = norm(p).powi(3);
+        p.map(|x| -MU * x / r3)
+    }
+
     #[test]
     fn approaches_are_the_minima_of_the_exact_orbits() {
         // Pairs built to meet (Orbit::partner) at known times and miss distances, sampled
@@ -863,10 +869,6 @@ mod tests {
         let tracks = owned.tracks();
         let p = Progress::default();
         let c = candidates(&tracks, &settings(20e3), &p).unwrap();
-        let kepler = |p: [f64; 3]| {
-            let r3 = norm(p).powi(3);
-            p.map(|x| -MU * x / r3)
-        };
         let found = minima(
             &tracks,
             (&c.i, &c.j, &c.k),
@@ -921,10 +923,6 @@ mod tests {
         let tracks = owned.tracks();
         let p = Progress::default();
         let c = candidates(&tracks, &settings(20e3), &p).unwrap();
-        let kepler = |p: [f64; 3]| {
-            let r3 = norm(p).powi(3);
-            p.map(|x| -MU * x / r3)
-        };
         let cand = (c.i.as_slice(), c.j.as_slice(), c.k.as_slice());
         let run = |ends| minima(&tracks, cand, &kepler, 20e3, ends, &p).unwrap();
         let inner = run(WindowEnds::default());
