@@ -1,11 +1,19 @@
 """Catalogs: element sets in (``elements``: TLE and CCSDS OMM through ``sgp4``), states
 and ballistic coefficients fitted to them (``fit``), their initial covariance
 (``covariance``: published TLE accuracy), runs over many objects to common epochs, locally
-or on Dask (``run``), reentry windows (``reentry_windows``) and files out (``export``:
+or on Dask (``run``), reentry windows (``reentry_windows``), the decay of element-set histories as a density
+sensor (``density_sensor``) and files out (``export``:
 CCSDS OEM and a Parquet summary)."""
 
 from ..io import summary_table, write_oem, write_summary
 from .covariance import TleAccuracy, tle_accuracy, tle_covariance
+from .density_sensor import (
+    DecayIntervals,
+    corrected_model,
+    decay_intervals,
+    drag_parameters,
+    estimate_density_correction,
+)
 from .elements import (
     HISTORY_DAYS,
     SGP4_RHO0,
@@ -26,12 +34,17 @@ __all__ = [
     "Catalog",
     "CatalogObject",
     "CatalogResult",
+    "DecayIntervals",
     "FitResult",
     "ReentryResult",
     "TleAccuracy",
     "bstar_prior",
     "common_epochs",
+    "corrected_model",
+    "decay_intervals",
     "drag_parameter_from_bstar",
+    "drag_parameters",
+    "estimate_density_correction",
     "fit_element_set",
     "fit_element_sets",
     "fit_objects",

@@ -23,6 +23,7 @@ from . import atlas, calibrated
 from ._inputs import altitude_band
 from .atlas import Atlas, FieldMemory, field_memory, set_memory_budget
 from .calibrated import PRESETS, Preset
+from .catalog_corrected import CatalogCorrected, DensityCorrection
 from .correction import MeanCorrection
 from .exponential import Exponential
 from .field import DensityField, FieldResolution
@@ -43,6 +44,8 @@ __all__ = [
     "PRESETS",
     "ActivitySigma",
     "Atlas",
+    "CatalogCorrected",
+    "DensityCorrection",
     "DensityField",
     "DensityModel",
     "DriverUncertainty",
