@@ -1,9 +1,9 @@
 """Catalogs: element sets in (``elements``: TLE and CCSDS OMM through ``sgp4``), states
 and ballistic coefficients fitted to them (``fit``), their initial covariance
 (``covariance``: published TLE accuracy), runs over many objects to common epochs, locally
-or on Dask (``run``), reentry windows (``reentry_windows``), the decay of element-set histories as a density
-sensor (``density_sensor``) and files out (``export``:
-CCSDS OEM and a Parquet summary)."""
+or on Dask (``run``), reentry windows (``reentry_windows``), the decay of element-set
+histories as a density sensor (``density_sensor``) and files out (``export``: CCSDS OEM
+and a Parquet summary)."""
 
 from ..io import summary_table, write_oem, write_summary
 from .covariance import TleAccuracy, tle_accuracy, tle_covariance
