@@ -154,8 +154,8 @@ def test_pc_per_model_and_mixture_follow_from_the_ccsp_moments(shell):
     objs = objs[:150]
     end = add_seconds(start, 6 * 3600.0)
     models = {
-        "low": MODEL,
-        "high": rp.density.Exponential(1.6 * MODEL.rho0, MODEL.h0, MODEL.scale_height),
+        "low 1.0x": MODEL,
+        "High-1.6x": rp.density.Exponential(1.6 * MODEL.rho0, MODEL.h0, MODEL.scale_height),
     }
     res = screen_all(
         objs,
@@ -163,10 +163,19 @@ def test_pc_per_model_and_mixture_follow_from_the_ccsp_moments(shell):
         start=start,
         end=end,
         distance=30e3,
-        weights={"low": 3.0, "high": 1.0},
+        weights={"low 1.0x": 3.0, "High-1.6x": 1.0},
         progress=False,
     )
-    assert res.models == ["low", "high"] and np.allclose(res.weights, [0.75, 0.25])
+    assert res.models == ["low 1.0x", "High-1.6x"] and np.allclose(res.weights, [0.75, 0.25])
+    # The event table as columns and as a DataFrame: model columns named for Parquet.
+    table = res.table()
+    np.testing.assert_array_equal(table["pc_low_1_0x"], res.pc_models[:, 0])
+    np.testing.assert_array_equal(table["pc_high_1_6x"], res.pc_models[:, 1])
+    pytest.importorskip("pandas")
+    frame = res.to_pandas()
+    assert list(frame.columns) == list(table) and len(frame) == len(res.events)
+    np.testing.assert_array_equal(frame["pc"].to_numpy(), res.pc)
+    assert (frame["tca"].to_numpy() == table["tca"]).all()
     assert len(res.events) >= 3
     assert np.isfinite(res.pc_models).all()
     assert np.allclose(res.pc, res.pc_models @ res.weights, rtol=1e-12, atol=0)
@@ -186,6 +195,14 @@ def test_pc_per_model_and_mixture_follow_from_the_ccsp_moments(shell):
     direct = pc_2d(e.state1[:3], e.state1[3:], c1, e.state2[:3], e.state2[3:], c2, hbr).pc
     # Covariances 30 s from TCA and 300-s interpolation: a few per cent on Pc.
     assert res.pc_models[0, 0] == pytest.approx(direct, rel=0.1)
+
+
+def test_model_columns_are_plain_names():
+    from rhoprop.conjunction.all_on_all import model_column
+
+    assert model_column("NRLMSIS 2.1") == "pc_nrlmsis_2_1"
+    assert model_column("JB2008") == "pc_jb2008"
+    assert model_column(" -- ") == "pc_model"
 
 
 def test_radii_table_and_hard_body_radius(shell):

@@ -136,6 +136,7 @@ def decay_intervals(
     model: SampledModel,
     *,
     through: EpochLike | None = None,
+    since: EpochLike | None = None,
 ) -> DecayIntervals:
     """The decay measurements of every object of ``objects`` (several element sets per
     NORAD id: a history, e.g. ``catalog.load(path, history="each")``) with ``model``'s
@@ -145,6 +146,7 @@ def decay_intervals(
         objects: catalog objects carrying their element sets.
         model: the sampled density model to measure against.
         through: only intervals that end at or before this UTC epoch (default: all).
+        since: only intervals that start at or after this UTC epoch (default: all).
 
     Returns:
         :class:`DecayIntervals`, ordered by start.
@@ -152,6 +154,7 @@ def decay_intervals(
     if not isinstance(model, SampledModel):
         raise TypeError(f"model must be a sampled density model, got {type(model).__name__}")
     limit = None if through is None else to_datetime64(through, "through")
+    first = None if since is None else to_datetime64(since, "since")
     by_id: dict[int, list[object]] = {}
     for obj in objects:
         sat = obj.satrec()
@@ -176,6 +179,8 @@ def decay_intervals(
             )
     if limit is not None:
         rows = [r for r in rows if from_jd(r[3]) <= limit]
+    if first is not None:
+        rows = [r for r in rows if from_jd(r[2]) >= first]
     rows.sort(key=lambda r: r[2])
     units = _units(rows, model) if rows else np.zeros((0, 2))
     return DecayIntervals(

@@ -9,12 +9,13 @@ docs/conjunction.md, "All-on-all screening"."""
 from __future__ import annotations
 
 import itertools
+import re
 import threading
 import time
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from ..progress import ProgressBar
 from ..propagation import OrbitState
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import check_model
+from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
 from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
 from .approach import _models_for as models_for
@@ -49,6 +51,9 @@ from .screening import (
     _Window,
     window_span,
 )
+
+if TYPE_CHECKING:
+    import pandas
 
 __all__ = ["ALL_ON_ALL_STAGES", "DEFAULT_MAX_MEMORY", "AllOnAllResult", "screen_all"]
 
@@ -151,8 +156,10 @@ class AllOnAllResult:
         """The events as columns (one row per event, in order): names and ids, TCA
         (datetime64[ns] UTC), miss distance m, relative speed m/s, ``edge`` ("start" /
         "end" for a minimum at the window's start / end, else ""), hard-body radius m,
-        mixture Pc, Pc per model (``pc_<model name>``), the member Monte Carlo's mixed Pc
-        (NaN where not run) and the Pc note."""
+        mixture Pc, Pc per model (``pc_<model>``, the model's name in lower case with every
+        run of other characters than letters and digits as one ``_``: ``pc_nrlmsis_2_1``,
+        names a Parquet reader or pandas' attribute access takes), the member Monte
+        Carlo's mixed Pc (NaN where not run) and the Pc note."""
         ev = self.events
         cols: dict[str, np.ndarray] = {
             "name1": np.array([e.name1 for e in ev], dtype=object),
@@ -167,10 +174,27 @@ class AllOnAllResult:
             "pc": np.asarray(self.pc, dtype=float),
         }
         for k, name in enumerate(self.models):
-            cols[f"pc_{name}"] = np.asarray(self.pc_models[:, k], dtype=float)
+            column = model_column(name)
+            while column in cols:  # two names alike once lower-cased and joined
+                column += "_"
+            cols[column] = np.asarray(self.pc_models[:, k], dtype=float)
         cols["pc_monte_carlo"] = np.asarray(self.pc_monte_carlo, dtype=float)
         cols["pc_note"] = np.array(self.pc_notes, dtype=object)
         return cols
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """:meth:`table` as a ``pandas.DataFrame``, one row per event (needs pandas, e.g.
+        the ``[xarray]`` extra), as ``CatalogResult.to_pandas()`` gives its objects."""
+        pd = optional_import("pandas", "AllOnAllResult.to_pandas()")
+        frame: pandas.DataFrame = pd.DataFrame(self.table())
+        return frame
+
+
+def model_column(name: str) -> str:
+    """The Pc column of a model named ``name``: ``pc_`` and the name in lower case, each
+    run of characters other than ASCII letters and digits one ``_``."""
+    slug = re.sub(r"[^a-z0-9]+", "_", name.lower()).strip("_")
+    return f"pc_{slug or 'model'}"
 
 
 @dataclass

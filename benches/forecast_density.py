@@ -1,0 +1,107 @@
+"""The forecast's density error after the epoch, measured by the catalog itself.
+
+For start days S (every ``--every`` days of ``$RHOPROP_TEST_DATA/history_2026``), NRLMSIS
+2.1 is run on the space weather as known at S (``SpaceWeather.as_of(S, ...)``, one rule
+per ``--rules`` entry). The decay of every LEO object's element sets from S - 10 days to
+S + 3.5 days (``rhoprop.catalog.decay_intervals``; hindsight after S) measures that
+model's daily error c(d) = ln(observed / model) (``estimate_density_correction``). A
+prediction from S carries the density ratio of the days before S in each object's fitted
+Cd*A/m, so what hurts it is the change after S: delta_k = c(day k after S) - c(the day
+before S), k = 1, 2, 3. Printed per start and over all starts: mean (a bias of the
+forecast) and RMS of delta_k, per rule. The rule with the smallest RMS forecasts the
+density's level best for predictions started at S.
+
+Run:  python benches/forecast_density.py [--rules "1,1,2;1,1,1"] [--every 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import rhoprop as rp
+from machine import describe, info
+from rhoprop import catalog
+from rhoprop.density import Msis
+
+HISTORY = "history_2026/celestrak_stations_weather_amateur_20260228-20260430.txt.gz"
+
+
+def deltas(sets: list, start: np.datetime64, rule: dict) -> np.ndarray | None:
+    """delta_k (k = 1..3) of one start under one as_of rule, or None where a day lacks."""
+    model = Msis("2.1", space_weather=rp.SpaceWeather().as_of(start, **rule))
+    later = start + np.timedelta64(3 * 86400 + 43200, "s")
+    since = start - np.timedelta64(10, "D")
+    iv = catalog.decay_intervals(sets, model, through=later, since=since)
+    c = catalog.estimate_density_correction(iv, later)
+    day0 = start.astype("datetime64[D]")
+    level = dict(zip(c.days, c.level, strict=True))
+    want = [day0 - np.timedelta64(1, "D")] + [day0 + np.timedelta64(k, "D") for k in range(3)]
+    if not all(d in level for d in want):
+        return None
+    return np.array([level[d] - level[want[0]] for d in want[1:]])
+
+
+def main() -> None:
+    print(describe())
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--first", default="2026-03-06")
+    parser.add_argument("--last", default="2026-04-22")
+    parser.add_argument("--every", type=int, default=2)
+    parser.add_argument(
+        "--rules",
+        default="1,1,2",
+        help="as_of rules F107_DAYS,AP_DAYS,AP_RELAX_DAYS separated by ';' (1,1,2: the "
+        "library's default)",
+    )
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    args = parser.parse_args()
+    data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data"))
+    warnings.simplefilter("ignore", rp.errors.PredictedDriversWarning)
+    sets = catalog.load(data / HISTORY, history="each", errors="record").objects
+    rules = {}
+    for text in args.rules.split(";"):
+        f, a, r = text.split(",")
+        rules[text] = {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+    starts = np.arange(
+        np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
+    )
+    print("\n| start | rule | delta day 1 / 2 / 3 |\n| --- | --- | --- |")
+    found: dict[str, list[np.ndarray]] = {k: [] for k in rules}
+    for start in starts:
+        t0 = time.perf_counter()
+        for name, rule in rules.items():
+            d = deltas(sets, np.datetime64(start, "ns"), rule)
+            if d is not None:
+                found[name].append(d)
+                print(f"| {start} | {name} | " + " / ".join(f"{x:+.3f}" for x in d) + " |")
+        print(f"<!-- {start}: {time.perf_counter() - t0:.0f} s -->", flush=True)
+    print("\n| rule | starts | mean delta day 1 / 2 / 3 | RMS delta day 1 / 2 / 3 |")
+    print("| --- | ---: | --- | --- |")
+    summary = {}
+    for name, rows in found.items():
+        a = np.array(rows)
+        mean, rms = a.mean(axis=0), np.sqrt(np.mean(a**2, axis=0))
+        summary[name] = {"starts": len(a), "mean": mean.tolist(), "rms": rms.tolist()}
+        print(
+            f"| {name} | {len(a)} | "
+            + " / ".join(f"{x:+.3f}" for x in mean)
+            + " | "
+            + " / ".join(f"{x:.3f}" for x in rms)
+            + " |"
+        )
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "forecast_density.json").write_text(json.dumps({**info(), "rules": summary}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
