@@ -143,6 +143,22 @@ def test_a_gzip_bomb_is_refused_at_the_size_limit(tmp_path, monkeypatch):
     assert len(rp.catalog.load(ok).objects) == len(rp.catalog.load(SAMPLE).objects)
 
 
+def test_json_nested_too_deep_names_the_file(tmp_path):
+    # An OMM JSON file of 100,000 "[" and as many "]" raised a raw RecursionError; an
+    # earlier run's manifest.json nested as deep did so on overwrite (CLI and OutputFolder).
+    deep = "[" * 100_000 + "]" * 100_000
+    (tmp_path / "deep.json").write_text(deep)
+    with pytest.raises(ValueError, match=r"deep\.json: JSON nested deeper than"):
+        rp.catalog.load(tmp_path / "deep.json")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "manifest.json").write_text('{"files": ' + deep + "}")
+    # Not a manifest of rhoprop's: refused, nothing deleted, no RecursionError.
+    with pytest.raises(FileExistsError, match=r"holds no manifest\.json of an earlier rhoprop"):
+        rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
+    assert (out / "manifest.json").exists()
+
+
 def test_epochs_finer_than_a_nanosecond_and_tzinfo_without_offset():
     fine = np.datetime64("1970-01-01T00:00:01.123456789500", "as")
     assert rp.time.to_datetime64(fine) == np.datetime64("1970-01-01T00:00:01.123456790")

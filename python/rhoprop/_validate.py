@@ -6,6 +6,7 @@ import datetime as _dt
 import math
 import warnings
 from numbers import Real
+from typing import Any
 
 import numpy as np
 
@@ -121,3 +122,20 @@ def errors_argument(function: str, value: object) -> Errors:
     if value == "raise" or value == "record":
         return value
     raise ValueError(f"errors must be 'raise' or 'record', got {value!r}")
+
+
+def json_text(text: str, where: str) -> Any:
+    """``json.loads(text)``, with JSON nested deeper than Python's recursion limit (a
+    hostile or damaged file: ``[`` repeated 100,000 times) a ValueError naming ``where``
+    instead of a RecursionError; invalid JSON stays ``json.JSONDecodeError`` (a
+    ValueError)."""
+    import json
+    import sys
+
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(
+            f"{where}: JSON nested deeper than Python's recursion limit "
+            f"({sys.getrecursionlimit()} levels): a damaged or hostile file"
+        ) from None

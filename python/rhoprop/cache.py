@@ -20,7 +20,6 @@ writers never collide. Misuse never loses a computed value:
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import re
 import secrets
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from ._validate import json_text
 from .errors import CacheWarning
 
 #: Environment variable of the size cap of each cache directory, bytes.
@@ -225,8 +225,10 @@ def tiles_on_disk(root: Path) -> list[dict[str, Any]]:
         if not files:
             continue
         try:
-            label = json.loads((folder / "model.json").read_text()).get("repr", folder.name)
-        except (OSError, ValueError):
+            label = json_text((folder / "model.json").read_text(), folder.name).get(
+                "repr", folder.name
+            )
+        except (OSError, ValueError, AttributeError):
             label = folder.name
         days = sorted({f.name[:10] for f in files})
         out.append(

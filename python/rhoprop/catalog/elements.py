@@ -283,7 +283,7 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
     stripped = text.lstrip()
     if stripped.startswith(("[", "{")):
         try:
-            data = json.loads(text)
+            data = _validate.json_text(text, str(path))
         except json.JSONDecodeError as err:
             raise ValueError(f"{path}: not valid OMM JSON ({err})") from None
         records = data if isinstance(data, list) else [data]

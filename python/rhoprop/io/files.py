@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import json_text
 from .._version import __version__
 
 #: The manifest every run writes into its output folder.
@@ -200,8 +201,8 @@ def _listed_files(directory: Path) -> set[str] | None:
     or None if the folder has no manifest of rhoprop's (missing, unreadable, or not
     rhoprop's shape: an object with ``rhoprop_version`` and a list of names)."""
     try:
-        data = json.loads((directory / MANIFEST).read_text())
-    except (OSError, ValueError):
+        data = json_text((directory / MANIFEST).read_text(), str(directory / MANIFEST))
+    except (OSError, ValueError):  # unreadable, not JSON, nested too deep: not rhoprop's
         return None
     if not (
         isinstance(data, dict)
@@ -243,7 +244,7 @@ def _split(directory: Path, listed: set[str]) -> tuple[list[Path], list[str]]:
 def _produced(manifest: Path) -> bool:
     """Whether a manifest says its run completed or wrote files (unreadable: assume so)."""
     try:
-        data = json.loads(manifest.read_text())
+        data = json_text(manifest.read_text(), str(manifest))
         return bool(data.get("complete")) or bool(data.get("files"))
     except (OSError, ValueError, AttributeError):
         return True
