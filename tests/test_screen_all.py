@@ -126,6 +126,17 @@ def test_screen_all_equals_an_all_pairs_brute_force_search(shell):
     assert len(res.events) == len(brute)
     assert sum(e.relative_speed > 1000.0 for e in res.events) >= 10
     assert all(e.miss_distance <= distance for e in res.events)
+    # Each event's stretch within the distance: around TCA, and for a fast encounter
+    # (relative motion a straight line over seconds) the analytic 2 sqrt(D^2 - d^2) / v
+    # to 0.1 % (the interpolant of 60-s samples and the bisection to 1 ms).
+    fast = 0
+    for e in res.events:
+        assert e.within is not None and e.within[0] <= e.tca <= e.within[1]
+        if e.relative_speed > 1000.0 and e.within_seconds < 60.0:
+            expect = 2 * np.sqrt(distance**2 - e.miss_distance**2) / e.relative_speed
+            assert e.within_seconds == pytest.approx(expect, rel=1e-3, abs=2e-3)
+            fast += 1
+    assert fast >= 10
 
 
 def test_memory_chunks_and_threads_do_not_change_the_events(shell):
@@ -571,3 +582,42 @@ def test_minima_at_the_window_ends_are_events():
         table = res.table()
         assert table["edge"][0] == edge and np.isnan(table["pc"][0])
         assert "window's " + edge in table["pc_note"][0]
+        # Within 5 km for the whole window: the stretch is the window.
+        assert event.within == (start, end)
+        assert table["within_start"][0] == start and table["within_end"][0] == end
+
+
+def test_a_slow_pass_is_one_event_with_its_stretch_within_the_distance():
+    # Two circular orbits 500 m apart in radius: the lower one gains about 0.85 m/s
+    # along-track and passes the upper from 9 km behind to 9 km ahead in 6 h, within
+    # 5 km for about 3 h. The stretch against the distance of two rp.propagate runs
+    # sampled every 10 s, crossings interpolated linearly: within 5 s (0.85 m/s: a few
+    # metres of difference between the two propagations' samples).
+    start = np.datetime64("2024-03-01T00:00")
+    end = start + np.timedelta64(6, "h")
+    craft = rp.Spacecraft(2.2, 0.01)
+    r = 6778e3
+    x, u = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
+
+    def circular(radius: float, along: float) -> rp.OrbitState:
+        phi = along / radius
+        v = np.sqrt(MU / radius)
+        pos = radius * (np.cos(phi) * x + np.sin(phi) * u)
+        return rp.OrbitState(start, pos, v * (-np.sin(phi) * x + np.cos(phi) * u))
+
+    a, b = circular(r, 0.0), circular(r - 500.0, -9e3)
+    res = screen_all([(a, craft, "a"), (b, craft, "b")], MODEL, start=start, end=end, distance=5e3)
+    assert len(res.events) >= 1 and all(e.edge is None for e in res.events)
+    spans = {e.within for e in res.events}
+    assert len(spans) == 1  # every minimum of the stretch carries the whole stretch
+    first, last = spans.pop()
+    ta = rp.propagate(a, craft, MODEL, 6 * 3600.0, output_step=10.0)
+    tb = rp.propagate(b, craft, MODEL, 6 * 3600.0, output_step=10.0)
+    d = np.linalg.norm(tb.positions - ta.positions, axis=1) - 5e3
+    t = (ta.epochs - start) / np.timedelta64(1, "s")
+    k = np.flatnonzero(np.diff(np.sign(d)) != 0)
+    assert len(k) == 2  # in once, out once
+    cross = [t[i] - d[i] * (t[i + 1] - t[i]) / (d[i + 1] - d[i]) for i in k]
+    got = [(w - start) / np.timedelta64(1, "s") for w in (first, last)]
+    assert got == pytest.approx(cross, abs=5.0)
+    assert 2 * 3600 < got[1] - got[0] < 4 * 3600

@@ -8,6 +8,7 @@ docs/conjunction.md, "All-on-all screening"."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import re
 import threading
@@ -31,7 +32,7 @@ from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
-from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
+from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event, _hermite
 from .approach import _models_for as models_for
 from .event_mc import event_monte_carlo
 from .event_pc import check_coverage, check_options, event_probabilities
@@ -155,7 +156,8 @@ class AllOnAllResult:
     def table(self) -> dict[str, np.ndarray]:
         """The events as columns (one row per event, in order): names and ids, TCA
         (datetime64[ns] UTC), miss distance m, relative speed m/s, ``edge`` ("start" /
-        "end" for a minimum at the window's start / end, else ""), hard-body radius m,
+        "end" for a minimum at the window's start / end, else ""), ``within_start`` and
+        ``within_end`` (the stretch around TCA within the distance, UTC), hard-body radius m,
         mixture Pc, Pc per model (``pc_<model>``, the model's name in lower case with every
         run of other characters than letters and digits as one ``_``: ``pc_nrlmsis_2_1``,
         names a Parquet reader or pandas' attribute access takes), the member Monte
@@ -170,6 +172,14 @@ class AllOnAllResult:
             "miss_distance": np.array([e.miss_distance for e in ev], dtype=float),
             "relative_speed": np.array([e.relative_speed for e in ev], dtype=float),
             "edge": np.array(["" if e.edge is None else e.edge for e in ev], dtype=object),
+            "within_start": np.array(
+                [np.datetime64("NaT") if e.within is None else e.within[0] for e in ev],
+                dtype="datetime64[ns]",
+            ),
+            "within_end": np.array(
+                [np.datetime64("NaT") if e.within is None else e.within[1] for e in ev],
+                dtype="datetime64[ns]",
+            ),
             "hard_body_radius": np.asarray(self.hard_body_radius, dtype=float),
             "pc": np.asarray(self.pc, dtype=float),
         }
@@ -616,7 +626,9 @@ class _Run:
         counts["pairs"] = len(kept) * (len(kept) - 1) // 2
         counts["radial_pairs"] = radial_pair_count(kept, cfg.limit, cfg.degree) if kept else 0
         counts["refined_pairs"] = len(refined)
-        per_pair = [(pair, e) for pair in sorted(found) for e in _one_per_minimum(found[pair])]
+        per_pair = [
+            (pair, e) for pair in sorted(found) for e in _joined(_one_per_minimum(found[pair]))
+        ]
         counts["events"] = len(per_pair)
         events = [e for _p, e in per_pair]
         pairs = [p for p, _e in per_pair]
@@ -753,8 +765,89 @@ class _Run:
             a, b = self.objs[int(i[m])], self.objs[int(j[m])]
             where = EDGES[int(edge[m])]
             event = _event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy(), where)
-            out[int(i[m]), int(j[m])].append(event)
+            first, last = within_interval(chunk, int(i[m]), int(j[m]), float(t[m]), self.cfg.limit)
+            span = (add_seconds(self.cfg.start, first), add_seconds(self.cfg.start, last))
+            out[int(i[m]), int(j[m])].append(dataclasses.replace(event, within=span))
         return out
+
+
+#: Points per grid interval at which :func:`within_interval` checks the distance.
+WITHIN_POINTS = 8
+
+
+def within_interval(chunk: _Chunk, i: int, j: int, tca: float, limit: float) -> tuple[float, float]:
+    """(first, last) s from the window's start around ``tca`` between which objects
+    ``i`` and ``j`` stay within ``limit`` m, on the cubic Hermite interpolant of their
+    relative state between the chunk's samples (60-s samples: centimetres for a relative
+    orbit of kilometres), crossings by bisection to 1 ms; held within the samples both
+    objects have (an interval that began in an earlier time chunk starts at its
+    boundary)."""
+    k = int(min(chunk.samples[i], chunk.samples[j]))
+    times = chunk.times[:k]
+    rel_p = chunk.pos[j, :k] - chunk.pos[i, :k]
+    rel_v = chunk.vel[j, :k] - chunk.vel[i, :k]
+    if k < 2:
+        return tca, tca
+    at = int(np.clip(np.searchsorted(times, tca, side="right") - 1, 0, k - 2))
+
+    def distance(q: int, frac: np.ndarray) -> np.ndarray:
+        h = float(times[q + 1] - times[q])
+        p, _ = _hermite(rel_p[q], rel_v[q], rel_p[q + 1], rel_v[q + 1], h, frac[:, None])
+        out: np.ndarray = np.linalg.norm(p, axis=-1)
+        return out
+
+    def crossing(q: int, lo: float, hi: float) -> float:
+        """Time of |rel| = limit between fractions lo (inside) and hi (outside)."""
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            if distance(q, np.array([mid]))[0] <= limit:
+                lo = mid
+            else:
+                hi = mid
+        return float(times[q] + 0.5 * (lo + hi) * (times[q + 1] - times[q]))
+
+    grid = np.linspace(0.0, 1.0, WITHIN_POINTS + 1)
+    h_at = float(times[at + 1] - times[at])
+    s_tca = float(np.clip((tca - times[at]) / h_at, 0.0, 1.0))
+    ends = []
+    for direction in (-1, 1):
+        q, frac = at, s_tca
+        end = float(times[0] if direction < 0 else times[k - 1])
+        while 0 <= q <= k - 2:
+            pts = grid[grid < frac] if direction < 0 else grid[grid > frac]
+            pts = pts[::-1] if direction < 0 else pts
+            d = distance(q, pts) if len(pts) else np.zeros(0)
+            out = np.flatnonzero(d > limit)
+            if len(out):
+                inside = frac if out[0] == 0 else float(pts[out[0] - 1])
+                end = crossing(q, inside, float(pts[out[0]]))
+                break
+            q, frac = q + direction, (1.0 if direction < 0 else 0.0)
+        ends.append(end)
+    return ends[0], ends[1]
+
+
+def _joined(events: list[CloseApproach]) -> list[CloseApproach]:
+    """A pair's events (TCA order) with the ``within`` intervals that overlap or touch
+    (one stretch within the distance, or its parts in two time chunks) joined: every
+    minimum of a stretch carries the whole stretch."""
+    groups: list[list[CloseApproach]] = []
+    tol = np.timedelta64(1, "ms")
+    for e in events:
+        if groups and e.within is not None and groups[-1][-1].within is not None:
+            last = max(g.within[1] for g in groups[-1] if g.within is not None)
+            if e.within[0] <= last + tol:
+                groups[-1].append(e)
+                continue
+        groups.append([e])
+    out: list[CloseApproach] = []
+    for g in groups:
+        spans = [e.within for e in g if e.within is not None]
+        if len(g) > 1 and spans:
+            union = (min(a for a, _ in spans), max(b for _, b in spans))
+            g = [dataclasses.replace(e, within=union) for e in g]
+        out += g
+    return out
 
 
 def _one_per_minimum(events: list[CloseApproach]) -> list[CloseApproach]:

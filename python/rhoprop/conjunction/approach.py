@@ -69,6 +69,11 @@ class CloseApproach:
             from the window's start, ``"end"`` when it still falls at the window's end
             (the closest approach may lie outside the window; ``tca`` is the window's
             start or end). The all-on-all screen reports these.
+        within: (first, last) UTC epochs around ``tca`` between which the two stay
+            within the screening distance (:func:`screen_all`; None from the pairwise
+            functions). A fast encounter passes in a second or two; co-orbiting objects
+            can stay within it for hours or the whole window (then every minimum in
+            that stretch carries the same interval).
     """
 
     tca: np.datetime64
@@ -81,6 +86,14 @@ class CloseApproach:
     id1: int | None = None
     id2: int | None = None
     edge: Literal["start", "end"] | None = None
+    within: tuple[np.datetime64, np.datetime64] | None = None
+
+    @property
+    def within_seconds(self) -> float | None:
+        """Length of :attr:`within`, s (None without it)."""
+        if self.within is None:
+            return None
+        return float((self.within[1] - self.within[0]) / np.timedelta64(1, "ns")) * 1e-9
 
     @property
     def relative_position(self) -> np.ndarray:
