@@ -8,7 +8,9 @@ model's daily error c(d) = ln(observed / model) (``estimate_density_correction``
 prediction from S carries the density ratio of the days before S in each object's fitted
 Cd*A/m, so what hurts it is the change after S: delta_k = c(day k after S) - c(the day
 before S), k = 1, 2, 3. Printed per start and over all starts: mean (a bias of the
-forecast) and RMS of delta_k, per rule. The rule with the smallest RMS forecasts the
+forecast) and RMS of delta_k, per rule, and beside them the change of the drag itself
+(ln of each object's decay, day k after S against the day before: what holding the drag
+misses, as SGP4's static density does). The rule with the smallest RMS forecasts the
 density's level best for predictions started at S.
 
 Run:  python benches/forecast_density.py [--rules "1,1,2;1,1,1"] [--every 2]
@@ -33,8 +35,30 @@ from rhoprop.density import Msis
 HISTORY = "history_2026/celestrak_stations_weather_amateur_20260228-20260430.txt.gz"
 
 
-def deltas(sets: list, start: np.datetime64, rule: dict) -> np.ndarray | None:
-    """delta_k (k = 1..3) of one start under one as_of rule, or None where a day lacks."""
+def held(iv: catalog.DecayIntervals, start: np.datetime64) -> np.ndarray | None:
+    """The change of the drag itself (what holding it, as SGP4's static density does,
+    misses): per object ln(decay) of day k after the start minus that of the day before,
+    the median over objects, k = 1..3."""
+    day = np.floor((iv.middle - start) / np.timedelta64(1, "D")).astype(int)
+    ok = iv.decay > 0
+    per: list[list[float]] = [[], [], []]
+    for o in np.unique(iv.norad_id):
+        before = (iv.norad_id == o) & (day == -1) & ok
+        if not before.any():
+            continue
+        ref = np.log(iv.decay[before]).mean()
+        for k in range(3):
+            after = (iv.norad_id == o) & (day == k) & ok
+            if after.any():
+                per[k].append(float(np.log(iv.decay[after]).mean() - ref))
+    if not all(per):
+        return None
+    return np.array([np.median(p) for p in per])
+
+
+def deltas(sets: list, start: np.datetime64, rule: dict) -> tuple[np.ndarray, np.ndarray] | None:
+    """(delta_k, held change) (k = 1..3) of one start under one as_of rule, or None
+    where a day lacks."""
     model = Msis("2.1", space_weather=rp.SpaceWeather().as_of(start, **rule))
     later = start + np.timedelta64(3 * 86400 + 43200, "s")
     since = start - np.timedelta64(10, "D")
@@ -43,9 +67,10 @@ def deltas(sets: list, start: np.datetime64, rule: dict) -> np.ndarray | None:
     day0 = start.astype("datetime64[D]")
     level = dict(zip(c.days, c.level, strict=True))
     want = [day0 - np.timedelta64(1, "D")] + [day0 + np.timedelta64(k, "D") for k in range(3)]
-    if not all(d in level for d in want):
+    hold = held(iv, start)
+    if not all(d in level for d in want) or hold is None:
         return None
-    return np.array([level[d] - level[want[0]] for d in want[1:]])
+    return np.array([level[d] - level[want[0]] for d in want[1:]]), hold
 
 
 def main() -> None:
@@ -74,15 +99,28 @@ def main() -> None:
     starts = np.arange(
         np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
     )
-    print("\n| start | rule | delta day 1 / 2 / 3 |\n| --- | --- | --- |")
+    print(
+        "\n| start | rule | delta day 1 / 2 / 3 | drag change day 1 / 2 / 3 |\n"
+        "| --- | --- | --- | --- |"
+    )
     found: dict[str, list[np.ndarray]] = {k: [] for k in rules}
+    kept: list[np.ndarray] = []
     for start in starts:
         t0 = time.perf_counter()
         for name, rule in rules.items():
-            d = deltas(sets, np.datetime64(start, "ns"), rule)
-            if d is not None:
+            got = deltas(sets, np.datetime64(start, "ns"), rule)
+            if got is not None:
+                d, hold = got
                 found[name].append(d)
-                print(f"| {start} | {name} | " + " / ".join(f"{x:+.3f}" for x in d) + " |")
+                if name == next(iter(rules)):
+                    kept.append(hold)
+                print(
+                    f"| {start} | {name} | "
+                    + " / ".join(f"{x:+.3f}" for x in d)
+                    + " | "
+                    + " / ".join(f"{x:+.3f}" for x in hold)
+                    + " |"
+                )
         print(f"<!-- {start}: {time.perf_counter() - t0:.0f} s -->", flush=True)
     print("\n| rule | starts | mean delta day 1 / 2 / 3 | RMS delta day 1 / 2 / 3 |")
     print("| --- | ---: | --- | --- |")
@@ -98,6 +136,20 @@ def main() -> None:
             + " / ".join(f"{x:.3f}" for x in rms)
             + " |"
         )
+    h = np.array(kept)
+    rms_hold = np.sqrt(np.mean(h**2, axis=0))
+    summary["held drag"] = {
+        "starts": len(h),
+        "mean": h.mean(axis=0).tolist(),
+        "rms": rms_hold.tolist(),
+    }
+    print(
+        f"| the drag held (SGP4's static density) | {len(h)} | "
+        + " / ".join(f"{x:+.3f}" for x in h.mean(axis=0))
+        + " | "
+        + " / ".join(f"{x:.3f}" for x in rms_hold)
+        + " |"
+    )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "forecast_density.json").write_text(json.dumps({**info(), "rules": summary}, indent=1))

@@ -111,6 +111,13 @@ def test_too_few_objects_is_an_error_naming_the_count() -> None:
         )
     with pytest.raises(ValueError, match="got 0"):
         ds.estimate_density_correction(iv, "2026-03-01T12:00")
+    # 40 objects but no day with 5 measurements: named, not a raw numpy error.
+    pick = np.arange(40) * 20 + np.arange(40) % 20  # object o on day o % 20: 2 a day
+    names = ("norad_id", "start", "end", "decay", "unit", "altitude")
+    sparse = ds.DecayIntervals(**{k: getattr(iv, k)[pick] for k in names})
+    assert len(np.unique(sparse.norad_id)) >= 10
+    with pytest.raises(ValueError, match="a day with at least 5"):
+        ds.estimate_density_correction(sparse, "2026-03-22T00:00")
 
 
 def test_the_corrected_model_is_the_base_times_the_factor() -> None:

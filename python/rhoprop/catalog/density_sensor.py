@@ -317,6 +317,11 @@ def estimate_density_correction(
             counts[d] = len(np.unique(ids[m]))
             fits[d] = _day_fit(r[m], h[m], w[m]) if m.sum() >= MIN_PER_DAY else np.nan
         good = np.isfinite(fits[:, 0])
+        if not good.any():
+            raise ValueError(
+                f"a catalog density correction needs a day with at least {MIN_PER_DAY} "
+                f"decay measurements in the {window_days:g} days before {epoch}; none has"
+            )
         fits[good, 0] -= np.mean(fits[good, 0])
         level = np.interp(np.arange(len(days)), np.flatnonzero(good), fits[good, 0])
         grad = np.interp(np.arange(len(days)), np.flatnonzero(good), fits[good, 1])

@@ -40,6 +40,7 @@ class DensityCorrection:
         sigma: 1-sigma of ``level`` per day (the scatter of the objects over their count).
         objects: objects that measured each day.
         as_of: the epoch the correction was estimated at (UTC); after it, persistence.
+        calibration_ids: the NORAD ids of the objects that measured it.
     """
 
     days: np.ndarray
