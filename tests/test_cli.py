@@ -238,3 +238,24 @@ def test_catalog_of_a_2026_element_set_runs_offline_with_observed_drivers(tmp_pa
     )
     assert code == 0, capsys.readouterr().err
     assert (out / "oem" / "90001.oem").exists()
+
+
+def test_options_that_must_be_positive_are_refused_by_name_before_any_output(tmp_path, capsys):
+    # `reentry --horizon -1` said "duration must be positive, got -86400.0"; `screen
+    # --distance -1 --out o` and `catalog --max-span -1 --out o` left o/manifest.json.
+    from rhoprop.cli import main
+
+    tle = str(Path(__file__).parent / "data" / "sample.tle")
+    cases = [
+        (["reentry", tle, "--horizon", "-1"], "--horizon"),
+        (["screen", tle, "--distance", "-1"], "--distance"),
+        (["catalog", tle, "--max-span", "-1"], "--max-span"),
+        (["catalog", tle, "--output-step", "nan"], "--output-step"),
+    ]
+    for args, option in cases:
+        out = tmp_path / "o"
+        with pytest.raises(SystemExit) as stop:
+            main([*args, "--out", str(out)])
+        assert stop.value.code == 2
+        assert f"argument {option}: must be a positive number" in capsys.readouterr().err
+        assert not out.exists()

@@ -273,6 +273,22 @@ def test_bad_input_is_refused_naming_what(shell):
         screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, radii={5: 0.0})
 
 
+def test_screen_all_messages_name_its_own_parameter_and_the_repeats(shell):
+    # They named "secondaries" (a parameter of screen) and, for two identical states,
+    # said only "needs at least two objects within max_span; 0 of 1 lie further".
+    objs, start = shell
+    end = add_seconds(start, 3600.0)
+    kw = {"start": start, "end": end, "distance": 1e3, "progress": False}
+    with pytest.raises(TypeError, match=r"^objects must be a rhoprop\.catalog\.Catalog"):
+        screen_all(None, MODEL, **kw)
+    with pytest.raises(TypeError, match=r"^objects must be a Catalog or a list"):
+        screen_all(objs[0], MODEL, **kw)
+    with pytest.raises(ValueError, match=r"two different objects.*1 repeat another's epoch"):
+        screen_all([objs[0], objs[0]], MODEL, **kw)
+    with pytest.raises(ValueError, match=r"two different objects.*got 0"):
+        screen_all([objs[0], objs[0]], MODEL, **kw, max_span=1.0)
+
+
 def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
     # Merged snapshots hold element sets months old; their propagation to the window
     # would hold months of density tiles. Beyond max_span (60 days) they are listed in

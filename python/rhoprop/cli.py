@@ -7,6 +7,7 @@ Argument parsing only: each command calls one function of the package. Exit code
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 from collections.abc import Sequence
@@ -60,6 +61,18 @@ def _catalog(args: argparse.Namespace) -> int:
         max_span_days=args.max_span,
     )
     return 0
+
+
+def _positive(text: str) -> float:
+    """An argparse type: a finite number > 0 (argparse names the option in its error, and
+    the run stops before its output folder is made)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return value
 
 
 def _reentry(args: argparse.Namespace) -> int:
@@ -312,10 +325,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="the sigma-point filter or a Monte Carlo per object",
     )
     cat.add_argument("--members", type=int, default=100, help="Monte Carlo members per object")
-    cat.add_argument("--output-step", type=float, default=3600.0, help="output spacing, s")
+    cat.add_argument("--output-step", type=_positive, default=3600.0, help="output spacing, s")
     cat.add_argument(
         "--update-interval",
-        type=float,
+        type=_positive,
         default=3600.0,
         help="CCSP update interval, s (default 3600, the paper's tuning); eccentric "
         "orbits (e >= 0.1) update once per revolution, at apogee",
@@ -402,7 +415,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument(
         "--max-span",
-        type=float,
+        type=_positive,
         default=60.0,
         metavar="DAYS",
         help="objects whose epoch lies more days than this before --end are not run "
@@ -420,7 +433,7 @@ def build_parser() -> argparse.ArgumentParser:
         "to OUT/reentry.csv.",
     )
     reentry.add_argument("file", help="TLE or OMM file")
-    reentry.add_argument("--horizon", type=float, default=30.0, help="days after each epoch")
+    reentry.add_argument("--horizon", type=_positive, default=30.0, help="days after each epoch")
     reentry.add_argument("--members", type=int, default=100, help="Monte Carlo members")
     reentry.add_argument(
         "--model",
@@ -514,7 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="start of the window, UTC ISO (default: the epoch 99 %% of the element sets are "
         "not after; later ones are propagated back to it)",
     )
-    scr.add_argument("--distance", type=float, default=5e3, help="screening distance, m")
+    scr.add_argument("--distance", type=_positive, default=5e3, help="screening distance, m")
     scr.add_argument(
         "--model",
         default="families",
@@ -550,7 +563,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     scr.add_argument(
         "--max-span",
-        type=float,
+        type=_positive,
         default=60.0,
         metavar="DAYS",
         help="element sets whose epoch lies more days than this before --start (or after "

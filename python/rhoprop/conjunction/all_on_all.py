@@ -486,23 +486,31 @@ def _recent(
 ) -> list[_Object]:
     """The objects whose epoch lies within ``max_span`` s before ``start`` or after
     ``end``; (name, reason) of the others go to ``skipped``."""
-    if max_span is None:
-        return objs
-    limit = _validate.positive("max_span", max_span)
-    kept = []
-    for o in objs:
-        t = o.state.epoch
-        reason = beyond_max_span(seconds_between(t, start), "start", limit) if t <= start else ""
-        if t > end:
-            reason = beyond_max_span(seconds_between(t, end), "end", limit)
-        if reason:
-            skipped.append((o.name, reason))
-        else:
-            kept.append(o)
+    kept = objs
+    if max_span is not None:
+        limit = _validate.positive("max_span", max_span)
+        kept = []
+        for o in objs:
+            t = o.state.epoch
+            reason = ""
+            if t <= start:
+                reason = beyond_max_span(seconds_between(t, start), "start", limit)
+            if t > end:
+                reason = beyond_max_span(seconds_between(t, end), "end", limit)
+            if reason:
+                skipped.append((o.name, reason))
+            else:
+                kept.append(o)
     if len(kept) < 2:
+        same = [name for name, why in skipped if why.startswith("same element set")]
         raise ValueError(
-            f"screen_all needs at least two objects within max_span of the window; "
-            f"{len(objs) - len(kept)} of {len(objs)} lie further"
+            "screen_all needs at least two different objects within max_span of the "
+            f"window; got {len(kept)}: {len(objs) - len(kept)} of {len(objs)} lie further"
+            + (
+                f", and {len(same)} repeat another's epoch and state ({', '.join(same[:3])})"
+                if same
+                else ""
+            )
         )
     return kept
 
@@ -510,7 +518,7 @@ def _recent(
 def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]], int]:
     """The objects, each element set once (same epoch and state: the later copy is
     skipped, named), and how many were given."""
-    items = _secondaries_list(objects)
+    items = _secondaries_list(objects, "objects")
     objs = [_as_object(item, f"objects[{i}]", i) for i, item in enumerate(items)]
     if len(objs) < 2:
         raise ValueError(f"screen_all needs at least two objects, got {len(objs)}")

@@ -328,17 +328,19 @@ def _interpolation_margin(a: _Track, b: _Track, h: float) -> float:
     return 10.0 * h**4 / 384.0 * (fourth(a) + fourth(b)) + 100.0
 
 
-def _secondaries_list(secondaries: Any) -> list[Any]:
+def _secondaries_list(secondaries: Any, name: str = "secondaries") -> list[Any]:
+    """``secondaries`` as a list; TypeError naming the parameter ``name`` for a single
+    object or something that is not a collection of objects."""
     if isinstance(secondaries, (CatalogObject, tuple)):
         raise TypeError(
-            "secondaries must be a Catalog or a list of objects, not a single object: "
+            f"{name} must be a Catalog or a list of objects, not a single object: "
             "wrap it in a list"
         )
     try:
         return list(secondaries)
     except TypeError as err:
         raise TypeError(
-            "secondaries must be a rhoprop.catalog.Catalog or a list of CatalogObjects or "
+            f"{name} must be a rhoprop.catalog.Catalog or a list of CatalogObjects or "
             f"(OrbitState, Spacecraft[, name]) tuples, got {type(secondaries).__name__}"
         ) from err
 
