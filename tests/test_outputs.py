@@ -145,6 +145,35 @@ def test_object_names_cannot_inject_lines_into_an_oem(tmp_path):
     assert len(list(oem.segments[0].states)) == len(r.epochs)
 
 
+def test_a_catalog_oem_in_gcrf_is_rotated_from_teme(tmp_path):
+    # REF_FRAME = GCRF named the TEME states as GCRF (about 40 km off in LEO). Now the
+    # states and covariances are rotated by the element set's epoch's TEME -> GCRF.
+    from oem import OrbitEphemerisMessage
+
+    cat = catalog.load(SAMPLE)
+    r = catalog.propagate_catalog(
+        cat[:2], rp.scenarios.benchmark_exponential(0.2), END, output_step=1800.0, progress=False
+    )
+    teme = io.write_oem(r, tmp_path / "teme")
+    gcrf = io.write_oem(r, tmp_path / "gcrf", ref_frame="GCRF")
+    for k, (a, b) in enumerate(zip(teme, gcrf, strict=True)):
+        assert "REF_FRAME = GCRF" in b.read_text() and "rotated from TEME" in b.read_text()
+        sa = list(OrbitEphemerisMessage.open(str(a)).segments[0].states)
+        sb = list(OrbitEphemerisMessage.open(str(b)).segments[0].states)
+        m = rp.frames.teme_to_gcrf_matrix(r.objects[k].state.epoch)
+        for x, y in zip(sa, sb, strict=True):
+            np.testing.assert_allclose(
+                np.asarray(y.position), m @ np.asarray(x.position), atol=1e-6
+            )
+            np.testing.assert_allclose(
+                np.asarray(y.velocity), m @ np.asarray(x.velocity), atol=1e-9
+            )
+        cov_a = next(iter(OrbitEphemerisMessage.open(str(a)).segments[0].covariances)).matrix
+        cov_b = next(iter(OrbitEphemerisMessage.open(str(b)).segments[0].covariances)).matrix
+        # A rotation keeps the trace of the position block.
+        assert np.trace(cov_b[:3, :3]) == pytest.approx(np.trace(cov_a[:3, :3]), rel=1e-9)
+
+
 def test_non_utf8_bytes_are_skipped_or_named(tmp_path):
     # A stray byte in one name: "raise" names the line; "skip" still loads everything.
     path = tmp_path / "latin1.tle"

@@ -1,6 +1,6 @@
 """Frames and time: GMST (IAU-82), inertial <-> Earth-fixed, geodetic WGS-84, the RTN
-frame of a reference orbit and equinoctial elements. Inputs may be one vector (3,) or
-many (n, 3)."""
+frame of a reference orbit, equinoctial elements, and TEME <-> GCRF (SGP4's frame and the
+inertial frame other tools expect). Inputs may be one vector (3,) or many (n, 3)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _core, _validate
-from .time import EpochsLike, to_datetime64_array, ut1_seconds
+from .time import EpochLike, EpochsLike, seconds_since_j2000, to_datetime64_array, ut1_seconds
 
 
 def _rows(name: str, value: Any, width: int = 3) -> tuple[np.ndarray, bool]:
@@ -163,4 +163,41 @@ def from_equinoctial(elements: npt.ArrayLike, reference: npt.ArrayLike) -> np.nd
     e, single = _rows("elements", elements, 6)
     ref = _rows("reference", reference, 6)[0][0]
     out = _core.equinoctial_to_cartesian(e, np.ascontiguousarray(ref))
+    return out[0] if single else out
+
+
+def teme_to_gcrf_matrix(epoch: EpochLike) -> np.ndarray:
+    """The rotation (3, 3) taking vectors in TEME of the UTC ``epoch`` (SGP4's frame: the
+    true equator of date, x along the mean equinox of date measured on it) to GCRF, as
+    Vallado et al. (2006, "Revisiting Spacetrack Report #3", AIAA 2006-6753) give it:
+    about the true pole by minus the equation of the equinoxes (1994), then the inverse
+    of the IAU 1976 precession and 1980 nutation (ERFA's ``eqeq94`` and ``pnm80``). The
+    23-mas frame bias between the J2000 mean equator and GCRF is not applied (under 1 m
+    in LEO, 5 m at GEO): the result serves as EME2000 and as GCRF alike. Checked against
+    astropy's TEME -> GCRS in ``tests/test_frames.py``."""
+    import erfa  # type: ignore[import-untyped]
+
+    days = seconds_since_j2000(epoch) / 86400.0
+    tt1, tt2 = 2451545.0, days
+    to_true_of_date = erfa.rz(-erfa.eqeq94(tt1, tt2), np.eye(3))
+    out: np.ndarray = erfa.pnm80(tt1, tt2).T @ to_true_of_date
+    return out
+
+
+def teme_to_gcrf(epoch: EpochLike, states: npt.ArrayLike) -> np.ndarray:
+    """States [x, y, z, vx, vy, vz] (6,) or (n, 6), m and m/s, in TEME of the UTC
+    ``epoch`` -> GCRF (:func:`teme_to_gcrf_matrix`; the frame's own rotation, 1e-11 rad/s
+    from precession and nutation, is left out of the velocities: under 0.1 mm/s)."""
+    x, single = _rows("states", states, 6)
+    m = teme_to_gcrf_matrix(epoch)
+    out = np.concatenate([x[:, :3] @ m.T, x[:, 3:] @ m.T], axis=1)
+    return out[0] if single else out
+
+
+def gcrf_to_teme(epoch: EpochLike, states: npt.ArrayLike) -> np.ndarray:
+    """The inverse of :func:`teme_to_gcrf`: GCRF states (6,) or (n, 6) -> TEME of the UTC
+    ``epoch``."""
+    x, single = _rows("states", states, 6)
+    m = teme_to_gcrf_matrix(epoch)
+    out = np.concatenate([x[:, :3] @ m, x[:, 3:] @ m], axis=1)
     return out[0] if single else out

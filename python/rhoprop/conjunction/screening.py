@@ -333,8 +333,7 @@ def _secondaries_list(secondaries: Any, name: str = "secondaries") -> list[Any]:
     object or something that is not a collection of objects."""
     if isinstance(secondaries, (CatalogObject, tuple)):
         raise TypeError(
-            f"{name} must be a Catalog or a list of objects, not a single object: "
-            "wrap it in a list"
+            f"{name} must be a Catalog or a list of objects, not a single object: wrap it in a list"
         )
     try:
         return list(secondaries)

@@ -193,10 +193,14 @@ def write_oem(
         duplicates: catalog only: ``"error"`` (default) refuses NORAD ids that occur more
             than once; ``"suffix"`` names the repeats ``<id>_2.oem``, ``<id>_3.oem``, ...
         object_name, object_id: single results: the OBJECT_NAME and OBJECT_ID fields.
-        ref_frame: REF_FRAME, one of :data:`OEM_FRAMES` (default TEME for a catalog,
-            whose states come from SGP4, and EME2000 for a single result, rhoprop's
-            inertial frame). The states are written as computed: this names their frame,
-            it does not convert them.
+        ref_frame: REF_FRAME, one of :data:`OEM_FRAMES`. A catalog's states are in TEME
+            (from SGP4: each object's TEME of its epoch, taken as inertial): TEME
+            (default) writes them as they are; EME2000, GCRF or ICRF converts them, with
+            their covariances, by the rotation of the object's epoch
+            (:func:`rhoprop.frames.teme_to_gcrf_matrix`: 43 km in LEO, which a reader
+            taking TEME for GCRF would carry). A single result's states are in the frame
+            its initial state was given in, which rhoprop does not know: ``ref_frame``
+            (default EME2000) names it and converts nothing.
         covariance_frame: ``"inertial"`` (the states' frame, default) or ``"rtn"`` (each
             epoch's covariance rotated into the RTN frame of its mean state;
             ``COV_REF_FRAME = RTN``).
@@ -265,17 +269,27 @@ def write_oem(
         idx = np.flatnonzero(result.valid[k])
         if not len(idx):
             continue
-        body = text(
-            obj.name,
-            str(obj.norad_id),
-            result.epochs[idx],
-            result.mean[k, idx],
-            result.covariance[k, idx],
-            _note(result, k),
-        )
+        mean, cov = result.mean[k, idx], result.covariance[k, idx]
+        note = _note(result, k)
+        if frame != "TEME":
+            mean, cov = _from_teme(obj.state.epoch, mean, cov)
+            note = f"{note}; states and covariances rotated from TEME of the element set's epoch"
+        body = text(obj.name, str(obj.norad_id), result.epochs[idx], mean, cov, note.lstrip("; "))
         path = out / names[k].replace(".oem", suffix)
         paths.append(_save_oem(path, body, file_format, validate=not paths))
     return paths
+
+
+def _from_teme(
+    epoch: np.datetime64, mean: np.ndarray, cov: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """States (n, 6) and covariances (n, 6, 6) in TEME of ``epoch`` -> GCRF."""
+    from ..frames import teme_to_gcrf_matrix
+
+    m = teme_to_gcrf_matrix(epoch)
+    r = np.zeros((6, 6))
+    r[:3, :3] = r[3:, 3:] = m
+    return mean @ r.T, r @ cov @ r.T
 
 
 def _is_single(result: Any) -> bool:
