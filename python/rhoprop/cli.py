@@ -59,6 +59,7 @@ def _catalog(args: argparse.Namespace) -> int:
         cd=args.cd,
         drag_sigma=args.drag_sigma,
         max_span_days=args.max_span,
+        frame=args.frame,
     )
     return 0
 
@@ -326,6 +327,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument("--members", type=int, default=100, help="Monte Carlo members per object")
     cat.add_argument("--output-step", type=_positive, default=3600.0, help="output spacing, s")
+    cat.add_argument(
+        "--frame",
+        choices=("TEME", "GCRF", "EME2000"),
+        default="TEME",
+        help="REF_FRAME of the OEM files (default TEME, SGP4's frame, as computed); GCRF or "
+        "EME2000 rotates states and covariances from TEME (about 43 km in LEO)",
+    )
     cat.add_argument(
         "--update-interval",
         type=_positive,

@@ -185,6 +185,7 @@ def run_catalog_file(
     cd: float | None = None,
     drag_sigma: str | float = "auto",
     max_span_days: float | None = MAX_SPAN / 86400.0,
+    frame: str = "TEME",
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -204,8 +205,9 @@ def run_catalog_file(
     interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
     ``drag_sigma``: "auto" or a number (or its text), see ``propagate_catalog``.
     ``max_span_days``: objects with an epoch more days before ``end`` end "stale", not
-    run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). Returns the paths
-    written."""
+    run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). ``frame``: the OEM
+    files' REF_FRAME, "TEME" (default, as computed) or "GCRF"/"EME2000" (rotated,
+    :func:`~rhoprop.io.write_oem`). Returns the paths written."""
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma: float | Literal["auto"] = "auto"
     if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
@@ -260,7 +262,7 @@ def run_catalog_file(
     # Announced before they are written, so that an interrupted run's files are its own.
     folder.expect([directory / "oem" / n for n in oem_names(result.objects, kind)])
     folder.expect([directory / "summary.parquet"])
-    paths = write_oem(result, directory / "oem", duplicates=kind)
+    paths = write_oem(result, directory / "oem", duplicates=kind, ref_frame=frame)
     folder.add(paths)
     summary = write_summary(result, directory / "summary.parquet")
     folder.add([summary])
