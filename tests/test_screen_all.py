@@ -562,6 +562,16 @@ def test_a_stop_on_the_step_grid_does_not_underflow(test_data, tmp_path):
     assert result.counts["screened"] == 2 and not result.skipped
 
 
+def _circular(start: np.datetime64, radius: float, along: float) -> rp.OrbitState:
+    """A circular orbit of ``radius`` m in a fixed plane, ``along`` m ahead (> 0) of the
+    reference point at ``start``."""
+    x, u = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
+    phi = along / radius
+    v = np.sqrt(MU / radius)
+    pos = radius * (np.cos(phi) * x + np.sin(phi) * u)
+    return rp.OrbitState(start, pos, v * (-np.sin(phi) * x + np.cos(phi) * u))
+
+
 def test_minima_at_the_window_ends_are_events():
     # Two objects on circular orbits 1 m apart in radius and 100 m apart along-track: the
     # lower one drifts 1.7 mm/s forward, so the distance grows all window when it starts
@@ -573,17 +583,9 @@ def test_minima_at_the_window_ends_are_events():
     end = start + np.timedelta64(6, "h")
     craft = rp.Spacecraft(2.2, 0.01)
     r = 6778e3
-    x, u = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
-
-    def circular(radius: float, along: float) -> rp.OrbitState:
-        phi = along / radius  # > 0: ahead
-        v = np.sqrt(MU / radius)
-        pos = radius * (np.cos(phi) * x + np.sin(phi) * u)
-        return rp.OrbitState(start, pos, v * (-np.sin(phi) * x + np.cos(phi) * u))
-
-    a = circular(r, 0.0)
+    a = _circular(start, r, 0.0)
     for along, edge in ((100.0, "start"), (-100.0, "end")):
-        b = circular(r - 1.0, along)
+        b = _circular(start, r - 1.0, along)
         res = screen_all(
             [(a, craft, "a"), (b, craft, "b")], MODEL, start=start, end=end, distance=5e3
         )
@@ -613,15 +615,7 @@ def test_a_slow_pass_is_one_event_with_its_stretch_within_the_distance():
     end = start + np.timedelta64(6, "h")
     craft = rp.Spacecraft(2.2, 0.01)
     r = 6778e3
-    x, u = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
-
-    def circular(radius: float, along: float) -> rp.OrbitState:
-        phi = along / radius
-        v = np.sqrt(MU / radius)
-        pos = radius * (np.cos(phi) * x + np.sin(phi) * u)
-        return rp.OrbitState(start, pos, v * (-np.sin(phi) * x + np.cos(phi) * u))
-
-    a, b = circular(r, 0.0), circular(r - 500.0, -9e3)
+    a, b = _circular(start, r, 0.0), _circular(start, r - 500.0, -9e3)
     res = screen_all([(a, craft, "a"), (b, craft, "b")], MODEL, start=start, end=end, distance=5e3)
     assert len(res.events) >= 1 and all(e.edge is None for e in res.events)
     spans = {e.within for e in res.events}
