@@ -78,7 +78,7 @@ def test_hit_reads_the_entry_with_its_checksum(root):
     np.testing.assert_array_equal(first.rel_sigma, second.rel_sigma)
 
 
-@pytest.mark.parametrize("damage", ["garbage", "truncated", "empty", "npy", "checksum"])
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "empty", "npy", "checksum", "nan"])
 def test_corrupt_entry_is_recomputed_and_overwritten(root, damage):
     m, fn = model()
     good = field(m)
@@ -93,6 +93,13 @@ def test_corrupt_entry_is_recomputed_and_overwritten(root, damage):
     elif damage == "npy":
         with open(path, "wb") as out:
             np.save(out, np.zeros(3))
+    elif damage == "nan":
+        # NaN written with a checksum that matches (it gave "ln_mean[0] must be finite"
+        # from the core, naming no file): recomputed like any corrupt entry.
+        with np.load(path) as saved:
+            arrays = {k: saved[k] for k in saved.files if k != "checksum"}
+        arrays["ln_mean"] = np.full_like(arrays["ln_mean"], np.nan)
+        cache.store_entry(path, arrays)
     else:
         # A valid npz whose values changed after the checksum was taken (e.g. bit rot
         # behind a good zip CRC, or an edit by hand).

@@ -124,6 +124,10 @@ def load_entry(path: Path) -> dict[str, np.ndarray] | None:
     if stored is None or str(stored) != checksum(arrays):
         _warn(f"cache entry {path} is corrupt (checksum mismatch); recomputing it")
         return None
+    for name, values in arrays.items():  # rhoprop stores only finite numbers
+        if values.dtype.kind in "fc" and not np.isfinite(values).all():
+            _warn(f"cache entry {path} holds non-finite values in {name!r}; recomputing it")
+            return None
     try:
         os.utime(path)  # a hit makes the entry the most recently used
     except OSError:
