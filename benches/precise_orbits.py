@@ -1,0 +1,183 @@
+"""Predictions judged against precise orbits: Jason-1 (2003) and TOPEX/Poseidon (1997).
+
+``$RHOPROP_TEST_DATA/precise_orbits/leo`` holds CNES/CLS DORIS orbits of both satellites
+(SP3-c, 60 s, Earth-fixed, time system TAI) and 28 element sets of the same days. For each
+start S (00:00 UTC of every day with an element set before it and precise orbit after it):
+
+- rhoprop's default: the newest element set before S, ``catalog.load`` then
+  ``propagate_catalog`` with the library's defaults (fitted state and Cd*A/m, CCSP,
+  NRLMSIS 2.1) on the space weather as known at S (forecast mode);
+- rhoprop from the history: ``load(history="fit")``, every element set of the 3 days
+  before S fitted together (each near its own epoch);
+- SGP4 of the newest element set (the baseline).
+
+Each prediction at S + 1..5 days (where the precise orbit reaches) is compared with the
+precise position there: the DORIS orbit interpolated (Lagrange through 10 samples) to the
+UTC instant (TAI - UTC: 31 s in 1997, 32 s in 2003), rotated from ITRS to GCRS with astropy
+(IERS-B bundled with it, no download). The predictions are in TEME (SGP4's frame):
+rhoprop's of the element set's epoch, SGP4's of each instant; both rotated to GCRF with
+``rp.frames.teme_to_gcrf``. Printed: per satellite and horizon the median and
+largest position error (km) of each configuration and its ratio to SGP4's.
+
+Run:  python benches/precise_orbits.py
+"""
+
+from __future__ import annotations
+
+import gzip
+import os
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+from sgp4.api import Satrec
+
+import rhoprop as rp
+from machine import describe
+from rhoprop import catalog
+from rhoprop.density import Msis
+
+LEO = "precise_orbits/leo"
+SATELLITES = {
+    "Jason-1": (26997, "ssaja102.b03007.e03017.DGS.sp3.gz"),
+    "TOPEX/Poseidon": (22076, "grgtop03.b97344.e97348.D_S.sp3.gz"),
+}
+HORIZONS = (1, 2, 3, 4, 5)
+
+
+def read_sp3(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(TAI epochs datetime64[ns], positions m, velocities m/s) of an SP3-c file of one
+    satellite (P and V records; velocities in dm/s in the file)."""
+    epochs, pos, vel = [], [], []
+    with gzip.open(path, "rt") as text:
+        for line in text:
+            if line.startswith("*  "):
+                y, mo, d, h, mi = (int(x) for x in line[3:31].split()[:5])
+                sec = float(line[3:31].split()[5])
+                epochs.append(
+                    np.datetime64(f"{y:04d}-{mo:02d}-{d:02d}T{h:02d}:{mi:02d}", "ns")
+                    + np.timedelta64(round(sec * 1e9), "ns")
+                )
+            elif line.startswith("P"):
+                pos.append([float(x) * 1e3 for x in line[4:46].split()])
+            elif line.startswith("V"):
+                vel.append([float(x) * 0.1 for x in line[4:46].split()])
+    return np.array(epochs), np.array(pos), np.array(vel)
+
+
+def truth_gcrs(sp3: tuple, utc: np.datetime64) -> np.ndarray:
+    """The precise position (m, GCRS) at the UTC instant ``utc``."""
+    from astropy import units as u
+    from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
+    from astropy.time import Time
+
+    epochs, pos, _ = sp3
+    tai = Time(str(utc), scale="utc").tai
+    tai64 = np.datetime64(tai.isot, "ns")
+    # Lagrange through the 10 samples around it (60 s apart: sub-millimetre in LEO). The
+    # velocities are not used: TOPEX's file gives them in m/s where SP3 says dm/s.
+    k = int(np.clip(np.searchsorted(epochs, tai64) - 5, 0, len(epochs) - 10))
+    x = (epochs[k : k + 10] - tai64) / np.timedelta64(60, "s")
+    weights = np.array(
+        [np.prod([-x[m] / (x[j] - x[m]) for m in range(10) if m != j]) for j in range(10)]
+    )
+    p = weights @ pos[k : k + 10]
+    t = Time(str(utc), scale="utc")
+    itrs = ITRS(CartesianRepresentation(p * u.m), obstime=t)
+    return np.asarray(itrs.transform_to(GCRS(obstime=t)).cartesian.xyz.to(u.m).value)
+
+
+def sets_of(path: Path, norad: int) -> list[tuple[str, str, float]]:
+    lines = path.read_text().splitlines()
+    out = []
+    for l1, l2 in zip(lines[0::2], lines[1::2], strict=True):
+        sat = Satrec.twoline2rv(l1, l2)
+        if sat.satnum == norad:
+            out.append((l1, l2, sat.jdsatepoch + sat.jdsatepochF))
+    return sorted(out, key=lambda s: s[2])
+
+
+def jd(t: np.datetime64) -> float:
+    return float((t - np.datetime64("2000-01-01T12:00")) / np.timedelta64(1, "D")) + 2451545.0
+
+
+def predict(
+    sets: list[tuple[str, str, float]],
+    start: np.datetime64,
+    ends: list[np.datetime64],
+    history: bool,
+) -> list[np.ndarray]:
+    """rhoprop's GCRF positions at ``ends`` from the element sets before ``start``."""
+    before = [s for s in sets if s[2] < jd(start)]
+    if history:
+        before = [s for s in before if s[2] >= jd(start) - 3.0]
+    else:
+        before = before[-1:]
+    weather = rp.SpaceWeather().as_of(start)
+    model = Msis("2.1", space_weather=weather)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "sets.tle"
+        path.write_text("".join(f"{s[0]}\n{s[1]}\n" for s in before))
+        cat = catalog.load(path, fit=True, model=model, history="fit" if history else "newest")
+    obj = cat.objects[0]
+    out = []
+    for end in ends:
+        res = catalog.propagate_catalog([obj], model, end, output_step=1e9, progress=False)
+        out.append(rp.frames.teme_to_gcrf(obj.state.epoch, res.mean[0, -1])[:3])
+    return out
+
+
+def main() -> None:
+    print(describe())
+    data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data")) / LEO
+    warnings.simplefilter("ignore", rp.errors.PredictedDriversWarning)
+    from astropy.utils import iers
+
+    iers.conf.auto_download = False
+    print(
+        "\n| satellite | horizon | starts | SGP4 median / max km | rhoprop default median / max "
+        "km | ratio | rhoprop history median / max km | ratio |"
+    )
+    print("| --- | ---: | ---: | --- | --- | ---: | --- | ---: |")
+    for name, (norad, file) in SATELLITES.items():
+        sp3 = read_sp3(data / file)
+        sets = sets_of(data / "tles_jason1_topex.txt", norad)
+        first_utc = sp3[0][0] - np.timedelta64(40, "s")
+        last_utc = sp3[0][-1] - np.timedelta64(40, "s")
+        errors: dict[int, list[tuple[float, float, float]]] = {h: [] for h in HORIZONS}
+        day = first_utc.astype("datetime64[D]") + np.timedelta64(1, "D")
+        while day + np.timedelta64(1, "D") <= last_utc:
+            start = day.astype("datetime64[ns]")
+            horizons = [h for h in HORIZONS if start + np.timedelta64(h, "D") <= last_utc]
+            ends = [start + np.timedelta64(h, "D") for h in horizons]
+            newest = [s for s in sets if s[2] < jd(start)][-1]
+            sat = Satrec.twoline2rv(newest[0], newest[1])
+            default = predict(sets, start, ends, history=False)
+            hist = predict(sets, start, ends, history=True)
+            for h, end, p_def, p_hist in zip(horizons, ends, default, hist, strict=True):
+                whole = np.floor(jd(end))
+                _, r, _ = sat.sgp4(whole, jd(end) - whole)
+                p_sgp4 = rp.frames.teme_to_gcrf(
+                    end, np.concatenate([np.array(r) * 1e3, np.zeros(3)])
+                )[:3]
+                true = truth_gcrs(sp3, end)
+                errors[h].append(
+                    tuple(float(np.linalg.norm(p - true)) / 1e3 for p in (p_sgp4, p_def, p_hist))
+                )
+            day += np.timedelta64(1, "D")
+        for h in HORIZONS:
+            if not errors[h]:
+                continue
+            e = np.array(errors[h])
+            med, top = np.median(e, axis=0), e.max(axis=0)
+            print(
+                f"| {name} | {h} d | {len(e)} | {med[0]:.2f} / {top[0]:.2f} | {med[1]:.2f} / "
+                f"{top[1]:.2f} | {med[1] / med[0]:.2f} | {med[2]:.2f} / {top[2]:.2f} | "
+                f"{med[2] / med[0]:.2f} |",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
