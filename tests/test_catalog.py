@@ -187,7 +187,10 @@ def test_element_sets_older_than_max_span_end_stale_and_leave_the_rest_unchanged
     assert main([*args, "--max-span", str(14 / 24)]) == 0
     captured = capsys.readouterr()
     assert "2 stale" in captured.out and captured.err.count(": stale: epoch") == 2
-    assert main([*args, "--max-span", "-1", "--overwrite"]) == 1
+    with pytest.raises(SystemExit) as stop:  # refused by argparse, naming the option
+        main([*args, "--max-span", "-1", "--overwrite"])
+    assert stop.value.code == 2
+    assert "argument --max-span: must be a number >= 0" in capsys.readouterr().err
 
 
 def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so(monkeypatch):

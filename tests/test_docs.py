@@ -30,6 +30,7 @@ PAGES: dict[str, tuple[str, ...]] = {
     "catalogs.md": ("propagated", "local == dask: True"),
     "plots.md": (),
     "conjunction.md": (),
+    "density-sensor.md": (),
 }
 #: Pages whose examples run elsewhere, or that have none.
 ELSEWHERE = {

@@ -316,7 +316,9 @@ def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
     from rhoprop.cli import main
 
     sample = Path(__file__).parent / "data" / "sample.tle"
-    assert main(["screen", str(sample), "--end", "2002-09-08", "--max-span", "-1"]) == 1
+    with pytest.raises(SystemExit) as stop:
+        main(["screen", str(sample), "--end", "2002-09-08", "--max-span", "-1"])
+    assert stop.value.code == 2
 
 
 SYNTHETIC = """

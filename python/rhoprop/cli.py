@@ -64,6 +64,17 @@ def _catalog(args: argparse.Namespace) -> int:
     return 0
 
 
+def _non_negative(text: str) -> float:
+    """An argparse type: a finite number >= 0 (``--max-span``: 0 means no limit)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {text}")
+    return value
+
+
 def _positive(text: str) -> float:
     """An argparse type: a finite number > 0 (argparse names the option in its error, and
     the run stops before its output folder is made)."""
@@ -423,7 +434,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument(
         "--max-span",
-        type=_positive,
+        type=_non_negative,
         default=60.0,
         metavar="DAYS",
         help="objects whose epoch lies more days than this before --end are not run "
@@ -571,7 +582,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     scr.add_argument(
         "--max-span",
-        type=_positive,
+        type=_non_negative,
         default=60.0,
         metavar="DAYS",
         help="element sets whose epoch lies more days than this before --start (or after "
