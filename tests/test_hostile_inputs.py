@@ -332,3 +332,38 @@ def test_overwrite_only_ever_deletes_files_a_manifest_lists(
         return
     after = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
     assert not foreign and after == {MANIFEST}
+
+
+def test_user_csvs_take_a_byte_order_mark_and_name_bad_bytes_and_repeats(tmp_path):
+    # A spreadsheet's UTF-8 byte-order mark made "norad_id" unknown; a Latin-1 byte gave
+    # a UnicodeDecodeError naming no file; a NORAD id twice in --radii took the later row.
+    from rhoprop.catalog.job import read_drag_file
+    from rhoprop.conjunction.screen_job import read_radii
+
+    radii = tmp_path / "radii.csv"
+    radii.write_bytes(b"\xef\xbb\xbfnorad_id,radius_m\n25544,10\n1,2.5\n")
+    assert read_radii(radii) == {25544: 10.0, 1: 2.5}
+    drag = tmp_path / "drag.csv"
+    drag.write_bytes(b"\xef\xbb\xbfnorad_id,drag_parameter\n25544,0.011\n")
+    assert read_drag_file(drag) == pytest.approx({25544: 0.011})
+    radii.write_bytes(b"norad_id,radius_m\n25544,10\n1,2.5 \xe9\n")
+    with pytest.raises(ValueError, match=r"radii\.csv: not UTF-8 text"):
+        read_radii(radii)
+    drag.write_bytes(b"norad_id,drag_parameter\n25544,0.011 \xe9\n")
+    with pytest.raises(ValueError, match=r"drag\.csv: not UTF-8 text"):
+        read_drag_file(drag)
+    radii.write_text("norad_id,radius_m\n25544,10\n1,2.5\n25544,3\n")
+    with pytest.raises(ValueError, match="line 4: NORAD id 25544 repeats line 2"):
+        read_radii(radii)
+
+
+def test_numpy_scalars_are_numbers_for_the_pc_options():
+    # np.float32 / np.int64 were refused as a hard-body radius or a radius.
+    from rhoprop.conjunction.event_pc import check_options
+
+    check_options({"m": None}, None, np.float32(3.0), None)
+    check_options({"m": None}, None, None, {5: np.int64(2), 6: np.float64(1.5)})
+    with pytest.raises(ValueError, match="hard_body_radius"):
+        check_options({"m": None}, None, np.bool_(True), None)
+    with pytest.raises(ValueError, match="radii"):
+        check_options({"m": None}, None, None, {5: np.float32(-1.0)})

@@ -117,8 +117,12 @@ def read_drag_file(path: str | Path, cd: float | None = None) -> dict[int, float
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"drag file {str(p)!r} does not exist")
-    with p.open(newline="") as handle:
-        rows = list(csv.DictReader(handle))
+    try:
+        # utf-8-sig: a spreadsheet's byte-order mark is not part of the first column's name
+        with p.open(newline="", encoding="utf-8-sig") as handle:
+            rows = list(csv.DictReader(handle))
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{p.name}: not UTF-8 text ({err.reason} at byte {err.start})") from None
     columns = set(rows[0]) if rows else set()
     if "norad_id" not in columns or not ({"drag_parameter", "area_to_mass"} & columns):
         raise ValueError(

@@ -19,6 +19,7 @@ object's covariance at its epoch and no offset.
 from __future__ import annotations
 
 import dataclasses
+import numbers
 import time
 from collections import defaultdict
 from collections.abc import Callable, Mapping
@@ -105,15 +106,18 @@ def check_options(
 ) -> None:
     """The Pc options checked before any work (ValueError/TypeError naming them)."""
     _weights(models, weights)
-    if hbr is not None and not (
-        isinstance(hbr, (int, float)) and not isinstance(hbr, bool) and np.isfinite(hbr) and hbr > 0
-    ):
+    if hbr is not None and not (_real(hbr) and np.isfinite(hbr) and hbr > 0):
         raise ValueError(f"hard_body_radius must be a number > 0 m, got {hbr!r}")
     if radii is not None and not isinstance(radii, Mapping):
         raise TypeError(f"radii must be a mapping {{NORAD id: m}}, got {type(radii).__name__}")
     for key, r in (radii or {}).items():
-        if not (isinstance(r, (int, float)) and np.isfinite(r) and r > 0):
+        if not (_real(r) and np.isfinite(r) and r > 0):
             raise ValueError(f"radii[{key!r}] must be > 0 m, got {r!r}")
+
+
+def _real(value: Any) -> bool:
+    """A real number, numpy's scalars included (np.float32, np.int64), not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _radii(events: list[Any], hbr: float | None, radii: Any) -> np.ndarray:

@@ -29,18 +29,30 @@ def read_radii(path: str | Path) -> dict[int, float]:
     """{NORAD id: radius m} from a CSV with ``norad_id`` and ``radius_m`` columns (the
     hard-body radius of an event is the sum of both objects' radii)."""
     out: dict[int, float] = {}
-    with open(path, newline="") as fh:
-        rows = csv.DictReader(fh)
-        if not rows.fieldnames or not {"norad_id", "radius_m"} <= set(rows.fieldnames):
-            raise ValueError(f"{path}: needs columns norad_id and radius_m")
-        for line, row in enumerate(rows, start=2):
-            try:
-                key, radius = int(row["norad_id"]), float(row["radius_m"])
-            except (TypeError, ValueError) as err:
-                raise ValueError(f"{path} line {line}: {err}") from err
-            if not (np.isfinite(radius) and radius > 0):
-                raise ValueError(f"{path} line {line}: radius_m must be > 0, got {radius}")
-            out[key] = radius
+    first: dict[int, int] = {}
+    try:
+        # utf-8-sig: a spreadsheet's byte-order mark is not part of the first column's name
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            rows = list(csv.DictReader(fh))
+            names = set(rows[0]) if rows else set()
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start})") from None
+    if not {"norad_id", "radius_m"} <= names:
+        raise ValueError(f"{path}: needs columns norad_id and radius_m")
+    for line, row in enumerate(rows, start=2):
+        try:
+            key, radius = int(row["norad_id"]), float(row["radius_m"])
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"{path} line {line}: {err}") from err
+        if not (np.isfinite(radius) and radius > 0):
+            raise ValueError(f"{path} line {line}: radius_m must be > 0, got {radius}")
+        if key in first:
+            raise ValueError(
+                f"{path} line {line}: NORAD id {key} repeats line {first[key]}; give each "
+                "object one radius"
+            )
+        first[key] = line
+        out[key] = radius
     return out
 
 
