@@ -216,7 +216,8 @@ def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so(monkeypatch):
 
     default = run()
     k = [o.norad_id for o in default.objects].index(90004)
-    assert default.status[k] == "propagated" and default.valid[k].all()
+    # Valid to the end (at 2,500x the usual density its arc curves: "non_gaussian" says so).
+    assert default.status[k] in ("propagated", "non_gaussian") and default.valid[k].all()
     for cov in default.covariance[k]:
         assert np.linalg.eigvalsh(cov).min() > 0
     monkeypatch.setattr(objects, "ccsp", functools.partial(objects.ccsp, coordinates="cartesian"))
@@ -230,7 +231,7 @@ def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so(monkeypatch):
     assert 0 < n_valid < len(d.epochs) and d.valid[k, :n_valid].all()
     for cov in d.covariance[k, :n_valid]:
         assert np.linalg.eigvalsh(cov).min() > 0
-    assert set(d.status) <= {"propagated", "decayed", "shortened"}
+    assert set(d.status) <= {"propagated", "non_gaussian", "decayed", "shortened"}
 
 
 def narrow_field():

@@ -633,3 +633,55 @@ def test_a_slow_pass_is_one_event_with_its_stretch_within_the_distance():
     got = [(w - start) / np.timedelta64(1, "s") for w in (first, last)]
     assert got == pytest.approx(cross, abs=5.0)
     assert 2 * 3600 < got[1] - got[0] < 4 * 3600
+
+
+def _plane_orbit(
+    epoch: np.datetime64, radius: float, node: np.ndarray, normal: np.ndarray, u: float
+):
+    """A circular orbit of ``radius`` m in the plane of ``normal`` at argument of latitude
+    ``u`` rad from the unit ``node``."""
+    w = np.cross(normal, node)
+    v = np.sqrt(MU / radius)
+    return rp.OrbitState(
+        epoch,
+        radius * (np.cos(u) * node + np.sin(u) * w),
+        v * (-np.sin(u) * node + np.cos(u) * w),
+    )
+
+
+def test_events_days_from_the_epochs_say_when_the_gaussian_no_longer_holds():
+    # Two 300 km orbits of one inclination, nodes 30 deg apart, both at the planes'
+    # crossing at their epoch (one 20 m higher): they meet there once per revolution for
+    # weeks. A day after the epochs the arcs are straight at the scale of the spread; nine
+    # days after, the arc's sag is the radial spread and each event says its 2-D Pc is
+    # approximate (docs/mc-vs-ccsp.md, "Every run knows").
+    epoch = np.datetime64("2024-03-01T00:00")
+    inc = np.radians(51.6)
+    states = []
+    for raan, dr in ((0.0, 0.0), (np.radians(30.0), 20.0)):
+        node = np.array([np.cos(raan), np.sin(raan), 0.0])
+        normal = np.array([np.sin(raan) * np.sin(inc), -np.cos(raan) * np.sin(inc), np.cos(inc)])
+        states.append((node, normal, dr))
+    cross = np.cross(states[0][1], states[1][1])
+    cross /= np.linalg.norm(cross)
+    objs = []
+    for name, (node, normal, dr) in zip("AB", states, strict=True):
+        u = np.arctan2(cross @ np.cross(normal, node), cross @ node)
+        r = rp.constants.R_EARTH + 300e3 + dr
+        objs.append((_plane_orbit(epoch, r, node, normal, u), rp.Spacecraft(2.2, 0.01), name))
+    model = rp.density.Exponential.benchmark(rel_sigma=0.2)
+    notes = {}
+    for days in (1, 9):
+        start = epoch + np.timedelta64(days * 86400, "s")
+        res = screen_all(
+            objs,
+            model,
+            start=start,
+            end=start + np.timedelta64(2, "h"),
+            distance=50e3,
+            progress=False,
+        )
+        assert len(res.events) >= 1 and np.isfinite(res.pc).all()
+        notes[days] = res.pc_notes
+    assert not any("curves" in n for n in notes[1]), notes[1]
+    assert all("A's spread curves" in n and "B's spread curves" in n for n in notes[9])

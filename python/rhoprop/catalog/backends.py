@@ -31,13 +31,20 @@ class Outcomes:
         self.mean = np.full((objects, epochs, 6), np.nan)
         self.cov = np.full((objects, epochs, 6, 6), np.nan)
         self.valid = np.zeros((objects, epochs), dtype=bool)
+        self.gaussian = np.ones((objects, epochs), dtype=bool)
         self.rest: dict[int, ObjectOutcome] = {}
 
     def __setitem__(self, i: int, outcome: ObjectOutcome) -> None:
         self.mean[i], self.cov[i], self.valid[i] = outcome.mean, outcome.cov, outcome.valid
+        if outcome.gaussian is not None:
+            self.gaussian[i] = outcome.gaussian
         # The small fields only: the arrays live in the result's arrays.
         self.rest[i] = dataclasses.replace(
-            outcome, mean=self.mean[i], cov=self.cov[i], valid=self.valid[i]
+            outcome,
+            mean=self.mean[i],
+            cov=self.cov[i],
+            valid=self.valid[i],
+            gaussian=self.gaussian[i],
         )
 
     def __getitem__(self, i: int) -> ObjectOutcome:

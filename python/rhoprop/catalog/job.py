@@ -273,7 +273,7 @@ def run_catalog_file(
     manifest = folder.finish()
     counts = {s: int(np.count_nonzero(result.status == s)) for s in STATUSES}
     for obj, status, reason in zip(result.objects, result.status, result.reason, strict=True):
-        if status != "propagated":
+        if status not in ("propagated", "non_gaussian"):  # those two: counted below
             print(
                 f"{obj.norad_id} {sanitise(obj.name)}: {status}: {sanitise(reason, 300)}",
                 file=sys.stderr,

@@ -26,6 +26,7 @@ from ..propagation import (
     propagate,
 )
 from ..propagation.ccsp import ccsp_many, update_schedule
+from ..propagation.gaussian_check import arc_sag_share, holds, member_coverage
 from ..propagation.kappa import KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
 from ..propagation.propagate import (
@@ -177,6 +178,7 @@ class Status(enum.Enum):
     SHORTENED = "shortened"
     FAILED = "failed"
     STALE = "stale"
+    NON_GAUSSIAN = "non_gaussian"
 
 
 @dataclass(frozen=True)
@@ -201,7 +203,8 @@ class ObjectOutcome:
     """One object's run: means (nt, 6) and covariances (nt, 6, 6) on the common epochs
     (NaN where invalid), which are ``valid``, the mean orbit's decay (s from the object's
     epoch, or None), the fraction of members decayed, the :class:`Status` and its reason,
-    and the exception of a failed object (``errors="record"``)."""
+    the exception of a failed object (``errors="record"``) and, per epoch, whether the
+    Cartesian Gaussian holds the spread (:mod:`~rhoprop.propagation.gaussian_check`)."""
 
     mean: np.ndarray
     cov: np.ndarray
@@ -211,6 +214,7 @@ class ObjectOutcome:
     status: Status
     reason: str
     error: Exception | None = None
+    gaussian: np.ndarray | None = None
 
     @classmethod
     def without_output(
@@ -475,11 +479,12 @@ def _propagate_object(
     out_mean = np.full((nt, 6), np.nan)
     out_cov = np.full((nt, 6, 6), np.nan)
     fraction = 0.0
+    gaussian = np.ones(nt, dtype=bool)
     status, reason = Status.PROPAGATED, ""
     if cfg.method == "ccsp":
         decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done, plan.step)
         if k:
-            means, covs, stopped = _ccsp_outputs(
+            means, covs, stopped, checked = _ccsp_outputs(
                 obj,
                 craft,
                 model,
@@ -492,6 +497,7 @@ def _propagate_object(
             )
             reached = len(means)
             out_mean[:reached], out_cov[:reached] = means, covs
+            gaussian[:reached] = checked
             if stopped:
                 status, reason = Status.SHORTENED, stopped
     else:
@@ -520,8 +526,19 @@ def _propagate_object(
         m = mc.moments()
         out_mean[:], out_cov[:] = m.mean, m.covariance
         fraction = float(np.mean(mc.decayed))
+        gaussian[:] = holds(coverage=member_coverage(mc.positions, m.mean, m.covariance))
     valid = np.isfinite(out_cov).all(axis=(1, 2)) & np.isfinite(out_mean).all(axis=1)
     out_mean[~valid], out_cov[~valid] = np.nan, np.nan
+    gaussian[~valid] = True  # nothing to judge
+    if not gaussian.all():
+        bad = int(np.flatnonzero(~gaussian)[0])
+        status = Status.NON_GAUSSIAN if status is Status.PROPAGATED else status
+        said = (
+            f"from {_iso(epochs[bad])} the Cartesian covariance does not hold the spread's "
+            "shape: it curves along the orbit (its moments stay right; for the shape use "
+            "method='monte_carlo' or rhoprop.ccsp's element_covariance)"
+        )
+        reason = f"{reason}; {said}" if reason else said
     if decay is not None:
         at = add_seconds(obj.state.epoch, decay)
         # Decay is the headline; an earlier stop of the CCSP stays in the reason.
@@ -535,6 +552,7 @@ def _propagate_object(
         fraction=fraction,
         status=status,
         reason=reason,
+        gaussian=gaussian,
     )
 
 
@@ -659,9 +677,10 @@ def _ccsp_outputs(
     drag_sigma: float = 0.0,
     first: CcspResult | None = None,
     step: float | None = None,
-) -> tuple[np.ndarray, np.ndarray, str]:
+) -> tuple[np.ndarray, np.ndarray, str, np.ndarray]:
     """CCSP means (k, 6) and covariances (k, 6, 6) at the first k of ``offsets`` (s from
-    the object's epoch) it reached, and "" or why it stopped before the last. Only a
+    the object's epoch) it reached, "" or why it stopped before the last, and whether
+    the Cartesian Gaussian holds there (k,) (:func:`arc_sag_share`). Only a
     covariance that stops being positive definite (near decay) or a sigma point that
     comes down shortens the outputs; every other error is raised. ``first`` is the run
     over all of ``offsets`` if already made (:func:`_ccsp_chunk`)."""
@@ -697,7 +716,7 @@ def _ccsp_outputs(
             f"{_iso(add_seconds(state.epoch, t_bad))} (near decay); later outputs invalid"
         )
         if k == 0:
-            return np.empty((0, 6)), np.empty((0, 6, 6)), why
+            return np.empty((0, 6)), np.empty((0, 6, 6)), why, np.empty(0, dtype=bool)
         try:
             r = run(k)
         except RhopropError as again:
@@ -705,7 +724,7 @@ def _ccsp_outputs(
     if r is None:
         means = np.broadcast_to(state.state, (k, 6))
         start = paper_covariance() if initial is None else initial
-        return means, np.broadcast_to(start, (k, 6, 6)), why
+        return means, np.broadcast_to(start, (k, 6, 6)), why, np.ones(k, dtype=bool)
     reached = int(np.count_nonzero(offsets[:k] <= r.times[-1] * (1 + 1e-12)))
     if r.decayed_at is not None and reached < len(offsets):
         why = (
@@ -713,4 +732,10 @@ def _ccsp_outputs(
             f"{_iso(add_seconds(state.epoch, r.decayed_at))}; later outputs invalid"
         )
     pick = np.searchsorted(r.times, offsets[:reached] * (1 - 1e-12))
-    return r.mean[pick], r.covariance[pick], why
+    checked = np.ones(len(pick), dtype=bool)
+    if r.element_mean is not None and r.element_covariance is not None:
+        share = arc_sag_share(
+            r.element_mean[pick], r.element_covariance[pick], r.rtn_covariance[pick]
+        )
+        checked = holds(sag_share=share)
+    return r.mean[pick], r.covariance[pick], why, checked

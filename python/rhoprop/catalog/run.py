@@ -65,7 +65,7 @@ CATALOG_ZONAL_DEGREE = 4
 CATALOG_FRAME = "TEME (SGP4's frame, taken as inertial)"
 
 #: The statuses an object can end with (:class:`Status` values).
-STATUSES = ("propagated", "decayed", "shortened", "failed", "stale")
+STATUSES = ("propagated", "non_gaussian", "decayed", "shortened", "failed", "stale")
 
 #: Longest run (s) :func:`propagate_catalog` makes by default, from an object's epoch to
 #: ``end``. A run holds the density tiles of every day it flies through (about 25 MB per
@@ -99,6 +99,8 @@ class CatalogResult:
         covariance_note: per object, what the covariance includes (initial covariance
             and what propagation adds), in words.
         status: per object (objects,): ``"propagated"`` (every output valid),
+            ``"non_gaussian"`` (every output valid, but from some epoch on the Cartesian
+            covariance no longer holds the spread's shape: see ``gaussian``),
             ``"decayed"`` (the mean orbit came down at ``decay_epoch``), ``"shortened"``
             (the CCSP stopped early: a sigma point came down, or its covariance lost
             positive definiteness near decay), ``"failed"`` (only with
@@ -108,6 +110,13 @@ class CatalogResult:
             where the CCSP stopped, or the error (type and message) of a failed object.
         drag_sigma: per object (objects,), the relative 1-sigma of Cd*A/m propagated (0:
             none); None for results built by hand.
+        gaussian: per object and epoch (objects, nt), whether the Gaussian of ``mean``
+            and ``covariance`` holds the spread's shape (False: the spread curves along
+            the orbit; the object's status or reason says from when): for a CCSP its arc
+            sag share below 0.5, for a Monte Carlo 90 % or more of its members inside the
+            95 % position region (:mod:`rhoprop.propagation.gaussian_check`,
+            docs/mc-vs-ccsp.md, "Every run knows"). True where not valid; None for
+            results built by hand.
     """
 
     objects: list[CatalogObject]
@@ -122,6 +131,7 @@ class CatalogResult:
     reason: np.ndarray
     covariance_note: np.ndarray | None = None
     drag_sigma: np.ndarray | None = None
+    gaussian: np.ndarray | None = None
 
     def to_xarray(self) -> xarray.Dataset:
         """The run as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
@@ -130,7 +140,8 @@ class CatalogResult:
         (the common output epochs, datetime64[ns] UTC, with ``elapsed`` s since the
         first), ``state``/``state2`` (x ... vz), ``rtn``/``rtn2`` (R, T, N; RTN of each
         object's mean). Variables per object and epoch: ``mean``, ``covariance``,
-        ``rtn_covariance``, ``along_track_std`` (NaN where not ``valid``), ``valid``;
+        ``rtn_covariance``, ``along_track_std`` (NaN where not ``valid``), ``valid``,
+        ``gaussian`` (whether the Gaussian holds the spread's shape);
         per object: ``status``, ``reason``, ``decay_epoch`` (NaT: none),
         ``decay_fraction``, ``drag_parameter`` (m^2/kg), ``object_epoch`` and
         ``covariance_note``. Attributes: frame (TEME), units, method, rhoprop version.
@@ -143,6 +154,15 @@ class CatalogResult:
         data.update(
             {
                 "valid": (("object", "epoch"), np.asarray(self.valid, dtype=bool)),
+                "gaussian": (
+                    ("object", "epoch"),
+                    (
+                        np.ones(self.valid.shape, dtype=bool)
+                        if self.gaussian is None
+                        else np.asarray(self.gaussian, dtype=bool)
+                    ),
+                    {"long_name": "whether the Gaussian holds the spread's shape"},
+                ),
                 "status": ("object", _strings([str(v) for v in self.status])),
                 "reason": ("object", _strings([str(v) for v in self.reason])),
                 "decay_epoch": (
@@ -450,4 +470,5 @@ def _result(
         reason=np.array([r.reason for r in order], dtype=object),
         covariance_note=np.array(notes, dtype=object),
         drag_sigma=np.array([p.drag_sigma for p in plans], dtype=float),
+        gaussian=results.gaussian,
     )

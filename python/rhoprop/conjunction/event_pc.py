@@ -362,10 +362,14 @@ def _object_moments(
             out[name, e, side] = (np.full(3, np.nan), np.full((6, 6), np.nan), "")
             continue
         f = 0.0 if hi == lo else (tca - t[lo]) / (t[hi] - t[lo])
+        curved = res.gaussian is not None and not (res.gaussian[b, lo] and res.gaussian[b, hi])
         out[name, e, side] = (
             (1 - f) * off[lo] + f * off[hi],
             (1 - f) * cov[lo] + f * cov[hi],
-            "",
+            f"{name}: {cat.name}'s spread curves along its orbit at TCA (its Gaussian "
+            "does not hold the shape): the 2-D Pc is approximate"
+            if curved
+            else "",
         )
 
 
@@ -391,4 +395,4 @@ def _pc_one(
         res = pc_2d(r1, v1, c1, r2, v2, c2, hbr)
     except ValueError as err:  # e.g. no relative motion: the model does not apply
         return float("nan"), f"{name}: no short-encounter Pc ({err})"
-    return float(res.pc), n1 or n2
+    return float(res.pc), "; ".join(n for n in (n1, n2) if n)

@@ -165,8 +165,9 @@ def ccsp(
             density-weighted relative sigma over the initial orbit, r = :func:`slow_share`
             of the run's span: the constant that drives the slow term's along-track
             variance at the end, so the earlier outputs of a run longer than the slow
-            half-life are a little narrow: 0.83x the Monte Carlo's along-track sigma at
-            1-3 days of a 14-day run, 0.97x at its end); ``Constant`` goes whole into c.
+            half-life are a little narrow: 0.82x the Monte Carlo's along-track sigma at
+            1-3 days of a 30-day run, 0.91x at 14 days, 0.96-1.02x at its end;
+            docs/mc-vs-ccsp.md); ``Constant`` goes whole into c.
             The result's
             ``drag_sigma`` is the one flown.
 
@@ -434,6 +435,7 @@ def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResul
         drag_cross_covariance=out["drag_cross"],
         element_mean=out.get("element_means"),
         element_covariance=out.get("element_covariances"),
+        reference=np.array(state.state, dtype=float),
     )
 
 

@@ -578,6 +578,8 @@ class CcspResult:
             Gaussian that holds for weeks (``covariance`` is its linear map to Cartesian
             coordinates, which past about a week misses the along-track curvature);
             None for Cartesian runs.
+        reference: the initial state (6,) whose axes the elements are in; None for
+            results built by hand.
     """
 
     epoch: np.datetime64
@@ -592,11 +594,24 @@ class CcspResult:
     drag_cross_covariance: Array | None = None
     element_mean: Array | None = None
     element_covariance: Array | None = None
+    reference: Array | None = None
 
     @property
     def epochs(self) -> Array:
         """Update epochs, datetime64[ns] (nt,)."""
         return offsets_to_epochs(self.epoch, self.times)
+
+    def arc_sag_share(self) -> Array:
+        """Per output (nt,), the along-track arc's radial sag over the radial 1-sigma
+        (:func:`~rhoprop.propagation.gaussian_check.arc_sag_share`): from 0.5 on, the
+        Cartesian ``covariance`` no longer holds the spread's curved shape (its moments
+        stay right; use ``element_covariance`` or a Monte Carlo for the shape;
+        docs/mc-vs-ccsp.md, "Every run knows"). NaN for Cartesian runs."""
+        from .gaussian_check import arc_sag_share
+
+        if self.element_mean is None or self.element_covariance is None:
+            return np.full(len(self.times), np.nan)
+        return arc_sag_share(self.element_mean, self.element_covariance, self.rtn_covariance)
 
     def moments(self) -> StateMoments:
         """The filter's mean and covariance."""
