@@ -184,15 +184,20 @@ def ccsp(
     output_times: _F64 | None = None,
     coordinates: str = "equinoctial",
     kappa_scale: float = 1.0,
+    slow_drag: tuple[float, float, float] | None = None,
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
     Cd*A/m carried as the second consider parameter; output_times are further outputs
-    between updates (the sigma points' moments in flight, not re-drawn)."""
+    between updates (the sigma points' moments in flight, not re-drawn); slow_drag
+    (Cd*A/m variance, slow term variance, its half-life s) rescales each output's c term
+    to its own time."""
 
 def ccsp_many(
     atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
-    objects: list[tuple[float, _F64, float, _F64, _F64, float, float, _F64]],
+    objects: list[
+        tuple[float, _F64, float, _F64, _F64, float, float, tuple[float, float, float] | None, _F64]
+    ],
     scaling: tuple[float, float],
     perturbation: str,
     floor_altitude: float,
@@ -202,7 +207,7 @@ def ccsp_many(
     kappa_scale: float = 1.0,
 ) -> list[_CcspOutput | Exception]:
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
-    update_times, step, drag_sigma, output_times (empty: none)), in one call: per object
+    update_times, step, drag_sigma, slow_drag, output_times (empty: none)), in one call: per object
     the dict of ``ccsp`` or the exception its run raised."""
 
 def fit_orbits(

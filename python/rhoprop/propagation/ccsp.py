@@ -164,10 +164,10 @@ def ccsp(
             (``drag_sigma`` raised to hypot(drag_sigma, sqrt(w r) s), s the model's
             density-weighted relative sigma over the initial orbit, r = :func:`slow_share`
             of the run's span: the constant that drives the slow term's along-track
-            variance at the end, so the earlier outputs of a run longer than the slow
-            half-life are a little narrow: 0.82x the Monte Carlo's along-track sigma at
-            1-3 days of a 30-day run, 0.91x at 14 days, 0.96-1.02x at its end;
-            docs/mc-vs-ccsp.md); ``Constant`` goes whole into c.
+            variance at the end; each earlier output has its c term rescaled to r of its
+            own time, so a long run's early outputs are as wide as a short run's:
+            0.99-1.01x the Monte Carlo's along-track sigma at 1-14 days of one 14-day
+            run, docs/mc-vs-ccsp.md); ``Constant`` goes whole into c.
             The result's
             ``drag_sigma`` is the one flown.
 
@@ -206,7 +206,7 @@ def ccsp(
 
     def run(atmosphere: AtmosphereLike) -> _CcspOutput:
         nonlocal flown
-        flown = args.flown_drag_sigma(atmosphere, state)
+        flown, slow_drag = args.flown_drag_sigma(atmosphere, state)
         return _core.ccsp(
             atmosphere,
             args.epoch,
@@ -223,6 +223,7 @@ def ccsp(
             args.outputs if len(args.outputs) else None,
             args.coordinates,
             args.kappa_scale,
+            slow_drag,
         )
 
     out = run_in_field(model, state, span, args.floor, run)
@@ -245,13 +246,23 @@ class _Arguments:
     coordinates: Coordinates
     kappa_scale: float = 1.0
     slow_fraction: float = 0.0
+    slow_term: tuple[float, float] | None = None  # (w, half-life s) of a TwoScale kappa
 
-    def flown_drag_sigma(self, atmosphere: AtmosphereLike, state: OrbitState) -> float:
-        """``drag_sigma`` with the slow density term folded in (see :func:`ccsp`)."""
+    def flown_drag_sigma(
+        self, atmosphere: AtmosphereLike, state: OrbitState
+    ) -> tuple[float, tuple[float, float, float] | None]:
+        """``drag_sigma`` with the slow density term folded in (see :func:`ccsp`), and
+        the core's ``slow_drag`` (Cd*A/m variance, the slow term's variance before its
+        share, its half-life s) that rescales each output's c term to its own time, or
+        None when c holds no time-dependent slow term."""
         if self.slow_fraction == 0.0:
-            return self.drag_sigma
+            return self.drag_sigma, None
         s = orbit_relative_sigma(atmosphere, state, self.epoch)
-        return math.hypot(self.drag_sigma, math.sqrt(self.slow_fraction) * s)
+        flown = math.hypot(self.drag_sigma, math.sqrt(self.slow_fraction) * s)
+        if self.slow_term is None:
+            return flown, None
+        w, half_life = self.slow_term
+        return flown, (self.drag_sigma**2, w * s * s, half_life)
 
 
 def _arguments(
@@ -310,7 +321,9 @@ def _arguments(
     check_memory(
         (len(times) + len(outputs) + 1) * OUTPUT_BYTES, DEFAULT_MAX_MEMORY, "the CCSP outputs"
     )
-    (l1, l2), kappa_scale, slow = consider_settings(kappa, scaling, times, update_interval)
+    (l1, l2), kappa_scale, slow, slow_term = consider_settings(
+        kappa, scaling, times, update_interval
+    )
     p0 = DEFAULT_INITIAL_COVARIANCE if initial_covariance is None else initial_covariance
     p0 = np.array(p0, dtype=float)
     if p0.shape != (6, 6):
@@ -328,6 +341,7 @@ def _arguments(
         coordinates=coordinates_argument(coordinates),
         kappa_scale=kappa_scale,
         slow_fraction=slow,
+        slow_term=slow_term,
     )
     return args, span
 
@@ -337,9 +351,10 @@ def consider_settings(
     scaling: tuple[float, float] | None,
     update_times: np.ndarray,
     update_interval: float | None,
-) -> tuple[tuple[float, float], float, float]:
-    """((lambda1 + n, lambda2 + p), kappa_scale, slow_fraction) of a run: how the filter
-    stands for ``kappa`` (see :func:`ccsp`)."""
+) -> tuple[tuple[float, float], float, float, tuple[float, float] | None]:
+    """((lambda1 + n, lambda2 + p), kappa_scale, slow_fraction, slow_term) of a run: how
+    the filter stands for ``kappa`` (see :func:`ccsp`); slow_term is (w, half-life s) of a
+    ``TwoScale`` process, whose slow term each output rescales to its own time, else None."""
     if scaling is not None:
         if kappa is not None:
             raise ValueError(
@@ -349,7 +364,7 @@ def consider_settings(
         if len(scaling) != 2:
             raise ValueError(f"scaling must be two numbers, got {scaling!r}")
         l1 = _validate.positive("scaling[0]", scaling[0])
-        return (l1, _validate.positive("scaling[1]", scaling[1])), 1.0, 0.0
+        return (l1, _validate.positive("scaling[1]", scaling[1])), 1.0, 0.0, None
     process = TwoScale() if kappa is None else kappa
     if not isinstance(process, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(process).__name__}")
@@ -362,6 +377,7 @@ def consider_settings(
         else float(np.max(np.diff(update_times, prepend=0.0)))
     )
     scale, slow = 1.0, 0.0
+    slow_term: tuple[float, float] | None = None
     if isinstance(process, PiecewiseConstant):
         if update_interval is not None and abs(process.interval - update_interval) > 1e-9:
             raise ValueError(
@@ -376,6 +392,7 @@ def consider_settings(
         scale = math.sqrt(1.0 - process.slow_fraction)
         share = slow_share(process.slow_half_life, float(update_times[-1]))
         slow = process.slow_fraction * share
+        slow_term = (process.slow_fraction, process.slow_half_life)
     elif isinstance(process, Constant):
         c, scale, slow = 1.0 / 3.0, 0.0, 1.0
     else:
@@ -385,19 +402,22 @@ def consider_settings(
         )
     if not c > 0:
         raise ValueError(f"kappa's correlation between updates must be > 0, got {c:g}")
-    return (3.0, 1.0 / c), scale, slow
+    return (3.0, 1.0 / c), scale, slow, slow_term
 
 
 def slow_share(half_life: float, span: float) -> float:
     """The along-track variance at the end of ``span`` s that a unit Gauss-Markov density
     term with ``half_life`` s drives, over that of a constant one: the double integral of
     x y 2^(-|x - y| / half_life) over [0, span]^2 against (span^2 / 2)^2 (x, y the times
-    left to the end), midpoint rule on 400 nodes. 1 for a span short beside the
-    half-life; 0.58 for 14 days at 4.1 days."""
-    n = 400
-    x = (np.arange(n) + 0.5) / n * span
-    corr = np.exp2(-np.abs(x[:, None] - x[None, :]) / half_life)
-    return float(x @ corr @ x / x.sum() ** 2)
+    left to the end), in closed form (u = span ln 2 / half_life): 4 (2 u^3 / 3 - u^2 + 2 -
+    2 u e^-u - 2 e^-u) / u^4, its series 1 - 4 u / 15 + u^2 / 18 below u = 0.05; the core's
+    ``slow_share`` is the same formula (each output's c term is rescaled with it). 1 for a
+    span short beside the half-life; 0.58 for 14 days at 4.1 days."""
+    u = span * math.log(2.0) / half_life
+    if u < 0.05:
+        return 1.0 - 4.0 * u / 15.0 + u * u / 18.0
+    e = math.exp(-u)
+    return 4.0 * (2.0 * u**3 / 3.0 - u * u + 2.0 - 2.0 * u * e - 2.0 * e) / u**4
 
 
 def orbit_relative_sigma(atmosphere: AtmosphereLike, state: OrbitState, ut1: float) -> float:
@@ -502,7 +522,7 @@ def ccsp_many(
         first = prepared[members[0]][2]
         flown = {i: prepared[i][2].flown_drag_sigma(atmosphere, prepared[i][0]) for i in members}
         objects = [
-            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, flown[i], a.outputs)
+            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, *flown[i], a.outputs)
             for i, (s, c, a, _) in ((i, prepared[i]) for i in members)
         ]
         outs = _core.ccsp_many(
@@ -518,7 +538,7 @@ def ccsp_many(
         )
         for i, out in zip(members, outs, strict=True):
             state = prepared[i][0]
-            results[i] = out if isinstance(out, Exception) else _result(state, out, flown[i])
+            results[i] = out if isinstance(out, Exception) else _result(state, out, flown[i][0])
     return results
 
 

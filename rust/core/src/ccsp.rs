@@ -68,6 +68,54 @@ pub struct CcspConfig {
     pub drag_sigma: f64,
     /// Coordinates in which the sigma points are drawn and their moments taken.
     pub coordinates: Coordinates,
+    /// The slow density term a two-scale kappa folds into c, when it does: `drag_sigma`
+    /// is then sized for the run's end, and each output's c term is rescaled to its own
+    /// time ([`SlowDrag`]). None: c's variance is `drag_sigma^2` throughout.
+    pub slow_drag: Option<SlowDrag>,
+}
+
+/// What c's variance is made of when it carries the slow term of a two-scale kappa: the
+/// Cd*A/m part and the slow density part, whose along-track effect at span t equals a
+/// constant of variance `slow_variance * slow_share(half_life, t)`. The filter flies c at
+/// `drag_sigma` (the end's variance); an output at t has its c term (D D^T in the
+/// covariance, D in the cross-covariance) scaled to `drag_variance + slow_variance *
+/// slow_share(half_life, t)`, so early outputs of a long run are not narrow (0.82x a
+/// Monte Carlo's along-track sigma at 1-3 days of a 30-day run without it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlowDrag {
+    /// Variance of the Cd*A/m part (the user's `drag_sigma` squared).
+    pub drag_variance: f64,
+    /// Variance of the slow density part before its share (w s^2).
+    pub slow_variance: f64,
+    /// Half-life of the slow term, s.
+    pub half_life: f64,
+}
+
+/// The along-track variance at the end of `span` s that a unit Gauss-Markov term with
+/// `half_life` s drives, over that of a constant: (4 / T^4) times the double integral
+/// of x y 2^(-|x - y| / half_life) over [0, T]^2, in closed form (u = T ln 2 / half_life):
+/// 4 (2 u^3 / 3 - u^2 + 2 - 2 u e^-u - 2 e^-u) / u^4, its series 1 - 4 u / 15 + u^2 / 18
+/// below u = 0.05. 1 at span 0; 0.58 for 14 days at 4.1 days.
+pub fn slow_share(half_life: f64, span: f64) -> f64 {
+    let u = span * std::f64::consts::LN_2 / half_life;
+    if u < 0.05 {
+        return 1.0 - 4.0 * u / 15.0 + u * u / 18.0;
+    }
+    let e = (-u).exp();
+    4.0 * (2.0 * u.powi(3) / 3.0 - u * u + 2.0 - 2.0 * u * e - 2.0 * e) / u.powi(4)
+}
+
+impl CcspConfig {
+    /// The factor on c's variance at output time `t` (1 without [`SlowDrag`]).
+    fn c_variance_factor(&self, t: f64) -> f64 {
+        match self.slow_drag {
+            Some(s) if self.drag_sigma > 0.0 && t > 0.0 => {
+                (s.drag_variance + s.slow_variance * slow_share(s.half_life, t))
+                    / (self.drag_sigma * self.drag_sigma)
+            }
+            _ => 1.0,
+        }
+    }
 }
 
 /// Coordinates of the filter's mean and covariance (docs/conventions.md, "CCSP
@@ -268,6 +316,17 @@ fn run<A: Atmosphere + ?Sized>(
         ));
     }
     let drag_on = check_drag_sigma(cfg.drag_sigma)? > 0.0;
+    if let Some(slow) = cfg.slow_drag {
+        for (what, v) in [
+            ("slow_drag.drag_variance", slow.drag_variance),
+            ("slow_drag.slow_variance", slow.slow_variance),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(CoreError::invalid(what, v, "must be finite and >= 0"));
+            }
+        }
+        positive("slow_drag.half_life", slow.half_life)?;
+    }
     let (l1, l2) = cfg.scaling;
     // UKF weights: w0 = lambda / (n + lambda), wi = 1 / (2 (n + lambda)).
     let (w0, wi) = ((l1 - N as f64) / l1, 0.5 / l1);
@@ -303,7 +362,7 @@ fn run<A: Atmosphere + ?Sized>(
         element_means: Vec::new(),
         element_covariances: Vec::new(),
     };
-    out.push(&coords, 0.0, &mean, &p0, &c, &d);
+    out.push(&coords, 0.0, &mean, &p0, &c, &d, 1.0);
     out.means[0] = y0;
     out.covariances[0] = cfg.p0;
     if cfg.output_times.windows(2).any(|w| w[1] <= w[0]) {
@@ -362,7 +421,8 @@ fn run<A: Atmosphere + ?Sized>(
             };
             let p_k = pc_k + d_k * d_k.transpose();
             let p_k = positive_definite((p_k + p_k.transpose()) * 0.5);
-            out.push(&coords, stops[k], &mean_k, &p_k, &c_k, &d_k);
+            let f = cfg.c_variance_factor(stops[k]);
+            out.push(&coords, stops[k], &mean_k, &p_k, &c_k, &d_k, f);
         }
         if decayed_at.is_some() {
             out.decayed_at = decayed_at;
@@ -391,7 +451,7 @@ fn run<A: Atmosphere + ?Sized>(
             p = (p + p.transpose()) * 0.5;
         }
         t = t1;
-        out.push(&coords, t, &mean, &p, &c, &d);
+        out.push(&coords, t, &mean, &p, &c, &d, cfg.c_variance_factor(t));
         progress.add(1);
     }
     Ok(out)
@@ -402,7 +462,9 @@ impl CcspOutput {
     /// elements the Cartesian mean and covariance are the unscented transform of the
     /// element Gaussian (its points are on their orbits, so the mean sits inside the arc
     /// and the radial variance holds the arc's sag, as a Monte Carlo's sample moments
-    /// do); the cross-covariances are mapped by the Jacobian at the mean.
+    /// do); the cross-covariances are mapped by the Jacobian at the mean. `c_factor`
+    /// rescales the c term to this output's variance ([`SlowDrag`]; 1: as flown).
+    #[allow(clippy::too_many_arguments)]
     fn push(
         &mut self,
         coords: &Frame,
@@ -411,7 +473,16 @@ impl CcspOutput {
         p: &Matrix6<f64>,
         c: &Vector6<f64>,
         d: &Vector6<f64>,
+        c_factor: f64,
     ) {
+        let scaled;
+        let (p, d) = if c_factor != 1.0 {
+            let d2 = d * c_factor.sqrt();
+            scaled = (p + d * d.transpose() * (c_factor - 1.0), d2);
+            (&scaled.0, &scaled.1)
+        } else {
+            (p, d)
+        };
         let arr = |v: &Vector6<f64>| -> [f64; 6] { std::array::from_fn(|i| v[i]) };
         let mat = |m: &Matrix6<f64>| -> [[f64; 6]; 6] {
             std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
@@ -911,6 +982,7 @@ mod tests {
             max_step: 180.0,
             drag_sigma: 0.0,
             coordinates: Coordinates::Equinoctial,
+            slow_drag: None,
         };
         let out = ccsp(&atm, &cfg, &Progress::default()).unwrap();
         let mean = propagate(
@@ -1111,6 +1183,7 @@ mod tests {
             max_step: 180.0,
             drag_sigma,
             coordinates: Coordinates::Equinoctial,
+            slow_drag: None,
         }
     }
 
@@ -1248,5 +1321,82 @@ mod tests {
             .unwrap_err()
             .to_string()
             .starts_with("drag_sigma = -0.1 is invalid"));
+    }
+    #[test]
+    fn slow_share_closed_form_equals_the_double_integral() {
+        // Midpoint rule on 2,000 nodes of (4 / T^4) sum x y 2^(-|x - y| / h) dx dy,
+        // against the closed form and its series, across the switch at u = 0.05.
+        let h = 4.1 * 86400.0;
+        for span in [
+            600.0,
+            0.05 * h / std::f64::consts::LN_2,
+            86400.0,
+            14.0 * 86400.0,
+            60.0 * 86400.0,
+        ] {
+            let n = 2000;
+            let dx = span / n as f64;
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) * dx).collect();
+            let mut sum = 0.0;
+            for &a in &x {
+                for &b in &x {
+                    sum += a * b * (-(a - b).abs() / h).exp2();
+                }
+            }
+            let quad = 4.0 * sum * dx * dx / span.powi(4);
+            let closed = slow_share(h, span);
+            assert!((closed - quad).abs() < 2e-6, "{span}: {closed} vs {quad}");
+        }
+        assert!((slow_share(h, 14.0 * 86400.0) - 0.58).abs() < 0.01);
+    }
+
+    #[test]
+    fn slow_drag_rescales_each_outputs_c_term_to_its_own_time() {
+        // A run whose c is flown at the end's variance: at the end the outputs equal the
+        // plain run's; earlier, covariance = pc + f D D^T with f the ratio of the
+        // variances, D scaled by sqrt(f).
+        use crate::density::Exponential;
+        let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.2).unwrap();
+        let hours: Vec<f64> = (1..=72).map(|h| h as f64 * 3600.0).collect();
+        let slow = SlowDrag {
+            drag_variance: 0.01,
+            slow_variance: 0.02,
+            half_life: 86400.0,
+        };
+        let end =
+            slow.drag_variance + slow.slow_variance * slow_share(slow.half_life, 72.0 * 3600.0);
+        let plain = paper_config(hours.clone(), end.sqrt());
+        let cfg = CcspConfig {
+            slow_drag: Some(slow),
+            ..plain.clone()
+        };
+        let a = ccsp(&atm, &plain, &Progress::default()).unwrap();
+        let b = ccsp(&atm, &cfg, &Progress::default()).unwrap();
+        let last = a.times.len() - 1;
+        for i in 0..6 {
+            for j in 0..6 {
+                let (x, y) = (
+                    a.element_covariances[last][i][j],
+                    b.element_covariances[last][i][j],
+                );
+                assert!(
+                    (x - y).abs() <= 1e-9 * x.abs().max(1e-30),
+                    "{i} {j}: {x} {y}"
+                );
+            }
+        }
+        let k = 24; // one day
+        let f = (slow.drag_variance + slow.slow_variance * slow_share(slow.half_life, a.times[k]))
+            / end;
+        assert!(f > 1.1, "{f}");
+        let d = Vector6::from_fn(|i, _| a.drag_cross[k][i]);
+        let db = Vector6::from_fn(|i, _| b.drag_cross[k][i]);
+        assert!((db - d * f.sqrt()).norm() <= 1e-9 * d.norm());
+        // In elements the arc (lambda's variance) is wider by the larger c term.
+        let (pa, pb) = (
+            a.element_covariances[k][5][5],
+            b.element_covariances[k][5][5],
+        );
+        assert!(pb > pa, "{pa} {pb}");
     }
 }
