@@ -2,13 +2,15 @@
 objects (``approach``), catalog screening (``screening``: one primary against many;
 ``all_on_all``: every pair, with each event's Pc per density model, ``event_pc``), the
 probability of collision for Gaussian states, Gaussian mixtures and Monte Carlo members
-(``probability``), CCSDS conjunction data messages (``cdm``) and a message's Pc with the
-density models' disagreement added (``with_density``). Positions m, velocities m/s,
-covariances m^2, hard-body radius m."""
+(``probability``), whether the short-encounter model applies and a Pc over the encounter
+where it does not (``encounter``), CCSDS conjunction data messages (``cdm``) and a
+message's Pc with the density models' disagreement added (``with_density``). Positions
+m, velocities m/s, covariances m^2, hard-body radius m."""
 
 from .all_on_all import AllOnAllResult, screen_all
 from .approach import CloseApproach, closest_approach
 from .cdm import CdmObject, ConjunctionMessage, read_cdm, write_cdm
+from .encounter import EncounterCheck, IntervalPcResult, encounter_check, pc_interval
 from .probability import (
     MixturePcResult,
     MonteCarloPcResult,
@@ -26,13 +28,17 @@ __all__: list[str] = [
     "CloseApproach",
     "ConjunctionMessage",
     "DensityPc",
+    "EncounterCheck",
+    "IntervalPcResult",
     "MixturePcResult",
     "MonteCarloPcResult",
     "PcResult",
     "ScreeningResult",
     "closest_approach",
     "density_pc",
+    "encounter_check",
     "pc_2d",
+    "pc_interval",
     "pc_mixture",
     "pc_monte_carlo",
     "read_cdm",

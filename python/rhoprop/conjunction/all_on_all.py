@@ -104,6 +104,11 @@ class AllOnAllResult:
             (weights renormalised).
         hard_body_radius: per event, m.
         pc_notes: per event, what was approximated or missing ("" when nothing).
+        pc_method: per event, which Pc: ``"2d"`` (the short-encounter 2-D Pc),
+            ``"interval"`` (an encounter too slow for it, by
+            :func:`~rhoprop.conjunction.encounter.encounter_check`, under at least one
+            model: Pc counted over the encounter interval,
+            :func:`~rhoprop.conjunction.encounter.pc_interval`), ``""`` (no Pc).
         pc_monte_carlo_models, pc_monte_carlo: the member Monte Carlo's Pc per event and
             model (events, models) and mixed (events,), for the ``monte_carlo_events``
             most probable events; NaN for the others.
@@ -152,6 +157,7 @@ class AllOnAllResult:
     distance: float
     grid_step: float
     objects: list[tuple[str, int | None]] = field(default_factory=list)
+    pc_method: list[str] = field(default_factory=list)
 
     def table(self) -> dict[str, np.ndarray]:
         """The events as columns (one row per event, in order): names and ids, TCA
@@ -161,7 +167,7 @@ class AllOnAllResult:
         mixture Pc, Pc per model (``pc_<model>``, the model's name in lower case with every
         run of other characters than letters and digits as one ``_``: ``pc_nrlmsis_2_1``,
         names a Parquet reader or pandas' attribute access takes), the member Monte
-        Carlo's mixed Pc (NaN where not run) and the Pc note."""
+        Carlo's mixed Pc (NaN where not run), ``pc_method`` and the Pc note."""
         ev = self.events
         cols: dict[str, np.ndarray] = {
             "name1": np.array([e.name1 for e in ev], dtype=object),
@@ -189,6 +195,9 @@ class AllOnAllResult:
                 column += "_"
             cols[column] = np.asarray(self.pc_models[:, k], dtype=float)
         cols["pc_monte_carlo"] = np.asarray(self.pc_monte_carlo, dtype=float)
+        cols["pc_method"] = np.array(
+            self.pc_method if self.pc_method else [""] * len(ev), dtype=object
+        )
         cols["pc_note"] = np.array(self.pc_notes, dtype=object)
         return cols
 
@@ -351,6 +360,7 @@ def screen_all(
             timings,
             client=client,
             report=run.report,
+            seed=seed,
         )
     finally:
         run.close()
@@ -372,6 +382,7 @@ def screen_all(
         pc=pcs.pc[order] if len(order) else pcs.pc,
         hard_body_radius=pcs.hard_body_radius[order] if len(order) else pcs.hard_body_radius,
         pc_notes=[pcs.notes[i] for i in order],
+        pc_method=[pcs.methods[i] for i in order],
         covariance1=pcs.covariance1[order] if len(order) else pcs.covariance1,
         covariance2=pcs.covariance2[order] if len(order) else pcs.covariance2,
         pc_monte_carlo_models=mc_models[order] if len(order) else mc_models,

@@ -36,6 +36,7 @@ from ..ensemble.debias import backward_orbit
 from ..propagation import Spacecraft
 from ..time import seconds_between, to_seconds
 from .approach import CloseApproach
+from .encounter import encounter_check, pc_interval
 from .probability import pc_2d
 from .screening import _Window
 
@@ -72,7 +73,8 @@ def object_radius(name: str) -> float:
 class EventPcs:
     """Per event: Pc per model (events, models), mixture Pc, hard-body radius m, note,
     and both objects' reference-model covariances at TCA in their RTN axes (events, 6, 6)
-    (NaN where not available, or without Pc)."""
+    (NaN where not available, or without Pc), and per event which Pc was used ("2d",
+    "interval" where a model's encounter was not short, "" without Pc)."""
 
     weights: np.ndarray
     pc_models: np.ndarray
@@ -83,6 +85,7 @@ class EventPcs:
     covariance2: np.ndarray
     drag: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     index: dict[int, int] = dataclasses.field(default_factory=dict)
+    methods: list[str] = dataclasses.field(default_factory=list)
 
 
 def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
@@ -237,10 +240,13 @@ def event_probabilities(
     *,
     client: object = None,
     report: Callable[[str, int, int], object] | None = None,
+    seed: int = 0,
 ) -> EventPcs:
     """Pc per event and model and the mixture's (see the module docs); ``client`` (a
     ``distributed.Client``) runs the CCSP on Dask, ``report(stage, done, total)`` is told
-    the objects done."""
+    the objects done; an encounter too slow for the 2-D Pc gets
+    :func:`~rhoprop.conjunction.encounter.pc_interval`, its draws seeded with ``seed``
+    and the event's index."""
     w = _weights(models, weights)
     radius = _radii(events, hbr, radii)
     n_ev, n_mod = len(events), len(models)
@@ -248,7 +254,9 @@ def event_probabilities(
     notes = [""] * n_ev
     cov = np.full((2, n_ev, 6, 6), np.nan)
     if not enabled or not n_ev:
-        return EventPcs(w, pcm, np.full(n_ev, np.nan), radius, notes, cov[0], cov[1])
+        return EventPcs(
+            w, pcm, np.full(n_ev, np.nan), radius, notes, cov[0], cov[1], methods=[""] * n_ev
+        )
     involved = sorted({i for p in pairs for i in p})
     local = {g: m for m, g in enumerate(involved)}
     sub = [objs[g] for g in involved]
@@ -264,11 +272,14 @@ def event_probabilities(
     moments = _model_moments(events, sub, models, ref, drag, needs, cfg, client, report)
     timings["pc_covariance"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    methods = [""] * n_ev
     for e, ev in enumerate(events):
         for k, name in enumerate(models):
-            pcm[e, k], why = _pc_one(ev, moments, name, e, float(radius[e]))
+            pcm[e, k], why, how = _pc_one(ev, moments, name, e, float(radius[e]), seed + e)
             if why and why not in notes[e]:
                 notes[e] = f"{notes[e]}; {why}" if notes[e] else why
+            if how == "interval" or (how and not methods[e]):
+                methods[e] = how
     have = np.isfinite(pcm)
     wk = np.where(have, w[None, :], 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -277,7 +288,7 @@ def event_probabilities(
         if name == ref:
             cov[side, e] = c6
     timings["pc"] = time.perf_counter() - t0
-    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1], drag, local)
+    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1], drag, local, methods)
 
 
 #: Per (model, event, side): (RTN offset (3,), RTN covariance (6, 6), note) at TCA.
@@ -374,25 +385,43 @@ def _object_moments(
 
 
 def _pc_one(
-    ev: CloseApproach, moments: _Moments, name: str, e: int, hbr: float
-) -> tuple[float, str]:
-    """The event's 2-D Pc under one model, and a note (NaN where the short-encounter model
-    cannot be applied: a minimum at the window's edge, or no relative motion)."""
+    ev: CloseApproach, moments: _Moments, name: str, e: int, hbr: float, seed: int = 0
+) -> tuple[float, str, str]:
+    """The event's Pc under one model, a note, and which Pc: "2d" (short encounter),
+    "interval" (:func:`pc_interval` over the encounter, capped at half an orbital period:
+    the 2-D model's straight-line assumption fails, :func:`encounter_check`), "" (NaN: a
+    minimum at the window's edge, no covariance)."""
     if ev.edge is not None:
-        return float("nan"), (
-            f"minimum at the window's {ev.edge}: no short-encounter Pc (the closest "
-            "approach may lie outside the window)"
+        return (
+            float("nan"),
+            (
+                f"minimum at the window's {ev.edge}: no short-encounter Pc (the closest "
+                "approach may lie outside the window)"
+            ),
+            "",
         )
     parts = []
     for side, state in ((0, ev.state1), (1, ev.state2)):
         off, cov, note = moments[name, e, side]
         if not np.isfinite(off).all():
-            return float("nan"), f"{name}: no valid covariance at TCA (decayed or shortened)"
+            return float("nan"), f"{name}: no valid covariance at TCA (decayed or shortened)", ""
         basis = frames.rtn_basis(state[:3], state[3:])
-        parts.append((state[:3] + basis.T @ off, state[3:], basis.T @ cov[:3, :3] @ basis, note))
+        b6 = np.zeros((6, 6))
+        b6[:3, :3] = b6[3:, 3:] = basis
+        parts.append((state[:3] + basis.T @ off, state[3:], b6.T @ cov @ b6, note))
     (r1, v1, c1, n1), (r2, v2, c2, n2) = parts
-    try:
-        res = pc_2d(r1, v1, c1, r2, v2, c2, hbr)
-    except ValueError as err:  # e.g. no relative motion: the model does not apply
-        return float("nan"), f"{name}: no short-encounter Pc ({err})"
-    return float(res.pc), "; ".join(n for n in (n1, n2) if n)
+    said = "; ".join(n for n in (n1, n2) if n)
+    check = encounter_check(r1, v1, c1, r2, v2, c2, hbr)
+    if not check.short:
+        span = min(check.duration, 0.5 * check.period)
+        if not np.isfinite(span):
+            return float("nan"), f"{name}: no Pc ({check.describe()}: no bound orbit)", ""
+        res_i = pc_interval(r1, v1, c1, r2, v2, c2, hbr, span=span, seed=seed)
+        why = (
+            f"{name}: not a short encounter ({check.describe()}): Pc counted over "
+            f"{span:.4g} s about TCA from {res_i.samples} samples (Clohessy-Wiltshire), "
+            "not the 2-D Pc"
+        )
+        return res_i.pc, f"{why}; {said}" if said else why, "interval"
+    res = pc_2d(r1, v1, c1[:3, :3], r2, v2, c2[:3, :3], hbr)
+    return float(res.pc), said, "2d"
