@@ -241,4 +241,4 @@ def _minimum(d2: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         refined = b - (c - a) ** 2 / (8 * curve)
     low[inner] = np.where(curve > 0, np.minimum(refined, b), b)
-    return np.maximum(low, 0.0)
+    return np.asarray(np.maximum(low, 0.0))
