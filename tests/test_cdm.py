@@ -260,6 +260,11 @@ def test_density_pc_mixes_models_with_shared_atmosphere():
         20.0,
     )
     assert float(getattr(again, "pc", again)) == pytest.approx(out.pc_models[1], rel=1e-12)
+    # Each model's maximum Pc and dilution flag are its own Gaussian's.
+    top = again.maximum()
+    assert out.pc_max_models[1] == top.pc_max and out.dilution_models[1] == top.dilution
+    assert (out.pc_max_models >= out.pc_models).all() and out.pc_max_message >= out.pc_message
+    assert "| Pc max | dilution |" in out.table()
     assert "mixture" in out.table()
 
 
@@ -289,8 +294,12 @@ def test_rhoprop_conjunction_reads_the_example_cdm(tmp_path, capsys):
     msg = cdm.read_cdm(example)
     # The message's own Pc is recomputed as written; the mixture is the weighted mean.
     assert figures["pc_message"] == pytest.approx(msg.collision_probability, rel=1e-9)
-    pcs = list(figures["pc_models"].values())
-    assert figures["pc_mixture"] == pytest.approx(sum(pcs) / len(pcs), rel=1e-12)
+    pcs, weights = figures["pc_models"], figures["weights"]
+    mixed = sum(weights[name] * pc for name, pc in pcs.items())
+    assert figures["pc_mixture"] == pytest.approx(mixed, rel=1e-12)
+    # Each model's maximum Pc is at least its Pc; the table says where it is diluted.
+    assert all(figures["pc_max_models"][name] >= pc for name, pc in pcs.items())
+    assert "| Pc max | dilution |" in printed
     assert figures["lead_time_s"] == 2 * 86400.0 and figures["hard_body_radius_m"] == 15.0
 
 

@@ -136,3 +136,21 @@ def test_screen_all_counts_a_co_orbiting_pair_over_its_encounter_not_in_2d():
         assert "not a short encounter" in res.pc_notes[i]
         assert 0.0 <= res.pc[i] <= 1.0
     assert res.table()["pc_method"][inside[0]] == "interval"
+
+
+def test_pc_max_and_dilution_against_the_small_radius_formula():
+    # Isotropic combined covariance: Pc ~ HBR^2 / (2 s^2) exp(-m^2 / (2 s^2)) for a small
+    # hard body, largest at s^2 = m^2 / 2: HBR^2 / (m^2 e) (Alfano 2005). The maximum is
+    # found on a grid of covariance scalings 26 % apart: within 2 % of the formula.
+    hbr, miss = 10.0, 700.0
+    for sigma, diluted in ((150.0, False), (400.0, False), (600.0, True), (3000.0, True)):
+        c = np.eye(3) * sigma**2 / 2  # each object half: combined sigma^2 per axis
+        res = pc_2d([0, 0, 0], [7000, 0, 0], c, [0, 0, miss], [0, 7000, 0], c, hbr)
+        top = res.maximum()
+        assert top.pc_max == pytest.approx(hbr**2 / (miss**2 * math.e), rel=0.02)
+        assert top.pc_max >= res.pc
+        assert top.dilution is diluted, (sigma, top)
+        assert top.covariance_scale == pytest.approx(miss**2 / 2 / sigma**2, rel=0.3)
+    # A miss inside the hard body: a covariance shrunk to nothing hits.
+    inside = pc_2d([0, 0, 0], [7000, 0, 0], c, [0, 0, 5.0], [0, 7000, 0], c, hbr).maximum()
+    assert inside.pc_max == 1.0 and inside.dilution

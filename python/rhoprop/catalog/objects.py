@@ -530,15 +530,7 @@ def _propagate_object(
     valid = np.isfinite(out_cov).all(axis=(1, 2)) & np.isfinite(out_mean).all(axis=1)
     out_mean[~valid], out_cov[~valid] = np.nan, np.nan
     gaussian[~valid] = True  # nothing to judge
-    if not gaussian.all():
-        bad = int(np.flatnonzero(~gaussian)[0])
-        status = Status.NON_GAUSSIAN if status is Status.PROPAGATED else status
-        said = (
-            f"from {_iso(epochs[bad])} the Cartesian covariance does not hold the spread's "
-            "shape: it curves along the orbit (its moments stay right; for the shape use "
-            "method='monte_carlo' or rhoprop.ccsp's element_covariance)"
-        )
-        reason = f"{reason}; {said}" if reason else said
+    status, reason = _gaussian_status(gaussian, epochs, status, reason)
     if decay is not None:
         at = add_seconds(obj.state.epoch, decay)
         # Decay is the headline; an earlier stop of the CCSP stays in the reason.
@@ -553,6 +545,26 @@ def _propagate_object(
         status=status,
         reason=reason,
         gaussian=gaussian,
+    )
+
+
+def _gaussian_status(
+    gaussian: np.ndarray, epochs: np.ndarray, status: Status, reason: str
+) -> tuple[Status, str]:
+    """The status and reason of a run whose Cartesian Gaussian does not hold at some
+    epochs (``gaussian`` False): "non_gaussian" for a run otherwise propagated, its
+    reason naming the first such epoch (a decayed or shortened run keeps its status)."""
+    if gaussian.all():
+        return status, reason
+    bad = int(np.flatnonzero(~gaussian)[0])
+    said = (
+        f"from {_iso(epochs[bad])} the Cartesian covariance does not hold the spread's "
+        "shape: it curves along the orbit (its moments stay right; for the shape use "
+        "method='monte_carlo' or rhoprop.ccsp's element_covariance)"
+    )
+    return (
+        Status.NON_GAUSSIAN if status is Status.PROPAGATED else status,
+        f"{reason}; {said}" if reason else said,
     )
 
 

@@ -109,6 +109,10 @@ class AllOnAllResult:
             :func:`~rhoprop.conjunction.encounter.encounter_check`, under at least one
             model: Pc counted over the encounter interval,
             :func:`~rhoprop.conjunction.encounter.pc_interval`), ``""`` (no Pc).
+        pc_max, dilution: per event, the reference model's largest Pc over scalings of
+            its combined covariance and whether its Pc lies in the dilution region (a
+            smaller covariance would raise it: :meth:`PcResult.maximum`); NaN / False
+            where its Pc is not a 2-D one.
         pc_monte_carlo_models, pc_monte_carlo: the member Monte Carlo's Pc per event and
             model (events, models) and mixed (events,), for the ``monte_carlo_events``
             most probable events; NaN for the others.
@@ -158,6 +162,8 @@ class AllOnAllResult:
     grid_step: float
     objects: list[tuple[str, int | None]] = field(default_factory=list)
     pc_method: list[str] = field(default_factory=list)
+    pc_max: np.ndarray = field(default_factory=lambda: np.empty(0))
+    dilution: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=bool))
 
     def table(self) -> dict[str, np.ndarray]:
         """The events as columns (one row per event, in order): names and ids, TCA
@@ -167,7 +173,8 @@ class AllOnAllResult:
         mixture Pc, Pc per model (``pc_<model>``, the model's name in lower case with every
         run of other characters than letters and digits as one ``_``: ``pc_nrlmsis_2_1``,
         names a Parquet reader or pandas' attribute access takes), the member Monte
-        Carlo's mixed Pc (NaN where not run), ``pc_method`` and the Pc note."""
+        Carlo's mixed Pc (NaN where not run), the reference model's ``pc_max`` and
+        ``dilution``, ``pc_method`` and the Pc note."""
         ev = self.events
         cols: dict[str, np.ndarray] = {
             "name1": np.array([e.name1 for e in ev], dtype=object),
@@ -195,6 +202,11 @@ class AllOnAllResult:
                 column += "_"
             cols[column] = np.asarray(self.pc_models[:, k], dtype=float)
         cols["pc_monte_carlo"] = np.asarray(self.pc_monte_carlo, dtype=float)
+        n = len(ev)
+        cols["pc_max"] = np.asarray(self.pc_max if len(self.pc_max) else np.full(n, np.nan))
+        cols["dilution"] = np.asarray(
+            self.dilution if len(self.dilution) else np.zeros(n, dtype=bool), dtype=bool
+        )
         cols["pc_method"] = np.array(
             self.pc_method if self.pc_method else [""] * len(ev), dtype=object
         )
@@ -366,27 +378,26 @@ def screen_all(
         run.close()
     skipped += gone
     counts["objects"] = given
-    t0 = time.perf_counter()
     chosen = n_mc if pc else 0
-    mc_models, mc = _monte_carlo(events, pairs, objs, models, pcs, chosen, members, seed, cfg)
-    timings["pc_monte_carlo"] = time.perf_counter() - t0
-    order = sorted(
-        range(len(events)),
-        key=lambda i: (-np.nan_to_num(pcs.pc[i], nan=-1.0), events[i].tca, events[i].name1),
+    mc_models, mc = _monte_carlo(
+        events, pairs, objs, models, pcs, chosen, members, seed, cfg, timings
     )
+    order = _by_pc(events, pcs.pc)
     return AllOnAllResult(
         events=[events[i] for i in order],
         models=list(models),
         weights=pcs.weights,
-        pc_models=pcs.pc_models[order] if len(order) else pcs.pc_models,
-        pc=pcs.pc[order] if len(order) else pcs.pc,
-        hard_body_radius=pcs.hard_body_radius[order] if len(order) else pcs.hard_body_radius,
+        pc_models=pcs.pc_models[order],
+        pc=pcs.pc[order],
+        hard_body_radius=pcs.hard_body_radius[order],
         pc_notes=[pcs.notes[i] for i in order],
         pc_method=[pcs.methods[i] for i in order],
-        covariance1=pcs.covariance1[order] if len(order) else pcs.covariance1,
-        covariance2=pcs.covariance2[order] if len(order) else pcs.covariance2,
-        pc_monte_carlo_models=mc_models[order] if len(order) else mc_models,
-        pc_monte_carlo=mc[order] if len(order) else mc,
+        pc_max=pcs.pc_max[order],
+        dilution=pcs.dilution[order],
+        covariance1=pcs.covariance1[order],
+        covariance2=pcs.covariance2[order],
+        pc_monte_carlo_models=mc_models[order],
+        pc_monte_carlo=mc[order],
         counts={key: counts.get(key, 0) for key in ALL_ON_ALL_STAGES},
         skipped=skipped,
         notes=notes,
@@ -402,6 +413,12 @@ def screen_all(
     )
 
 
+def _by_pc(events: list[CloseApproach], pc: np.ndarray) -> np.ndarray:
+    """Event indices by mixture Pc (largest first; no Pc last), then TCA and name."""
+    key = [(-np.nan_to_num(p, nan=-1.0), e.tca, e.name1) for p, e in zip(pc, events, strict=True)]
+    return np.array(sorted(range(len(events)), key=key.__getitem__), dtype=np.intp)
+
+
 def _monte_carlo(
     events: list[CloseApproach],
     pairs: list[tuple[int, int]],
@@ -412,11 +429,13 @@ def _monte_carlo(
     members: int,
     seed: int,
     cfg: _Window,
+    timings: dict[str, float],
 ) -> tuple[np.ndarray, np.ndarray]:
     """The member Monte Carlo's Pc (per model, mixed) of the ``chosen`` events of
-    largest mixture Pc (:mod:`.event_mc`)."""
+    largest mixture Pc (:mod:`.event_mc`), timed in ``timings["pc_monte_carlo"]``."""
+    t0 = time.perf_counter()
     top = sorted(range(len(events)), key=lambda i: -np.nan_to_num(pcs.pc[i], nan=-1.0))
-    return event_monte_carlo(
+    out = event_monte_carlo(
         events,
         pairs,
         objs,
@@ -431,6 +450,8 @@ def _monte_carlo(
         cfg.degree,
         cfg.floor,
     )
+    timings["pc_monte_carlo"] = time.perf_counter() - t0
+    return out
 
 
 def _settings(

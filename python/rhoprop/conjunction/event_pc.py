@@ -37,7 +37,7 @@ from ..propagation import Spacecraft
 from ..time import seconds_between, to_seconds
 from .approach import CloseApproach
 from .encounter import encounter_check, pc_interval
-from .probability import pc_2d
+from .probability import PcResult, pc_2d
 from .screening import _Window
 
 __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "PC_OUTPUT_STEP", "RADII", "object_radius"]
@@ -74,7 +74,9 @@ class EventPcs:
     """Per event: Pc per model (events, models), mixture Pc, hard-body radius m, note,
     and both objects' reference-model covariances at TCA in their RTN axes (events, 6, 6)
     (NaN where not available, or without Pc), and per event which Pc was used ("2d",
-    "interval" where a model's encounter was not short, "" without Pc)."""
+    "interval" where a model's encounter was not short, "" without Pc), and the reference
+    model's maximum Pc over covariance scalings and dilution flag (NaN / False where its
+    Pc is not a 2-D one)."""
 
     weights: np.ndarray
     pc_models: np.ndarray
@@ -86,6 +88,8 @@ class EventPcs:
     drag: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     index: dict[int, int] = dataclasses.field(default_factory=dict)
     methods: list[str] = dataclasses.field(default_factory=list)
+    pc_max: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
+    dilution: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0, dtype=bool))
 
 
 def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
@@ -255,7 +259,16 @@ def event_probabilities(
     cov = np.full((2, n_ev, 6, 6), np.nan)
     if not enabled or not n_ev:
         return EventPcs(
-            w, pcm, np.full(n_ev, np.nan), radius, notes, cov[0], cov[1], methods=[""] * n_ev
+            w,
+            pcm,
+            np.full(n_ev, np.nan),
+            radius,
+            notes,
+            cov[0],
+            cov[1],
+            methods=[""] * n_ev,
+            pc_max=np.full(n_ev, np.nan),
+            dilution=np.zeros(n_ev, dtype=bool),
         )
     involved = sorted({i for p in pairs for i in p})
     local = {g: m for m, g in enumerate(involved)}
@@ -273,9 +286,14 @@ def event_probabilities(
     timings["pc_covariance"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     methods = [""] * n_ev
+    top = np.full(n_ev, np.nan)
+    diluted = np.zeros(n_ev, dtype=bool)
     for e, ev in enumerate(events):
         for k, name in enumerate(models):
-            pcm[e, k], why, how = _pc_one(ev, moments, name, e, float(radius[e]), seed + e)
+            pcm[e, k], why, how, res = _pc_one(ev, moments, name, e, float(radius[e]), seed + e)
+            if name == ref and res is not None:
+                highest = res.maximum()
+                top[e], diluted[e] = highest.pc_max, highest.dilution
             if why and why not in notes[e]:
                 notes[e] = f"{notes[e]}; {why}" if notes[e] else why
             if how == "interval" or (how and not methods[e]):
@@ -288,7 +306,7 @@ def event_probabilities(
         if name == ref:
             cov[side, e] = c6
     timings["pc"] = time.perf_counter() - t0
-    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1], drag, local, methods)
+    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1], drag, local, methods, top, diluted)
 
 
 #: Per (model, event, side): (RTN offset (3,), RTN covariance (6, 6), note) at TCA.
@@ -386,11 +404,11 @@ def _object_moments(
 
 def _pc_one(
     ev: CloseApproach, moments: _Moments, name: str, e: int, hbr: float, seed: int = 0
-) -> tuple[float, str, str]:
-    """The event's Pc under one model, a note, and which Pc: "2d" (short encounter),
+) -> tuple[float, str, str, PcResult | None]:
+    """The event's Pc under one model, a note, which Pc: "2d" (short encounter),
     "interval" (:func:`pc_interval` over the encounter, capped at half an orbital period:
     the 2-D model's straight-line assumption fails, :func:`encounter_check`), "" (NaN: a
-    minimum at the window's edge, no covariance)."""
+    minimum at the window's edge, no covariance); and the 2-D result (or None)."""
     if ev.edge is not None:
         return (
             float("nan"),
@@ -399,12 +417,18 @@ def _pc_one(
                 "approach may lie outside the window)"
             ),
             "",
+            None,
         )
     parts = []
     for side, state in ((0, ev.state1), (1, ev.state2)):
         off, cov, note = moments[name, e, side]
         if not np.isfinite(off).all():
-            return float("nan"), f"{name}: no valid covariance at TCA (decayed or shortened)", ""
+            return (
+                float("nan"),
+                f"{name}: no valid covariance at TCA (decayed or shortened)",
+                "",
+                None,
+            )
         basis = frames.rtn_basis(state[:3], state[3:])
         b6 = np.zeros((6, 6))
         b6[:3, :3] = b6[3:, 3:] = basis
@@ -415,13 +439,13 @@ def _pc_one(
     if not check.short:
         span = min(check.duration, 0.5 * check.period)
         if not np.isfinite(span):
-            return float("nan"), f"{name}: no Pc ({check.describe()}: no bound orbit)", ""
+            return float("nan"), f"{name}: no Pc ({check.describe()}: no bound orbit)", "", None
         res_i = pc_interval(r1, v1, c1, r2, v2, c2, hbr, span=span, seed=seed)
         why = (
             f"{name}: not a short encounter ({check.describe()}): Pc counted over "
             f"{span:.4g} s about TCA from {res_i.samples} samples (Clohessy-Wiltshire), "
             "not the 2-D Pc"
         )
-        return res_i.pc, f"{why}; {said}" if said else why, "interval"
+        return res_i.pc, f"{why}; {said}" if said else why, "interval", None
     res = pc_2d(r1, v1, c1[:3, :3], r2, v2, c2[:3, :3], hbr)
-    return float(res.pc), said, "2d"
+    return float(res.pc), said, "2d", res

@@ -81,6 +81,59 @@ class PcResult:
     def __float__(self) -> float:
         return self.pc
 
+    def maximum(self) -> PcMaximum:
+        """The largest Pc any scaling of the combined covariance gives, and whether this
+        Pc lies in the dilution region (:class:`PcMaximum`; Alfano 2005, as CARA reports
+        it): the encounter-plane covariance times k^2 for k^2 on 41 log-spaced values
+        within a factor 100 of the small-radius optimum (k^2 = m^2 / 2, m the miss's
+        Mahalanobis distance), its largest Pc taken. Where the miss is within the
+        hard-body radius the maximum is 1 (a covariance shrunk to nothing)."""
+        cov = np.asarray(self.encounter_covariance, dtype=float)
+        miss = float(self.miss_distance)
+        if miss <= self.hard_body_radius:
+            return PcMaximum(1.0, 0.0, True)
+        m2 = miss * miss * float(np.linalg.inv(cov)[0, 0])
+        scales = 0.5 * m2 * np.logspace(-2.0, 2.0, 41)
+        plane = np.zeros((3, 3))
+        plane[1, 1] = 1.0
+        best, at = -1.0, 1.0
+        for k2 in scales:
+            plane[np.ix_([0, 2], [0, 2])] = cov * k2
+            pc = float(
+                _core.pc_2d(
+                    np.zeros(3),
+                    np.zeros(3),
+                    np.zeros((3, 3)),
+                    np.array([miss, 0.0, 0.0]),
+                    np.array([0.0, 1.0, 0.0]),
+                    np.ascontiguousarray(plane),
+                    self.hard_body_radius,
+                    self.shape,
+                    "repair",
+                )[0]
+            )
+            if pc > best:
+                best, at = pc, float(k2)
+        return PcMaximum(max(best, self.pc), at, at < 1.0)
+
+
+@dataclass(frozen=True)
+class PcMaximum:
+    """The maximum Pc over scalings of the combined covariance (:meth:`PcResult.maximum`).
+
+    Attributes:
+        pc_max: the largest Pc of the covariance times k^2 over k, in [0, 1].
+        covariance_scale: the k^2 at which it is reached (0 where the miss lies within
+            the hard-body radius).
+        dilution: True where k^2 < 1: a smaller covariance would give a larger Pc, so a
+            small Pc says the states are too uncertain to tell, not that the objects
+            miss (CARA's "dilution region").
+    """
+
+    pc_max: float
+    covariance_scale: float
+    dilution: bool
+
 
 @dataclass(frozen=True)
 class MixturePcResult:

@@ -19,7 +19,7 @@ independent within a model: over hours to days they accumulate along different t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -59,6 +59,12 @@ class DensityPc:
         covariances1, covariances2: per model, each object's position covariance at TCA,
             message plus density, inertial (k, 3, 3), m^2.
         ensembles: the two :class:`~rhoprop.EnsembleResult` (object 1, object 2).
+        pc_max_message, pc_max_models: the largest Pc any scaling of the message's / each
+            model's combined covariance gives (:meth:`PcResult.maximum`): what the Pc
+            could reach were the states known better or worse.
+        dilution_models: per model, whether its Pc lies in the dilution region (a
+            smaller covariance would raise it): density uncertainty that lowers a Pc
+            there says the states are too uncertain to tell, not that they miss.
     """
 
     names: list[str]
@@ -73,14 +79,35 @@ class DensityPc:
     covariances1: np.ndarray
     covariances2: np.ndarray
     ensembles: tuple[EnsembleResult, EnsembleResult]
+    pc_max_message: float = float("nan")
+    pc_max_models: np.ndarray = field(default_factory=lambda: np.empty(0))
+    dilution_models: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=bool))
+
+    @property
+    def dilution(self) -> bool:
+        """Whether any model of positive weight has its Pc in the dilution region."""
+        return bool(np.any(self.dilution_models & (self.weights > 0)))
 
     def table(self) -> str:
-        """A Markdown table of the Pc per model, the mixture and the message's own."""
-        rows = ["| source | weight | Pc |", "| --- | ---: | ---: |"]
-        rows.append(f"| message covariances only | | {self.pc_message:.4g} |")
-        for name, w, pc in zip(self.names, self.weights, self.pc_models, strict=True):
-            rows.append(f"| {name} | {w:.3g} | {pc:.4g} |")
-        rows.append(f"| **mixture (density-model uncertainty)** | 1 | **{self.pc:.4g}** |")
+        """A Markdown table of the Pc per model, the mixture and the message's own, with
+        each one's maximum Pc and dilution flag."""
+        rows = [
+            "| source | weight | Pc | Pc max | dilution |",
+            "| --- | ---: | ---: | ---: | --- |",
+        ]
+        rows.append(
+            f"| message covariances only | | {self.pc_message:.4g} | {self.pc_max_message:.4g} | |"
+        )
+        maxima = self.pc_max_models if len(self.pc_max_models) else [np.nan] * len(self.names)
+        flags = self.dilution_models if len(self.dilution_models) else [False] * len(self.names)
+        for name, w, pc, top, flag in zip(
+            self.names, self.weights, self.pc_models, maxima, flags, strict=True
+        ):
+            rows.append(f"| {name} | {w:.3g} | {pc:.4g} | {top:.4g} | {'yes' if flag else 'no'} |")
+        rows.append(
+            f"| **mixture (density-model uncertainty)** | 1 | **{self.pc:.4g}** | | "
+            f"{'yes' if self.dilution else 'no'} |"
+        )
         return "\n".join(rows)
 
 
@@ -371,27 +398,26 @@ def density_pc(
         w = w / w.sum()
     else:
         w = ens1.weights
-    per_model = np.array(
-        [
-            _pc(
-                pc_2d(
-                    a.position + off1[k],
-                    a.velocity,
-                    cov1[k],
-                    b.position + off2[k],
-                    b.velocity,
-                    cov2[k],
-                    hbr,
-                    shape=shape,
-                )
-            )
-            for k in range(len(ens1.names))
-        ]
-    )
+    results = [
+        pc_2d(
+            a.position + off1[k],
+            a.velocity,
+            cov1[k],
+            b.position + off2[k],
+            b.velocity,
+            cov2[k],
+            hbr,
+            shape=shape,
+        )
+        for k in range(len(ens1.names))
+    ]
+    per_model = np.array([_pc(r) for r in results])
+    highest = [r.maximum() for r in results]
+    own = message.pc(hbr, shape=shape)
     return DensityPc(
         names=list(ens1.names),
         weights=w,
-        pc_message=_pc(message.pc(hbr, shape=shape)),
+        pc_message=_pc(own),
         pc_models=per_model,
         pc=float(w @ per_model),
         lead_time=lead,
@@ -401,6 +427,9 @@ def density_pc(
         covariances1=cov1,
         covariances2=cov2,
         ensembles=(ens1, ens2),
+        pc_max_message=own.maximum().pc_max,
+        pc_max_models=np.array([m.pc_max for m in highest]),
+        dilution_models=np.array([m.dilution for m in highest]),
     )
 
 

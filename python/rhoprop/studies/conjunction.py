@@ -298,6 +298,13 @@ def assess_cdm(
         f"{result.hard_body_radius:g} m, {method}\n"
     )
     print(result.table())
+    if result.dilution:
+        print(
+            "\nnote: the Pc with density uncertainty lies in the dilution region (a smaller "
+            "covariance would raise it): a low Pc here says the states are too uncertain to "
+            f"tell, not that the objects miss; the largest Pc any covariance gives is "
+            f"{float(max(result.pc_max_models)):.4g}"
+        )
     if json_path is not None:
         summary = {
             "tca": str(message.tca),
@@ -305,7 +312,11 @@ def assess_cdm(
             "pc_stated": message.collision_probability,
             "pc_message": result.pc_message,
             "pc_models": dict(zip(result.names, map(float, result.pc_models), strict=True)),
+            "weights": dict(zip(result.names, map(float, result.weights), strict=True)),
             "pc_mixture": result.pc,
+            "pc_max_message": result.pc_max_message,
+            "pc_max_models": dict(zip(result.names, map(float, result.pc_max_models), strict=True)),
+            "dilution": result.dilution,
             "lead_time_s": result.lead_time,
             "hard_body_radius_m": result.hard_body_radius,
             "method": method,
