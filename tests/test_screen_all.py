@@ -357,6 +357,7 @@ def test_progress_reports_every_stage():
     assert len(res.events) >= 1
     assert seen["propagation"] == (150, 150)
     assert seen["sieve"][1] == 360 and seen["Pc (CCSP per model)"][0] >= 2
+    assert seen["Pc (per event)"] == (len(res.events), len(res.events))
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")

@@ -2,13 +2,72 @@
 
 from __future__ import annotations
 
+import sys
+import threading
+import time
 from typing import Any
+
+#: Seconds between plain progress lines when stderr is not a terminal (a log file, a
+#: pipe, a batch job): the first comes after this long, then one every this long while
+#: the run lasts, whether or not work was reported in between (a heartbeat), and a last
+#: one when a run that printed any ends.
+LINE_INTERVAL = 10.0
+
+
+def _plain() -> bool:
+    """Whether progress goes out as plain lines: stderr is not a terminal and this is not
+    a notebook (where ``tqdm.auto`` draws a widget)."""
+    from tqdm.auto import tqdm
+
+    if "notebook" in getattr(tqdm, "__module__", ""):
+        return False
+    isatty = getattr(sys.stderr, "isatty", None)
+    return not (callable(isatty) and isatty())
+
+
+class _Lines:
+    """Plain progress lines on stderr every :data:`LINE_INTERVAL` s from a background
+    thread (so a stage that reports nothing for minutes still shows it is alive)."""
+
+    def __init__(self, total: int, label: str, unit: str) -> None:
+        self.total, self.label, self.unit = total, label, unit
+        self.done = 0
+        self.start = time.monotonic()
+        self.printed = False
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._beat, daemon=True, name="rhoprop-progress")
+        self._thread.start()
+
+    def line(self) -> str:
+        elapsed = time.monotonic() - self.start
+        share = self.done / self.total if self.total else 0.0
+        text = (
+            f"{self.label}: {self.done}/{self.total} {self.unit} ({100 * share:.0f} %), "
+            f"{elapsed:.0f} s"
+        )
+        if 0 < share < 1:
+            text += f", about {elapsed * (1 - share) / share:.0f} s left"
+        return text
+
+    def _beat(self) -> None:
+        while not self._stop.wait(LINE_INTERVAL):
+            self.emit()
+
+    def emit(self) -> None:
+        print(self.line(), file=sys.stderr, flush=True)
+        self.printed = True
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join()
+        if self.printed:
+            self.emit()
 
 
 class ProgressBar:
-    """A progress bar through ``tqdm`` (a terminal line on stderr, a widget in Jupyter),
-    shown once a run has taken 1 s and only where someone can see it (a terminal or a
-    notebook; not in logs).
+    """Progress of a long run: a ``tqdm`` bar on a terminal (stderr) or in a notebook,
+    shown once the run has taken 1 s; elsewhere (stderr sent to a file or a pipe) plain
+    lines every :data:`LINE_INTERVAL` s, so logs show the run is alive.
 
     Called with the number of items done; :meth:`close` ends it.
     """
@@ -17,16 +76,27 @@ class ProgressBar:
         from tqdm.auto import tqdm
 
         self.total, self.label, self.unit = total, label, unit
-        self._bar: Any = tqdm(
-            total=total, desc=label, unit=f" {unit}", delay=1.0, disable=None, leave=True
-        )
         self._done = 0
+        self._lines: _Lines | None = None
+        self._bar: Any = None
+        if _plain():
+            self._lines = _Lines(total, label, unit)
+        else:
+            self._bar = tqdm(
+                total=total, desc=label, unit=f" {unit}", delay=1.0, disable=None, leave=True
+            )
 
     def __call__(self, done: int) -> None:
         step = int(done) - self._done
         if step > 0:
-            self._bar.update(step)
             self._done = int(done)
+            if self._lines is not None:
+                self._lines.done = self._done
+            else:
+                self._bar.update(step)
 
     def close(self) -> None:
-        self._bar.close()
+        if self._lines is not None:
+            self._lines.close()
+        else:
+            self._bar.close()

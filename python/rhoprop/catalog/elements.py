@@ -14,7 +14,7 @@ import io
 import json
 import math
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -599,6 +599,7 @@ def fit_objects(
     threads: int | None = None,
     zonal_degree: int = 2,
     history: Mapping[int, Sequence[CatalogObject]] | None = None,
+    progress: Callable[[int], object] | None = None,
 ) -> list[CatalogObject | Exception]:
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
@@ -610,7 +611,8 @@ def fit_objects(
     epoch order so that the fits of a call share their day tiles. ``history``: {NORAD
     id: older element sets} fitted together with the object's (those within
     :data:`HISTORY_DAYS` of it). A fit that leaves an RMS residual above
-    :data:`MAX_FIT_RMS` (diverged) counts as failed.
+    :data:`MAX_FIT_RMS` (diverged) counts as failed. ``progress(done)`` is told the
+    objects finished after each group of fits.
     Returns, in input order, the fitted object (``fit`` set, covariance the TLE accuracy
     plus the fit's) or the exception of a fit that failed."""
     from ..density import SampledModel
@@ -630,7 +632,9 @@ def fit_objects(
         first = span or (default_span(sat) if sat is not None else DEFAULT_SPAN)
         groups.setdefault((float(first[0]), float(first[1])), []).append(i)
     out: list[Any] = [None] * len(objects)
+    finished = 0
     for first, todo in groups.items():
+        finished += len(todo)
         tried = [first] if first[1] <= 0.0 else [first, (first[0], 0.0)]
         for window in tried:
             runs = fit_histories(
@@ -645,6 +649,8 @@ def fit_objects(
             todo = [i for i in todo if isinstance(out[i], Exception)]
             if not todo:
                 break
+        if progress is not None:
+            progress(finished)
     return out
 
 

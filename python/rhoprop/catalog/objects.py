@@ -18,6 +18,7 @@ import numpy.typing as npt
 from ..constants import MU, R_EARTH
 from ..density.model import ModelLike
 from ..errors import CovarianceError, RhopropError
+from ..progress import ProgressBar
 from ..propagation import (
     OrbitState,
     Spacecraft,
@@ -396,12 +397,17 @@ def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:
 
 
 def fit_catalog_objects(
-    objs: list[CatalogObject], model: ModelLike, fit: FitChoice, zonal_degree: int
+    objs: list[CatalogObject],
+    model: ModelLike,
+    fit: FitChoice,
+    zonal_degree: int,
+    progress: bool = False,
 ) -> list[CatalogObject]:
     """``objs`` with those :func:`fit_choice` picks fitted to their element sets with
     ``model`` (real-atmosphere models only; batched in the core,
     :func:`~rhoprop.catalog.fit_objects`). An object whose fit fails stays as it was,
-    the failure in its ``covariance_note``."""
+    the failure in its ``covariance_note``. ``progress``: a progress bar (or log lines)
+    of the objects fitted."""
     import dataclasses
 
     from .elements import fit_objects
@@ -414,7 +420,14 @@ def fit_catalog_objects(
     if not picked:
         return objs
     out = list(objs)
-    fitted = fit_objects([objs[i] for i in picked], model, zonal_degree=zonal_degree)
+    bar = ProgressBar(len(picked), "catalog: fitting", unit="objects") if progress else None
+    try:
+        fitted = fit_objects(
+            [objs[i] for i in picked], model, zonal_degree=zonal_degree, progress=bar
+        )
+    finally:
+        if bar is not None:
+            bar.close()
     for i, f in zip(picked, fitted, strict=True):
         if isinstance(f, Exception):
             note = f"{objs[i].covariance_note}; fit failed: {type(f).__name__}: {f}"

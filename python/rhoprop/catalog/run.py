@@ -396,7 +396,9 @@ def propagate_catalog(
         zonal_degree=zonal_degree_argument(zonal_degree),
     )
     fresh = [i for i in range(len(objs)) if i not in stale]
-    fitted = fit_catalog_objects([objs[i] for i in fresh], model, fit, cfg.zonal_degree)
+    fitted = fit_catalog_objects(
+        [objs[i] for i in fresh], model, fit, cfg.zonal_degree, progress=progress is True
+    )
     for i, obj in zip(fresh, fitted, strict=True):
         objs[i] = obj
     plans = _plans(objs, initial_covariance, drag_sigma, model)

@@ -78,6 +78,7 @@ STAGE_UNITS = {
     "sieve": "grid intervals",
     "refinement": "candidates",
     "Pc (CCSP per model)": "objects",
+    "Pc (per event)": "events",
 }
 #: Events of one pair closer in time than this are one event (found from two chunks), s.
 SAME_EVENT = 1e-3

@@ -44,6 +44,10 @@ INTERVAL_SAMPLES = 50_000
 #: Grid points over the interval; each sample's minimum is refined by a parabola
 #: through the squared distances around its grid minimum (exact for straight motion).
 GRID_POINTS = 801
+#: A first pass on this many points sets aside the samples that cannot come within the
+#: hard-body radius: between two points the distance dips at most half the chord (the
+#: arcs over a 1/200 of an orbit are straight to 1e-4), taken 10 % wider.
+COARSE_POINTS = 101
 #: Samples flown at once (memory: about 100 MB).
 _CHUNK = 5_000
 
@@ -210,6 +214,7 @@ def pc_interval(
     mean = np.concatenate([p2 - p1, w2 - w1])
     root = _sqrt(covs[0] + covs[1])
     times = np.linspace(-width / 2, width / 2, GRID_POINTS)
+    coarse = np.linspace(-width / 2, width / 2, COARSE_POINTS)
     rng = np.random.default_rng(int(seed))
     hits, done = 0, 0
     while done < samples:
@@ -217,9 +222,13 @@ def pc_interval(
         rel = mean + rng.standard_normal((k, 6)) @ root.T
         rho = rel[:, :3] @ basis.T
         rho_dot = (rel[:, 3:] - np.cross(omega, rel[:, :3])) @ basis.T
-        pos = _cw(rho, rho_dot, n, times)
-        d2 = np.einsum("stc,stc->st", pos, pos)
-        hits += int(np.count_nonzero(_minimum(d2) <= hbr * hbr))
+        first = _cw(rho, rho_dot, n, coarse)
+        chord = np.linalg.norm(np.diff(first, axis=1), axis=2).max(axis=1)
+        near = np.linalg.norm(first, axis=2).min(axis=1) - 0.55 * chord <= hbr
+        if near.any():
+            pos = _cw(rho[near], rho_dot[near], n, times)
+            d2 = np.einsum("stc,stc->st", pos, pos)
+            hits += int(np.count_nonzero(_minimum(d2) <= hbr * hbr))
         done += k
     pc = hits / samples
     se = math.sqrt(pc * (1 - pc) / samples)

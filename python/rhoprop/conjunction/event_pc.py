@@ -298,6 +298,8 @@ def event_probabilities(
                 notes[e] = f"{notes[e]}; {why}" if notes[e] else why
             if how == "interval" or (how and not methods[e]):
                 methods[e] = how
+        if report is not None:
+            report("Pc (per event)", e + 1, n_ev)
     have = np.isfinite(pcm)
     wk = np.where(have, w[None, :], 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
