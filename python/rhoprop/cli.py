@@ -60,6 +60,7 @@ def _catalog(args: argparse.Namespace) -> int:
         drag_sigma=args.drag_sigma,
         max_span_days=args.max_span,
         frame=args.frame,
+        start=args.start,
     )
     return 0
 
@@ -328,6 +329,12 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument("file", help="TLE or OMM file")
     cat.add_argument(
         "--end", required=True, help="common end epoch, UTC ISO (e.g. 2002-09-10T00:00Z)"
+    )
+    cat.add_argument(
+        "--start",
+        default=None,
+        help="first output epoch at or after it, UTC ISO (default: the epoch 99 %% of the "
+        "element sets are not after; the newer few have no output before their epoch)",
     )
     cat.add_argument("--out", default="rhoprop-catalog", help="output directory")
     cat.add_argument(

@@ -14,6 +14,7 @@ from ..density import DensityModel, Exponential, Msis
 from ..io import OutputFolder, command_line, oem_names, sanitise, write_oem, write_summary
 from ..options import Duplicates, UncertaintyMethod
 from ..spaceweather import SpaceWeather
+from ..time import to_datetime64
 from .covariance import COVARIANCE_NAMES
 from .elements import Catalog, load
 from .run import MAX_SPAN, STATUSES, propagate_catalog
@@ -166,6 +167,21 @@ def _load(file: str | Path, skip_bad: bool, **options: Any) -> Catalog:
         ) from err
 
 
+#: The default start of ``rhoprop screen`` and ``rhoprop catalog`` is the epoch this
+#: fraction of the element sets is not after: the newest epoch itself would let one
+#: element set dated days ahead (the 2023-07-04 snapshot holds one of 2023-07-07) move the
+#: whole window. The few later ones are propagated back to it by the screen; a catalog
+#: run leaves their outputs before their epoch invalid.
+START_QUANTILE = 0.99
+
+
+def default_start(cat: Catalog) -> np.datetime64:
+    """The default start of ``rhoprop screen`` and ``rhoprop catalog``: the
+    :data:`START_QUANTILE` quantile of the element sets' epochs (UTC)."""
+    epochs = np.sort(np.array([o.state.epoch for o in cat], dtype="datetime64[ns]"))
+    return np.datetime64(epochs[int(START_QUANTILE * (len(epochs) - 1))], "ns")
+
+
 def run_catalog_file(
     file: str | Path,
     end: str,
@@ -190,6 +206,7 @@ def run_catalog_file(
     drag_sigma: str | float = "auto",
     max_span_days: float | None = MAX_SPAN / 86400.0,
     frame: str = "TEME",
+    start: str | None = None,
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
     file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
@@ -211,7 +228,10 @@ def run_catalog_file(
     ``max_span_days``: objects with an epoch more days before ``end`` end "stale", not
     run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). ``frame``: the OEM
     files' REF_FRAME, "TEME" (default, as computed) or "GCRF"/"EME2000" (rotated,
-    :func:`~rhoprop.io.write_oem`). Returns the paths written."""
+    :func:`~rhoprop.io.write_oem`). ``start``: the first output epoch at or after it
+    (UTC ISO; default :func:`default_start`, the epoch 99 % of the element sets are not
+    after: the newer few have no valid output before their epoch). Returns the paths
+    written."""
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma: float | Literal["auto"] = "auto"
     if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
@@ -260,6 +280,7 @@ def run_catalog_file(
         drag_sigma=sigma,
         fit="auto" if fit == "auto" else False,
         max_span=max_span_option(max_span_days),
+        start=to_datetime64(start, "--start") if start else default_start(cat),
     )
     wall = time.perf_counter() - t0
     directory = folder.directory
@@ -279,7 +300,8 @@ def run_catalog_file(
                 file=sys.stderr,
             )
     print(
-        f"{len(cat)} objects ({len(cat.skipped)} skipped), {method}, to {end}: "
+        f"{len(cat)} objects ({len(cat.skipped)} skipped), {method}, "
+        f"{_iso(result.epochs[0])} to {_iso(result.epochs[-1])}: "
         f"{wall:.1f} s ({len(cat) / wall:.1f} objects/s); "
         + ", ".join(f"{v} {k}" for k, v in counts.items())
     )
@@ -291,6 +313,10 @@ def run_catalog_file(
     )
     print(atlas_line())
     return [*paths, summary, manifest]
+
+
+def _iso(t: np.datetime64) -> str:
+    return str(np.datetime64(t, "s")) + "Z"
 
 
 def max_span_option(days: float | None) -> float | None:

@@ -461,11 +461,14 @@ def _run_object(
     with the object named and chained to the cause. ``stop`` (local runs) ends the
     object's Monte Carlo early after Ctrl-C in the caller. ``done`` holds runs already
     made for this object by :func:`_ccsp_chunk` (its mean orbit, its CCSP), used instead
-    of running them again."""
+    of running them again. Epochs before the object's own (a run's ``start`` before it)
+    are not valid: rhoprop propagates forward only."""
     if stop is not None and stop.is_set():
         raise KeyboardInterrupt("catalog run interrupted")
     try:
-        return _propagate_object(plan, model, epochs, cfg, stop, done or {})
+        lead = leading_epochs(epochs, plan.obj)
+        out = _propagate_object(plan, model, epochs[lead:], cfg, stop, done or {})
+        return out if not lead else _after(out, lead)
     except Exception as err:
         if cfg.errors == "raise":
             named = _object_error(err, plan.obj)
@@ -475,6 +478,27 @@ def _run_object(
         return ObjectOutcome.without_output(
             len(epochs), Status.FAILED, f"{type(err).__name__}: {err}", err
         )
+
+
+def leading_epochs(epochs: np.ndarray, obj: CatalogObject) -> int:
+    """How many of the (increasing) ``epochs`` come before the object's epoch."""
+    return int(np.count_nonzero(to_seconds(epochs, obj.state.epoch) < 0))
+
+
+def _after(out: ObjectOutcome, lead: int) -> ObjectOutcome:
+    """``out`` behind ``lead`` epochs without output (before the object's epoch)."""
+    import dataclasses
+
+    def pad(a: np.ndarray, fill: Any) -> np.ndarray:
+        return np.concatenate([np.full((lead, *a.shape[1:]), fill, dtype=a.dtype), a])
+
+    return dataclasses.replace(
+        out,
+        mean=pad(out.mean, np.nan),
+        cov=pad(out.cov, np.nan),
+        valid=pad(out.valid, False),
+        gaussian=None if out.gaussian is None else pad(out.gaussian, True),
+    )
 
 
 def _propagate_object(
@@ -631,6 +655,7 @@ def _ccsp_chunk(
         i, obj = plan.index, plan.obj
         craft = Spacecraft(1.0, obj.drag_parameter)
         offsets = to_seconds(epochs, obj.state.epoch)
+        offsets = offsets[leading_epochs(epochs, obj) :]
         if offsets[-1] <= 0:
             continue
         updates, outputs = update_schedule(obj.state, offsets, cfg.update_interval)

@@ -98,7 +98,8 @@ class CatalogResult:
         method: "ccsp" or "monte_carlo".
         covariance_note: per object, what the covariance includes (initial covariance
             and what propagation adds), in words.
-        status: per object (objects,): ``"propagated"`` (every output valid),
+        status: per object (objects,): ``"propagated"`` (every output from the
+            object's epoch on valid),
             ``"non_gaussian"`` (every output valid, but from some epoch on the Cartesian
             covariance no longer holds the spread's shape: see ``gaussian``),
             ``"decayed"`` (the mean orbit came down at ``decay_epoch``), ``"shortened"``
@@ -242,11 +243,16 @@ def _shipped_model(model: Any) -> Any:
     return model
 
 
-def common_epochs(objects: list[CatalogObject], end: np.datetime64, step: float) -> np.ndarray:
-    """Output epochs shared by all objects: end, end - step, ... not before the latest
-    object epoch (at least the end itself)."""
-    latest = max(o.state.epoch for o in objects)
-    span = seconds_between(latest, end)
+def common_epochs(
+    objects: list[CatalogObject],
+    end: np.datetime64,
+    step: float,
+    start: np.datetime64 | None = None,
+) -> np.ndarray:
+    """Output epochs shared by all objects: end, end - step, ... not before ``start``
+    (default: the latest object epoch), at least the end itself."""
+    first = max(o.state.epoch for o in objects) if start is None else start
+    span = seconds_between(first, end)
     k = int(np.floor(span / step * (1 + 1e-12)))
     offsets = -step * np.arange(k, -1, -1)
     return offsets_to_epochs(end, offsets)
@@ -274,6 +280,7 @@ def propagate_catalog(
     dynamics: Dynamics | None = None,
     fit: FitChoice = "auto",
     max_span: float | None = MAX_SPAN,
+    start: EpochLike | None = None,
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -289,6 +296,10 @@ def propagate_catalog(
             seeded with ``seed + i``; statistics over the members still flying at each
             output).
         output_step: spacing of the common output epochs, s, counted back from ``end``.
+        start: no output epoch before it (UTC; default: the newest object's epoch, so
+            every object is valid at every output). An earlier start gives the objects
+            whose epoch is later no valid output before their epoch (rhoprop propagates
+            forward only); it must be before ``end``.
         client: a ``dask.distributed.Client``: objects are split into chunks of
             ``chunk_size``, the atmosphere is sent once and replicated to every worker
             (recomputed if a worker dies), failed tasks are retried twice; results equal
@@ -403,7 +414,7 @@ def propagate_catalog(
         objs[i] = obj
     plans = _plans(objs, initial_covariance, drag_sigma, model)
     notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
-    epochs = common_epochs(objs, end64, step)
+    epochs = common_epochs(objs, end64, step, _start(start, end64))
     shipped = _shipped_model(model)
     shown = None
     if callable(progress):
@@ -426,6 +437,16 @@ def propagate_catalog(
         if shown is not None:
             shown.close()
     return _result(objs, epochs, method, results, plans, notes)
+
+
+def _start(start: EpochLike | None, end: np.datetime64) -> np.datetime64 | None:
+    """``start`` checked against ``end`` (None: the default)."""
+    if start is None:
+        return None
+    first = to_datetime64(start, "start")
+    if not first < end:
+        raise ValueError(f"start {first} must be before end {end}")
+    return first
 
 
 def beyond_max_span(seconds: float, side: str, limit: float | None) -> str:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..catalog.elements import Catalog, load
-from ..catalog.job import max_span_option
+from ..catalog.job import default_start, max_span_option
 from ..catalog.run import MAX_SPAN
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
@@ -108,20 +108,6 @@ def output_events(res: AllOnAllResult, folder: OutputFolder) -> list[Path]:
     except ImportError as err:
         print(f"CDMs not written: {err}", file=sys.stderr)
     return written
-
-
-#: The default start is the epoch this fraction of the element sets is not after: the
-#: newest epoch itself would let one element set dated days ahead (the 2023-07-04
-#: snapshot holds one of 2023-07-07) move the whole window; the few later ones are
-#: propagated back to the start.
-START_QUANTILE = 0.99
-
-
-def default_start(cat: Catalog) -> np.datetime64:
-    """The default start of ``rhoprop screen``: the :data:`START_QUANTILE` quantile of the
-    element sets' epochs (UTC)."""
-    epochs = np.sort(np.array([o.state.epoch for o in cat], dtype="datetime64[ns]"))
-    return np.datetime64(epochs[int(START_QUANTILE * (len(epochs) - 1))], "ns")
 
 
 def _catalog(file: str | Path, skip_bad: bool) -> Catalog:
