@@ -316,7 +316,7 @@ def run_catalog_file(
 
 
 def _iso(t: np.datetime64) -> str:
-    return str(np.datetime64(t, "s")) + "Z"
+    return str(t.astype("datetime64[s]")) + "Z"
 
 
 def max_span_option(days: float | None) -> float | None:
