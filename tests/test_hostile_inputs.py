@@ -111,6 +111,11 @@ def test_omm_files_that_do_not_parse_name_the_file_and_field(tmp_path):
         kept = rp.catalog.load(tmp_path / "two.json", errors="record")
         assert [o.norad_id for o in kept.objects] == [25545]
         assert len(kept.skipped) == 1 and field in kept.skipped[0][1]
+    # A mean motion of 1e300 rev/day: SGP4 reports no error and returns NaN; the message
+    # said "position[0] must be finite".
+    (tmp_path / "fast.json").write_text(json.dumps([{**record, "MEAN_MOTION": 1e300}]))
+    with pytest.raises(ValueError, match=r"fast\.json.*no finite state.*describe no orbit"):
+        rp.catalog.load(tmp_path / "fast.json")
 
 
 def test_a_damaged_gzip_names_the_file(tmp_path):

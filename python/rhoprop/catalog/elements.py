@@ -124,6 +124,14 @@ def _object_from_satrec(
     err, r, v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
     if err:
         raise ValueError(f"{where}: SGP4 error {err} at the epoch: {SGP4_ERRORS.get(err, '')}")
+    if not np.isfinite([*r, *v]).all():
+        # SGP4 reports no error for some impossible elements (a mean motion of 1e300
+        # rev/day: semi-major axis 1e-200 Earth radii) and returns NaN.
+        raise ValueError(
+            f"{where}: SGP4 gives no finite state at the epoch (mean motion "
+            f"{sat.no_kozai * 1440 / (2 * np.pi):.6g} rev/day, eccentricity {sat.ecco:.6g}): "
+            "the elements describe no orbit"
+        )
     # A TLE epoch counts 86400-s days on the UTC calendar (no leap seconds).
     epoch = from_jd(sat.jdsatepoch, sat.jdsatepochF, scale="utc")
     bstar = float(sat.bstar)
