@@ -140,3 +140,26 @@ def test_few_members_are_not_judged():
     many = rng.normal(size=(4000, 1, 3))
     share = gaussian_check.member_coverage(many, mean[:1], cov[:1])[0]
     assert share == pytest.approx(0.95, abs=4 * math.sqrt(0.95 * 0.05 / 4000))
+
+
+def test_ensemble_components_say_where_their_gaussian_holds():
+    # Two exponential models at 300 km for 7 days: each CCSP component's arc curves past
+    # a few days (as the single run above), and both say so at the end, not at the start.
+    state, craft = circular(300e3), rp.scenarios.paper_spacecraft()
+    models = {
+        "low": rp.density.Exponential.benchmark(rel_sigma=0.2),
+        "high": rp.density.Exponential(1.3 * 3.725e-12, 400e3, 58.515e3, rel_sigma=0.2),
+    }
+    ens = rp.ensemble(
+        state,
+        craft,
+        models,
+        "low",
+        method="ccsp",
+        duration=7 * DAY,
+        drag_sigma=0.1,
+    )
+    ok = ens.gaussian()
+    assert ok.shape == (len(ens.times), 2)
+    day = int(np.argmin(np.abs(ens.times - DAY)))
+    assert ok[day].all() and not ok[-1].any()

@@ -81,6 +81,32 @@ class EnsembleResult:
     component_covariances: np.ndarray
     weights: np.ndarray
 
+    def gaussian(self) -> np.ndarray:
+        """Per output and model (nt, k), whether that model's Gaussian holds the shape of
+        its spread (False: it curves along the orbit, and the component, an ellipsoid,
+        misses members): a CCSP's arc sag share below 0.5, a Monte Carlo's members 90 %
+        or more inside their own 95 % region (:mod:`rhoprop.propagation.gaussian_check`,
+        docs/mc-vs-ccsp.md, "Every run knows")."""
+        from ..propagation.gaussian_check import arc_sag_share, holds, member_coverage
+
+        out = np.ones((len(self.times), len(self.names)), dtype=bool)
+        for j, name in enumerate(self.names):
+            r = self.results[name]
+            if isinstance(r, CcspResult):
+                if r.element_mean is None or r.element_covariance is None:
+                    continue
+                ok = holds(
+                    sag_share=arc_sag_share(
+                        r.element_mean, r.element_covariance, r.rtn_covariance
+                    )
+                )
+            else:
+                m = r.moments()
+                ok = holds(coverage=member_coverage(r.positions, m.mean, m.covariance))
+            at = np.searchsorted(r.times, np.asarray(self.times) * (1 - 1e-12))
+            out[:, j] = ok[np.clip(at, 0, len(ok) - 1)]
+        return out
+
     def mixture(self, time_index: int = -1) -> GaussianMixture:
         """The 3-D position mixture (RTN of the reference mean orbit, m) at an output.
         A model without statistics then (all its members, or its CCSP, came down) is a
