@@ -96,9 +96,7 @@ class EnsembleResult:
                 if r.element_mean is None or r.element_covariance is None:
                     continue
                 ok = holds(
-                    sag_share=arc_sag_share(
-                        r.element_mean, r.element_covariance, r.rtn_covariance
-                    )
+                    sag_share=arc_sag_share(r.element_mean, r.element_covariance, r.rtn_covariance)
                 )
             else:
                 m = r.moments()
