@@ -248,3 +248,21 @@ def test_tle_covariance_near_the_apogee_of_an_eccentric_orbit_has_full_rank(test
         [obj], rp.scenarios.benchmark_exponential(0.2), "2023-06-30T13:00", progress=False
     )
     assert list(r.status) == ["propagated"]
+
+
+def test_a_fitted_drag_far_from_its_b_star_prior_is_not_taken_for_drag(tle_file, atmosphere):
+    # A manoeuvring satellite's fit took its thrust for drag: 6.9 m^2/kg (a real Starlink,
+    # B* > 0) was accepted and propagated. Beyond 10x its B* prior, or pinned at the
+    # floor, a fit now counts as failed and the element set runs unfitted.
+    import dataclasses
+
+    from rhoprop.catalog.elements import _fitted
+
+    obj = catalog.load(tle_file, errors="record")[0]
+    assert obj.bstar > 0
+    f = fit_element_set(obj, atmosphere)
+    window = (-86400.0, 0.0)
+    assert isinstance(_fitted(obj, f, window), catalog.CatalogObject)
+    for value in (6.9, 1e-4, f.prior / 11):
+        err = _fitted(obj, dataclasses.replace(f, drag_parameter=value), window)
+        assert isinstance(err, ValueError) and "not drag" in str(err), value
