@@ -587,3 +587,18 @@ def test_cli_catalog_starts_where_99_percent_of_the_epochs_are(tmp_path, capsys)
     printed = capsys.readouterr().out
     # Six epochs 2.4 h apart: the 99 % quantile is the fifth (2002-09-06T21:36).
     assert "2002-09-06T22:00:00Z to 2002-09-07T06:00:00Z" in printed, printed
+
+
+def test_an_indefinite_ccsp_covariance_is_near_decay_only_with_a_low_perigee():
+    # An HEO of 372 x 31,841 km was reported "near decay" when its CCSP covariance lost
+    # definiteness; the reason now follows the perigee.
+    from rhoprop.catalog.objects import _why_indefinite
+    from rhoprop.constants import MU, R_EARTH
+
+    def orbit(perigee_km: float, apogee_km: float) -> rp.OrbitState:
+        rp_, ra = R_EARTH + perigee_km * 1e3, R_EARTH + apogee_km * 1e3
+        v = np.sqrt(MU * (2 / rp_ - 2 / (rp_ + ra)))
+        return rp.OrbitState("2023-11-13T00:00", [rp_, 0.0, 0.0], [0.0, v, 0.0])
+
+    assert _why_indefinite(orbit(180, 300)) == "near decay"
+    assert "outgrew one Gaussian" in _why_indefinite(orbit(372, 31_841))

@@ -713,6 +713,23 @@ def _clear_of_floor(result: CcspResult, cfg: RunSettings) -> bool:
     return bool(low > float(cfg.floor_altitude) + MEAN_ORBIT_MARGIN)
 
 
+#: Perigee altitude (m) below which a CCSP covariance that loses definiteness is said to
+#: be near decay; above it the spread has outgrown one Gaussian (an HEO of 372 x 31,841 km
+#: was reported "near decay").
+NEAR_DECAY_PERIGEE = 250e3
+
+
+def _why_indefinite(state: OrbitState) -> str:
+    """Why a CCSP covariance of an object starting at ``state`` lost definiteness, in words."""
+    a, e = axis_and_eccentricity(state)
+    if np.isfinite(a) and a * (1.0 - e) - R_EARTH < NEAR_DECAY_PERIGEE:
+        return "near decay"
+    return (
+        "its spread outgrew one Gaussian, perigee above "
+        f"{NEAR_DECAY_PERIGEE / 1e3:.0f} km: method='monte_carlo' gives its shape"
+    )
+
+
 def _iso(t: np.datetime64) -> str:
     return str(t.astype("datetime64[ms]")) + "Z"
 
@@ -763,7 +780,8 @@ def _ccsp_outputs(
         k = int(np.count_nonzero(offsets < t_bad))
         why = (
             f"the CCSP covariance lost positive definiteness at "
-            f"{_iso(add_seconds(state.epoch, t_bad))} (near decay); later outputs invalid"
+            f"{_iso(add_seconds(state.epoch, t_bad))} ({_why_indefinite(state)}); later "
+            "outputs invalid"
         )
         if k == 0:
             return np.empty((0, 6)), np.empty((0, 6, 6)), why, np.empty(0, dtype=bool)
