@@ -6,10 +6,11 @@
 //! section 3.3.2: the Sun from its mean anomaly (about 0.1 % in distance, 1 arcmin in
 //! direction, with the perigee's slow advance added), the Moon from the leading terms of Brown's theory (a few arcmin, about
 //! 500 km). Positions are geocentric, in the mean equator and equinox of J2000 (EME2000),
-//! which rhoprop uses as its inertial frame to within the TEME/J2000 precession of
-//! 0.3 deg by 2023: a 0.5 % error in the direction of a perturbation that is itself a
-//! 1e-4 fraction of the Earth's pull at GEO. Checked against an independent ephemeris
-//! (ERFA's through astropy) in the tests below.
+//! checked against an independent ephemeris (ERFA's through astropy) in the tests below.
+//! The pulls ([`ThirdBodies`]) rotate them to the mean equator and equinox of date (IAU
+//! 1976 precession, [`precession`]): the frame of rhoprop's states, TEME of date from
+//! element sets, to within nutation (under 0.01 deg), and the frame its J2 and Earth
+//! rotation assume. Left in J2000 they were 0.31-0.36 deg off in 2023-2026.
 
 use crate::constants::SECONDS_PER_DAY;
 
@@ -28,6 +29,35 @@ const DEG: f64 = std::f64::consts::PI / 180.0;
 /// Julian centuries of TT since J2000 for `ut1` seconds since J2000 (UT1).
 fn centuries(ut1: f64) -> f64 {
     (ut1 + TT_MINUS_UT1) / (36_525.0 * SECONDS_PER_DAY)
+}
+
+/// The IAU 1976 precession matrix (Lieske et al. 1977), J2000 mean equator and equinox to
+/// those of date, `t` Julian centuries of TT since J2000: R3(-z) R2(theta) R3(-zeta).
+pub fn precession(t: f64) -> [[f64; 3]; 3] {
+    let zeta = (2306.2181 * t + 0.30188 * t * t + 0.017998 * t * t * t) * ARCSEC;
+    let z = (2306.2181 * t + 1.09468 * t * t + 0.018203 * t * t * t) * ARCSEC;
+    let theta = (2004.3109 * t - 0.42665 * t * t - 0.041833 * t * t * t) * ARCSEC;
+    let (sz, cz) = zeta.sin_cos();
+    let (sza, cza) = z.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    [
+        [
+            cza * ct * cz - sza * sz,
+            -cza * ct * sz - sza * cz,
+            -cza * st,
+        ],
+        [
+            sza * ct * cz + cza * sz,
+            -sza * ct * sz + cza * cz,
+            -sza * st,
+        ],
+        [st * cz, -st * sz, ct],
+    ]
+}
+
+/// `m v` for a 3x3 matrix and a vector.
+fn rotate(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2])
 }
 
 /// Ecliptic (longitude, latitude, distance m) to EME2000 Cartesian, m.
@@ -108,9 +138,12 @@ pub struct ThirdBodies {
 }
 
 impl ThirdBodies {
-    /// The Sun and the Moon at `ut1` s since J2000.
+    /// The Sun and the Moon at `ut1` s since J2000, in the mean equator and equinox of
+    /// that date.
     pub fn at(ut1: f64) -> Self {
+        let of_date = precession(centuries(ut1));
         let body = |s: [f64; 3], mu: f64| {
+            let s = rotate(&of_date, s);
             let d = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
             let k = mu / (d * d * d);
             (s, mu, [k * s[0], k * s[1], k * s[2]])
@@ -139,6 +172,35 @@ impl ThirdBodies {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn precession_equals_erfa_pmat76() {
+        // ERFA's pmat76 (through pyerfa) at 2024-06-17T00:00 UTC: TT JD 2460478.50080074.
+        let erfa = [
+            [
+                0.999_982_216_856_306_1,
+                -0.005_469_734_936_745_44,
+                -0.002_376_545_995_649_408_7,
+            ],
+            [
+                0.005_469_734_936_096_066,
+                0.999_985_040_866_852_5,
+                -6.499_869_364_404_125e-6,
+            ],
+            [
+                0.002_376_545_997_143_975,
+                -6.499_322_883_349_552e-6,
+                0.999_997_175_989_453_6,
+            ],
+        ];
+        let t = (2_460_478.500_800_74 - 2_451_545.0) / 36_525.0;
+        let p = super::precession(t);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((p[i][j] - erfa[i][j]).abs() < 2e-11, "{i} {j}: {}", p[i][j]);
+            }
+        }
+    }
+
     use super::*;
     use crate::frames::{dot, norm};
 
