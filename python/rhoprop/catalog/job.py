@@ -233,13 +233,7 @@ def run_catalog_file(
     after: the newer few have no valid output before their epoch). Returns the paths
     written."""
     covariance = initial_covariance_option(initial_covariance or "object")
-    sigma: float | Literal["auto"] = "auto"
-    if not (isinstance(drag_sigma, str) and drag_sigma == "auto"):
-        try:
-            sigma = float(drag_sigma)
-        except ValueError:
-            msg = f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
-            raise ValueError(msg) from None
+    sigma = _drag_sigma_option(drag_sigma)
     drag = read_drag_file(drag_file, cd) if drag_file is not None else None
     if drag_file is None and cd is not None:
         raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
@@ -313,6 +307,17 @@ def run_catalog_file(
     )
     print(atlas_line())
     return [*paths, summary, manifest]
+
+
+def _drag_sigma_option(drag_sigma: str | float) -> float | Literal["auto"]:
+    """``--drag-sigma``: "auto" or a number (its text)."""
+    if isinstance(drag_sigma, str) and drag_sigma == "auto":
+        return "auto"
+    try:
+        return float(drag_sigma)
+    except ValueError:
+        msg = f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
+        raise ValueError(msg) from None
 
 
 def _iso(t: np.datetime64) -> str:

@@ -489,7 +489,7 @@ def _after(out: ObjectOutcome, lead: int) -> ObjectOutcome:
     """``out`` behind ``lead`` epochs without output (before the object's epoch)."""
     import dataclasses
 
-    def pad(a: np.ndarray, fill: Any) -> np.ndarray:
+    def pad(a: np.ndarray, fill: float) -> np.ndarray:
         return np.concatenate([np.full((lead, *a.shape[1:]), fill, dtype=a.dtype), a])
 
     return dataclasses.replace(
