@@ -263,3 +263,18 @@ def test_default_windows_hold_real_decays(test_data):
     width = (r.epoch_q975 - r.epoch_q025) / remaining
     assert held.mean() >= 0.70, f"{held.mean():.0%} of windows hold the decay day"
     assert np.nanmedian(width.astype(float)) <= 0.80, f"median width {np.nanmedian(width):.0%}"
+
+
+def test_an_element_set_below_the_floor_is_named():
+    # One element set already at 75 km stopped a whole reentry run with "initial geodetic
+    # altitude ... below the decay floor", naming no object.
+    import math
+
+    from rhoprop.catalog import CatalogObject
+
+    r = rp.constants.R_EARTH + 75e3
+    v = math.sqrt(rp.constants.MU / r)
+    state = rp.OrbitState("2024-03-01T00:00", [r, 0.0, 0.0], [0.0, 0.6 * v, 0.8 * v])
+    low = CatalogObject("DOWN 99077", 99077, state, 0.02, 1e-3, "test")
+    with pytest.raises(ValueError, match=r"object 99077 \(DOWN 99077, test\).*floor"):
+        rp.catalog.reentry([low], rp.density.Exponential.benchmark(), duration=86400.0, n=10)

@@ -246,19 +246,27 @@ def reentry(
         values = obj.drag_parameter * np.exp(rel * normal) if groups > 1 else [obj.drag_parameter]
         times = []
         for g, value in enumerate(values):
-            mc = monte_carlo(
-                obj.state,
-                Spacecraft(1.0, float(value)),
-                model,
-                span,
-                n=per_group,
-                kappa=process,
-                seed=seed + 1000 * i + g,
-                output_step=None,
-                progress=check,
-                dynamics=dyn,
-                threads=1,
-            )
+            try:
+                mc = monte_carlo(
+                    obj.state,
+                    Spacecraft(1.0, float(value)),
+                    model,
+                    span,
+                    n=per_group,
+                    kappa=process,
+                    seed=seed + 1000 * i + g,
+                    output_step=None,
+                    progress=check,
+                    dynamics=dyn,
+                    threads=1,
+                )
+            except Exception as err:  # named: one element set below the floor, say
+                from .objects import _object_error
+
+                named = _object_error(err, obj)
+                if named is err:
+                    raise
+                raise named from err
             times.append(np.asarray(mc.decay_times, dtype=float))
         return np.concatenate(times), obj.drag_parameter, rel
 

@@ -283,8 +283,17 @@ class Atlas:
         if coverage is not None:
             first, last = coverage
             if t0 < first or t1 > last:
+                hint = (
+                    "; after the record, give the model predicted drivers "
+                    "(space_weather=rp.SpaceWeather().with_forecast() for the NRLMSIS and "
+                    "Jacchia models) or a newer record ('rhoprop data refresh'; JB2008: "
+                    "rp.density.Jb2008Indices.refresh)"
+                    if t1 > last
+                    else ""
+                )
                 raise OutsideRecordError(
-                    f"{self.model!r} has drivers from {first} to {last}; the run needs {t0} to {t1}"
+                    f"{self.model!r} has drivers from {first} to {last}; the run needs {t0} "
+                    f"to {t1}{hint}"
                 )
         day = _day(t0)
         last_day = _day(t1)
