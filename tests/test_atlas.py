@@ -241,3 +241,62 @@ def test_a_floor_below_the_atlas_is_refused_and_stages_below_the_bottom_read_it(
         ut1_seconds(t), inertial(t, np.full(2, 10.0), np.full(2, 20.0), np.array([50e3, 20e3]))
     )
     assert mean[1] == pytest.approx(mean[0], rel=1e-9)  # 50 km is the bottom node
+
+
+def test_a_long_run_streams_its_tiles_and_gives_the_bits_of_the_whole_field(monkeypatch):
+    # A 12-day Monte Carlo (more than STREAM_TILES day tiles) gets a streamed field that
+    # holds STREAM_KEEP tiles besides those in use, not all twelve: the members, the mean
+    # orbit and the densities are those of the field of every tile, bit for bit.
+    model = rp.density.FromFunction(exp_function, name="analytic", resolution=COARSE)
+    state = rp.scenarios.paper_state()
+    days = 12.0
+    streamed = model.atmosphere(state, days * 86400.0)
+    assert isinstance(streamed, _core.StreamedAtmosphere)
+    assert len(streamed) == 13  # the paper's epoch is mid-day: 13 day tiles
+    whole = model.atlas.field(state.epoch, rp.time.add_seconds(state.epoch, days * 86400.0))
+    assert isinstance(whole, _core.GriddedAtmosphere)
+
+    def run(atmosphere):
+        return rp.monte_carlo(
+            state,
+            rp.scenarios.paper_spacecraft(),
+            atmosphere,
+            days * 86400.0,
+            n=40,
+            seed=3,
+            output_step=6 * 3600.0,
+            record_density=True,
+            progress=False,
+            drag_sigma=0.1,
+        )
+
+    a, b = run(whole), run(streamed)
+    np.testing.assert_array_equal(a.positions, b.positions)
+    np.testing.assert_array_equal(a.velocities, b.velocities)
+    np.testing.assert_array_equal(a.densities, b.densities)
+    np.testing.assert_array_equal(a.mean_orbit.positions, b.mean_orbit.positions)
+    assert streamed.loads >= 13
+    assert streamed.nbytes <= atlas_module.STREAM_KEEP * max(
+        t.nbytes
+        for t in [model.atlas.tile(*w) for w in model.atlas.windows(state.epoch, state.epoch)]
+    )
+    # Through the model (the path every propagator takes): the same bits again.
+    c = run(model)
+    np.testing.assert_array_equal(a.positions, c.positions)
+
+
+def test_a_tile_that_fails_in_a_streamed_run_raises_its_own_error():
+    # The source runs on a worker thread inside the core; its exception reaches the
+    # caller as itself (here the model's ZeroDivisionError on day 10), not as a core
+    # message.
+    state = rp.scenarios.paper_state()
+    start = np.datetime64(state.epoch, "ns")
+
+    def failing(t, lat, lon, h):
+        if (np.asarray(t) > start + np.timedelta64(10, "D")).any():
+            raise ZeroDivisionError("the model broke on day 10")
+        return exp_function(t, lat, lon, h)
+
+    model = rp.density.FromFunction(failing, name="failing", resolution=COARSE)
+    with pytest.raises(ZeroDivisionError, match="broke on day 10"):
+        rp.propagate(state, rp.scenarios.paper_spacecraft(), model, 12 * 86400.0)

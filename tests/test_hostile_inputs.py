@@ -372,3 +372,17 @@ def test_numpy_scalars_are_numbers_for_the_pc_options():
         check_options({"m": None}, None, np.bool_(True), None)
     with pytest.raises(ValueError, match="radii"):
         check_options({"m": None}, None, None, {5: np.float32(-1.0)})
+
+
+def test_a_ten_year_run_is_not_too_many_steps_and_the_limit_names_the_run():
+    # A 10-year lifetime run stopped at "more than 1000000 steps" (about 2 million are
+    # needed); the limit is now one step per 10 s of the run at least, and an error names
+    # the run's end.
+    state, light = rp.scenarios.paper_state(), rp.Spacecraft(2.2, 1e-6)
+    model = rp.scenarios.benchmark_exponential(0.2)
+    ten_years = 3650 * 86400.0
+    out = rp.propagate(state, light, model, ten_years, output_step=365 * 86400.0)
+    assert out.times[-1] == ten_years and np.isfinite(out.positions).all()
+    with pytest.raises(rp.errors.TooManyStepsError, match="of a run to 86400") as err:
+        rp.propagate(state, light, model, 86400.0, step=1e-3)
+    assert err.value.end == 86400.0 and err.value.max_steps == 1_000_000

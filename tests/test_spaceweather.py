@@ -222,8 +222,23 @@ def test_bad_txt_raises(tmp_path, replacements, message):
         text = text.replace(old, new, 1)
     path = tmp_path / "bad.txt"
     path.write_text(text)
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ValueError, match=r"bad\.txt: .*" + message):
         SpaceWeather(path)
+
+
+def test_a_damaged_record_names_its_file(tmp_path, monkeypatch):
+    # A csv without its columns and a damaged bundled SW-All.txt said "missing columns"
+    # or "no 'BEGIN OBSERVED'" without the file.
+    path = tmp_path / "SW-All.csv"
+    path.write_text("DATE,F10.7_OBS\n2002-09-05,150\n")
+    with pytest.raises(ValueError, match=r"SW-All\.csv: space-weather csv: missing columns"):
+        SpaceWeather(path)
+    bundled = tmp_path / "pkg" / "SW-All.txt"
+    bundled.parent.mkdir()
+    bundled.write_text(mini_txt().replace("BEGIN OBSERVED", "BEGIN X"))
+    monkeypatch.setattr("rhoprop.spaceweather.files.bundled_path", lambda: bundled)
+    with pytest.raises(ValueError, match=r"pkg/SW-All\.txt: space-weather record"):
+        SpaceWeather()
 
 
 def test_daily_gap_raises(tmp_path):

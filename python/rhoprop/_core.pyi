@@ -103,6 +103,32 @@ class GriddedAtmosphere:
         """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
 
 @final
+class StreamedAtmosphere:
+    """A field whose tiles ``source(k)`` gives when a run reaches them (at most ``keep``
+    held besides those in use); lookups give the bits of the field of all the tiles."""
+
+    def __new__(
+        cls,
+        epoch: float,
+        bounds: list[float],
+        source: Callable[[int], FieldTile],
+        open_altitude: bool,
+        keep: int,
+    ) -> Self: ...
+    @property
+    def loads(self) -> int:
+        """Tiles asked of the source so far."""
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the tiles the field holds now."""
+    def __len__(self) -> int: ...
+    def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
+        """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
+
+#: The core atmospheres every propagator takes.
+_Atmosphere = ExponentialAtmosphere | GriddedAtmosphere | StreamedAtmosphere
+
+@final
 class FieldTile:
     """One time window of a sampled field (an atlas tile)."""
 
@@ -155,7 +181,7 @@ class _MonteCarloOutput(TypedDict):
     drag_factors: _F64
 
 def propagate(
-    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    atmosphere: _Atmosphere,
     epoch: float,
     state: _F64,
     drag: float,
@@ -169,7 +195,7 @@ def propagate(
     """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
 
 def ccsp(
-    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    atmosphere: _Atmosphere,
     epoch: float,
     state: _F64,
     drag: float,
@@ -194,7 +220,7 @@ def ccsp(
     to its own time."""
 
 def ccsp_many(
-    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    atmosphere: _Atmosphere,
     objects: list[
         tuple[float, _F64, float, _F64, _F64, float, float, tuple[float, float, float] | None, _F64]
     ],
@@ -211,7 +237,7 @@ def ccsp_many(
     the dict of ``ccsp`` or the exception its run raised."""
 
 def fit_orbits(
-    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    atmosphere: _Atmosphere,
     jobs: list[
         tuple[float, _F64, float, float, float, int, int, npt.NDArray[np.int64], _F64, _F64]
     ],
@@ -228,7 +254,7 @@ def fit_orbits(
     states (n, 6), J^T J (7, 7), iterations, converged) or the exception of that job."""
 
 def monte_carlo(
-    atmosphere: ExponentialAtmosphere | GriddedAtmosphere,
+    atmosphere: _Atmosphere,
     epoch: float,
     state: _F64,
     drag: float,

@@ -18,7 +18,7 @@ caller ever parses a message).
         │                        .time, .min_eigenvalue
         ├── IntegrationError     the integrator could not complete (core)
         │   ├── StepUnderflowError   .time, .step
-        │   └── TooManyStepsError    .max_steps, .time
+        │   └── TooManyStepsError    .max_steps, .time, .end
         ├── OutsideRecordError   a lookup outside a data record (space weather, PcaRom)
         ├── DecayError           the object decayed where a result needs it in orbit
         └── ScenarioError        an invalid scenario file
@@ -108,10 +108,11 @@ class StepUnderflowError(IntegrationError):
 
 
 class TooManyStepsError(IntegrationError):
-    """More than ``max_steps`` steps before ``time`` (s)."""
+    """More than ``max_steps`` steps before ``time`` (s) of a run to ``end`` (s)."""
 
     max_steps: int | None = None
     time: float | None = None
+    end: float | None = None
 
 
 class OutsideRecordError(RhopropError):

@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, NoReturn
 
 import numpy as np
 
@@ -747,3 +747,22 @@ def _fit_all(
         else:
             cat.skipped.append((obj.source, message))
     cat.objects = kept
+
+
+def object_error(err: Exception, obj: CatalogObject) -> Exception:
+    """``err`` again (same type) with the object named in front, or ``err`` itself when
+    its type takes no plain message."""
+    try:
+        named = type(err)(f"object {obj.norad_id} ({obj.name}, {obj.source}): {err}")
+    except Exception:  # an exception type with a different constructor
+        return err
+    named.__dict__.update(vars(err))  # the core's values (time, axis, ...) stay attributes
+    return named
+
+
+def raise_named(err: Exception, obj: CatalogObject) -> NoReturn:
+    """Raises ``err`` with the object named (:func:`object_error`), chained to it."""
+    named = object_error(err, obj)
+    if named is err:
+        raise err
+    raise named from err

@@ -42,7 +42,7 @@ from ..time import (
     to_seconds,
 )
 from .covariance import paper_covariance
-from .elements import CatalogObject
+from .elements import CatalogObject, object_error
 from .fit import DEFAULT_DRAG_PARAMETER
 from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA
 
@@ -437,17 +437,6 @@ def fit_catalog_objects(
     return out
 
 
-def _object_error(err: Exception, obj: CatalogObject) -> Exception:
-    """``err`` again (same type) with the object named in front, or ``err`` itself when
-    its type takes no plain message."""
-    try:
-        named = type(err)(f"object {obj.norad_id} ({obj.name}, {obj.source}): {err}")
-    except Exception:  # an exception type with a different constructor
-        return err
-    named.__dict__.update(vars(err))  # the core's values (time, axis, ...) stay attributes
-    return named
-
-
 def _run_object(
     plan: ObjectPlan,
     model: Any,
@@ -471,7 +460,7 @@ def _run_object(
         return out if not lead else _after(out, lead)
     except Exception as err:
         if cfg.errors == "raise":
-            named = _object_error(err, plan.obj)
+            named = object_error(err, plan.obj)
             if named is err:
                 raise
             raise named from err

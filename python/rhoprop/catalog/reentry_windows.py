@@ -35,7 +35,7 @@ from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, resolve
 from ..propagation.kappa import Constant, KappaProcess
 from ..time import DurationLike, add_seconds
-from .elements import CatalogObject, fit_objects
+from .elements import CatalogObject, fit_objects, raise_named
 
 #: Default relative 1-sigma of Cd*A/m when the object carries no fit (assumed: the
 #: spread of fitted ballistic coefficients over successive element sets of one object is
@@ -261,12 +261,7 @@ def reentry(
                     threads=1,
                 )
             except Exception as err:  # named: one element set below the floor, say
-                from .objects import _object_error
-
-                named = _object_error(err, obj)
-                if named is err:
-                    raise
-                raise named from err
+                raise_named(err, obj)
             times.append(np.asarray(mc.decay_times, dtype=float))
         return np.concatenate(times), obj.drag_parameter, rel
 

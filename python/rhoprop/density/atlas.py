@@ -83,6 +83,12 @@ DEFAULT_MEMORY = 1_000_000_000
 #: Largest tile, bytes (the limit of every sampled grid, ``field.MAX_GRID_BYTES``); tiles
 #: are sampled ``field.SAMPLE_POINTS`` grid points per model call.
 MAX_TILE_BYTES = MAX_GRID_BYTES
+#: Runs over more day tiles than this get a streamed field (:meth:`Atlas.streamed`): a
+#: 150-day run held every tile at once (2.65 GB at the default resolution, whatever the
+#: budget).
+STREAM_TILES = 8
+#: Tiles a streamed field holds besides those the running batches are in.
+STREAM_KEEP = 2
 #: Version of the tile format; part of the key, so tiles of another format are misses.
 TILE_FORMAT = 1
 _NS_PER_S = 1_000_000_000
@@ -265,9 +271,29 @@ class Atlas:
         return result
 
     def atmosphere(self, state: StateLike, duration: float) -> Any:
-        """The core field for ``duration`` s from ``state`` (negative: backwards)."""
+        """The core field for ``duration`` s from ``state`` (negative: backwards): the
+        tiles' field, or for a run over more than :data:`STREAM_TILES` tiles a streamed
+        one (:meth:`streamed`), so that memory follows the budget, not the run's length."""
         edge = add_seconds(state.epoch, duration, round_up=duration > 0)
-        return self.field(min(state.epoch, edge), max(state.epoch, edge))
+        start, end = min(state.epoch, edge), max(state.epoch, edge)
+        windows = self.windows(start, end)
+        if len(windows) > STREAM_TILES:
+            return self.streamed(windows)
+        return self.field(start, end)
+
+    def streamed(self, windows: list[tuple[np.datetime64, np.datetime64]]) -> Any:
+        """A core field of the tiles over ``windows`` (consecutive, from :meth:`windows`)
+        that takes each tile when the run reaches it and holds :data:`STREAM_KEEP` of them
+        besides the one each batch is in (``rhoprop._core.StreamedAtmosphere``): the tiles
+        come from memory (under the budget), the disk cache or are sampled then. Results
+        are bit-identical to :meth:`field`'s."""
+        edges = np.array([w0 for w0, _ in windows] + [windows[-1][1]], dtype="datetime64[ns]")
+        bounds = [float(x) for x in np.asarray(ut1_seconds(edges), dtype=float)]
+
+        def source(k: int) -> Any:
+            return self.tile(*windows[k])
+
+        return _core.StreamedAtmosphere(0.0, bounds, source, True, STREAM_KEEP)
 
     # -- tiles -------------------------------------------------------------------------------
 

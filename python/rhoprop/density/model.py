@@ -22,7 +22,11 @@ from .atlas import Atlas
 from .field import DensityField, FieldResolution, sample_field
 
 #: Core atmosphere objects the propagator evaluates directly.
-CoreAtmosphere = (_core.ExponentialAtmosphere, _core.GriddedAtmosphere)
+CoreAtmosphere = (
+    _core.ExponentialAtmosphere,
+    _core.GriddedAtmosphere,
+    _core.StreamedAtmosphere,
+)
 
 
 @runtime_checkable
@@ -44,7 +48,7 @@ class DensityModel(Protocol):
 
 
 #: The core's atmospheres (what a model's ``atmosphere`` gives the propagators).
-AtmosphereLike = _core.ExponentialAtmosphere | _core.GriddedAtmosphere
+AtmosphereLike = _core.ExponentialAtmosphere | _core.GriddedAtmosphere | _core.StreamedAtmosphere
 #: What the propagators accept as ``model``: a density model or a core atmosphere.
 ModelLike = DensityModel | AtmosphereLike
 

@@ -249,11 +249,15 @@ def _parse_csv(text: str) -> dict[str, np.ndarray]:
 
 
 def read(path: Path) -> tuple[dict[str, np.ndarray], dict[str, int] | None]:
-    """Columns and declared counts (txt only) of a space-weather file of either form."""
+    """Columns and declared counts (txt only) of a space-weather file of either form; a
+    file that does not parse is a ValueError naming it."""
     text = path.read_text(encoding="utf-8", errors="replace")
-    if _is_csv(text):
-        return _parse_csv(text), None
-    return _parse_txt(text)
+    try:
+        if _is_csv(text):
+            return _parse_csv(text), None
+        return _parse_txt(text)
+    except ValueError as err:
+        raise ValueError(f"{path}: {err}") from None
 
 
 #: Physical ranges of the record's values (inclusive; NaN is a blank field): a value

@@ -57,8 +57,12 @@ pub enum CoreError {
     #[error("adaptive integrator: step size underflow at t = {t} s (h = {h} s)")]
     StepUnderflow { t: f64, h: f64 },
     /// The adaptive integrator needed more steps than allowed.
-    #[error("adaptive integrator: more than {max_steps} steps before t = {t} s")]
-    TooManySteps { max_steps: usize, t: f64 },
+    #[error(
+        "adaptive integrator: more than {max_steps} steps before t = {t} s of a run to \
+         {end} s (the limit: 1,000,000 or one per 10 s of the run; steps that small mean \
+         the orbit or the field needs them, e.g. an object near decay or a density jump)"
+    )]
+    TooManySteps { max_steps: usize, t: f64, end: f64 },
     /// The run was cancelled by the caller (e.g. Ctrl-C).
     #[error("cancelled")]
     Cancelled,

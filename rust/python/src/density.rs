@@ -6,9 +6,12 @@ use numpy::ndarray::Array1;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray4};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use rhoprop_core::density::{Atmosphere, Exponential, FieldTile, GriddedField};
+use rhoprop_core::density::{
+    Atmosphere, Exponential, FieldTile, GriddedField, StreamedField, TileSource,
+};
 use rhoprop_core::frames::EarthRotation;
 use rhoprop_core::time::gmst;
+use rhoprop_core::CoreError;
 use std::borrow::Cow;
 use std::sync::Arc;
 
@@ -189,6 +192,86 @@ impl PyFieldTile {
     }
 }
 
+/// A field whose tiles a Python callable gives when the run reaches them (`source(k)` ->
+/// `FieldTile`, k = 0 .. len - 1), at most `keep` held between lookups: a months-long run
+/// holds a few tiles, not all. Lookups give the bits of the field of all the tiles.
+#[pyclass(frozen, name = "StreamedAtmosphere", module = "rhoprop._core")]
+pub struct PyStreamed(pub Arc<StreamedField>);
+
+#[pymethods]
+impl PyStreamed {
+    /// Tile k spans `bounds[k]` to `bounds[k + 1]` s from `epoch` (s since J2000, UT1);
+    /// `open_altitude` as `GriddedAtmosphere.from_tiles`.
+    #[new]
+    #[pyo3(signature = (epoch, bounds, source, open_altitude, keep))]
+    fn new(
+        epoch: f64,
+        bounds: Vec<f64>,
+        source: Py<PyAny>,
+        open_altitude: bool,
+        keep: usize,
+    ) -> PyResult<Self> {
+        let source = Box::new(PySource(source));
+        StreamedField::new(epoch, bounds, source, open_altitude, keep)
+            .map(|f| Self(Arc::new(f)))
+            .map_err(to_py)
+    }
+
+    /// Tiles asked of the source so far.
+    #[getter]
+    fn loads(&self) -> usize {
+        self.0.loads()
+    }
+
+    /// Bytes of the tiles the field holds now.
+    #[getter]
+    fn nbytes(&self) -> usize {
+        self.0.held_bytes()
+    }
+
+    /// Number of tiles.
+    fn __len__(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s
+    /// since J2000.
+    fn mean_sigma<'py>(
+        &self,
+        py: Python<'py>,
+        ut1: PyReadonlyArray1<'py, f64>,
+        positions: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<MeanSigma<'py>> {
+        mean_sigma_at(py, self.0.as_ref(), ut1, positions)
+    }
+}
+
+/// A Python callable as a tile source. Its exception is kept (`errors::keep_source_error`)
+/// and raised as itself when the run's error reaches Python.
+struct PySource(Py<PyAny>);
+
+impl TileSource for PySource {
+    fn tile(&self, k: usize) -> Result<Arc<FieldTile>, CoreError> {
+        Python::attach(|py| {
+            let name = format!("density tile {k}");
+            match self.0.bind(py).call1((k,)) {
+                Ok(out) => match out.cast::<PyFieldTile>() {
+                    Ok(tile) => Ok(tile.get().0.clone()),
+                    Err(_) => Err(CoreError::rejected(
+                        name,
+                        "the source must return a rhoprop._core.FieldTile",
+                    )),
+                },
+                Err(e) => {
+                    let reason = e.to_string();
+                    crate::errors::keep_source_error(e);
+                    Err(CoreError::rejected(name, reason))
+                }
+            }
+        })
+    }
+}
+
 fn mean_sigma_at<'py, A: Atmosphere + ?Sized>(
     py: Python<'py>,
     atmosphere: &A,
@@ -230,6 +313,10 @@ macro_rules! with_atmosphere {
                 let $a: &::rhoprop_core::density::GriddedField = g;
                 $body
             }
+            $crate::density::AtmosphereRef::Streamed(g) => {
+                let $a: &::rhoprop_core::density::StreamedField = g;
+                $body
+            }
         }
     };
 }
@@ -239,6 +326,7 @@ pub(crate) use with_atmosphere;
 pub enum AtmosphereRef {
     Exponential(Exponential),
     Gridded(Arc<GriddedField>),
+    Streamed(Arc<StreamedField>),
 }
 
 impl AtmosphereRef {
@@ -250,8 +338,11 @@ impl AtmosphereRef {
         if let Ok(g) = obj.cast::<PyGridded>() {
             return Ok(Self::Gridded(g.get().0.clone()));
         }
+        if let Ok(g) = obj.cast::<PyStreamed>() {
+            return Ok(Self::Streamed(g.get().0.clone()));
+        }
         Err(PyTypeError::new_err(format!(
-            "atmosphere must be an ExponentialAtmosphere or GriddedAtmosphere, got {}",
+            "atmosphere must be an ExponentialAtmosphere, GriddedAtmosphere or StreamedAtmosphere, got {}",
             obj.get_type().name()?
         )))
     }

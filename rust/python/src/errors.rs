@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use pyo3::PyErr;
 use rhoprop_core::CoreError;
+use std::sync::Mutex;
 
 /// An instance of `rhoprop.errors.<class>` with message `msg` and attributes `attrs`.
 fn raise(py: Python<'_>, class: &str, msg: String, attrs: &[(&str, Py<PyAny>)]) -> PyErr {
@@ -22,10 +23,29 @@ fn raise(py: Python<'_>, class: &str, msg: String, attrs: &[(&str, Py<PyAny>)]) 
     made.unwrap_or_else(|e| PyRuntimeError::new_err(format!("{msg} (and rhoprop.errors: {e})")))
 }
 
+/// The exception a Python tile source raised in a run (the core carries only its text).
+static SOURCE_ERROR: Mutex<Option<PyErr>> = Mutex::new(None);
+
+/// Keeps the exception of a Python tile source, raised by [`to_py`] as itself.
+pub fn keep_source_error(e: PyErr) {
+    *SOURCE_ERROR.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+}
+
 /// Converts a core error to the matching Python exception.
 pub fn to_py(e: CoreError) -> PyErr {
     if e == CoreError::Cancelled {
         return PyKeyboardInterrupt::new_err("rhoprop run interrupted");
+    }
+    if let CoreError::Rejected { name, .. } = &e {
+        if name.starts_with("density tile ") {
+            if let Some(kept) = SOURCE_ERROR
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .take()
+            {
+                return kept;
+            }
+        }
     }
     let msg = e.to_string();
     Python::attach(|py| {
@@ -111,13 +131,13 @@ pub fn to_py(e: CoreError) -> PyErr {
                 msg,
                 &[("time", v(t)), ("step", v(h))],
             ),
-            CoreError::TooManySteps { max_steps, t } => {
+            CoreError::TooManySteps { max_steps, t, end } => {
                 let n = max_steps.into_pyobject(py).unwrap().into_any().unbind();
                 raise(
                     py,
                     "TooManyStepsError",
                     msg,
-                    &[("max_steps", n), ("time", v(t))],
+                    &[("max_steps", n), ("time", v(t)), ("end", v(end))],
                 )
             }
             CoreError::Cancelled => unreachable!("handled above"),

@@ -11,6 +11,7 @@ mod errors;
 mod fit;
 mod frames;
 mod long_call;
+mod memory;
 mod models;
 mod montecarlo;
 mod pool;
@@ -21,8 +22,10 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    memory::return_large_blocks();
     m.add_class::<density::PyExponential>()?;
     m.add_class::<density::PyGridded>()?;
+    m.add_class::<density::PyStreamed>()?;
     m.add_class::<density::PyFieldTile>()?;
     m.add_function(wrap_pyfunction!(propagation::propagate, m)?)?;
     m.add_function(wrap_pyfunction!(montecarlo::monte_carlo, m)?)?;

@@ -69,7 +69,7 @@ impl Axis {
 }
 
 /// Times this close below a node (s) are taken to be on it.
-const STEP_SNAP: f64 = 1e-6;
+pub(super) const STEP_SNAP: f64 = 1e-6;
 
 /// A non-decreasing time axis whose repeated nodes mark discontinuities.
 #[derive(Debug, Clone, PartialEq)]
@@ -278,7 +278,7 @@ impl FieldTile {
     }
 
     /// Whether `other` has the same spatial grid.
-    fn same_grid(&self, other: &Self) -> bool {
+    pub(super) fn same_grid(&self, other: &Self) -> bool {
         self.alt == other.alt
             && self.lat == other.lat
             && self.lon0 == other.lon0

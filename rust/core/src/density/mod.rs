@@ -6,12 +6,15 @@ mod exponential;
 mod gridded;
 pub mod jacchia_roberts;
 pub mod jb2008;
+mod streamed;
 
 pub use exponential::Exponential;
 pub use gridded::{FieldTile, GriddedField};
+pub use streamed::{StreamedField, TileSource};
 
 use crate::error::CoreError;
 use crate::frames::EarthRotation;
+use std::sync::Arc;
 
 /// What one batch keeps between its right-hand-side evaluations for an atmosphere that
 /// can reuse work from the previous stage: a field's cell corners per lane (consecutive
@@ -27,6 +30,9 @@ pub struct LaneMemory<const W: usize> {
     pub(crate) corners: [[f64; W]; 32],
     /// The field's time cell of the previous evaluation (a hint).
     pub(crate) time_cell: usize,
+    /// A streamed field's tile the batch is in, and its one-tile field (kept alive while
+    /// the batch is in it).
+    pub(crate) tile: Option<(usize, Arc<GriddedField>)>,
 }
 
 impl<const W: usize> Default for LaneMemory<W> {
@@ -35,6 +41,7 @@ impl<const W: usize> Default for LaneMemory<W> {
             cell: [f64::NAN; W],
             corners: [[0.0; W]; 32],
             time_cell: 0,
+            tile: None,
         }
     }
 }

@@ -15,8 +15,13 @@ pub struct AdaptiveOptions {
     pub rtol: f64,
     /// Largest step, s.
     pub max_step: f64,
-    /// Largest number of attempted steps before giving up.
+    /// Largest number of attempted steps before giving up (a run may take more: see
+    /// `steps_per_day`).
     pub max_steps: usize,
+    /// Attempted steps a run may take per day of its span when that allows more than
+    /// `max_steps`: a 10-year lifetime run of a LEO object needs about 2 million steps, and
+    /// the guard is against steps that shrink without end, not against long runs.
+    pub steps_per_day: f64,
 }
 
 impl Default for AdaptiveOptions {
@@ -25,6 +30,8 @@ impl Default for AdaptiveOptions {
             rtol: 1e-10,
             max_step: f64::INFINITY,
             max_steps: 1_000_000,
+            // One per 10 s on average.
+            steps_per_day: 8640.0,
         }
     }
 }
@@ -84,6 +91,10 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
     }
     check_times("output times", t0, outputs)?;
     let t_end = *outputs.last().expect("checked non-empty");
+    let span_days = (t_end - t0).abs() / 86400.0;
+    let max_steps = opts
+        .max_steps
+        .max((opts.steps_per_day * span_days) as usize);
 
     let mut k: [State<W>; 16] = [zero::<W>(); 16];
     let mut tmp = zero::<W>();
@@ -105,10 +116,11 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
 
     while t < t_end {
         attempts += 1;
-        if attempts > opts.max_steps {
+        if attempts > max_steps {
             return Err(CoreError::TooManySteps {
-                max_steps: opts.max_steps,
+                max_steps,
                 t,
+                end: t_end,
             });
         }
         // The last step lands on t_end exactly (below): t + (t_end - t) can round to just
@@ -423,6 +435,7 @@ mod tests {
         let e = run(
             AdaptiveOptions {
                 max_steps: 3,
+                steps_per_day: 0.0,
                 ..Default::default()
             },
             &[86400.0],
