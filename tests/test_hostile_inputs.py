@@ -386,3 +386,55 @@ def test_a_ten_year_run_is_not_too_many_steps_and_the_limit_names_the_run():
     with pytest.raises(rp.errors.TooManyStepsError, match="of a run to 86400") as err:
         rp.propagate(state, light, model, 86400.0, step=1e-3)
     assert err.value.end == 86400.0 and err.value.max_steps == 1_000_000
+
+
+def test_same_epoch_sets_threads_env_and_complex_models_are_named(tmp_path, monkeypatch):
+    # Two different element sets of one NORAD id at one epoch: one was dropped with no
+    # word; RHOPROP_THREADS=garbage was ignored by the Monte Carlo; a model returning
+    # complex densities was cast to real with only a ComplexWarning.
+    omm = {
+        "OBJECT_NAME": "X",
+        "OBJECT_ID": "1998-067A",
+        "EPOCH": "2023-11-13T00:00:00",
+        "MEAN_MOTION": 15.5,
+        "ECCENTRICITY": 0.0005,
+        "INCLINATION": 51.6,
+        "RA_OF_ASC_NODE": 10,
+        "ARG_OF_PERICENTER": 20,
+        "MEAN_ANOMALY": 30,
+        "EPHEMERIS_TYPE": 0,
+        "CLASSIFICATION_TYPE": "U",
+        "NORAD_CAT_ID": 25544,
+        "ELEMENT_SET_NO": 999,
+        "REV_AT_EPOCH": 1000,
+        "BSTAR": 1e-4,
+        "MEAN_MOTION_DOT": 1e-5,
+        "MEAN_MOTION_DDOT": 0,
+    }
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps([omm, dict(omm, MEAN_ANOMALY=31)]))
+    (obj,) = rp.catalog.load(path, fit=False)
+    assert obj.norad_id == 25544
+    assert "1 other element set(s) of the same epoch set aside" in obj.covariance_note
+    path.write_text(json.dumps([omm, omm]))  # the same set twice: nothing to say
+    (obj,) = rp.catalog.load(path, fit=False)
+    assert "same epoch" not in obj.covariance_note
+
+    monkeypatch.setenv("RHOPROP_THREADS", "garbage")
+    state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+    model = rp.scenarios.benchmark_exponential(0.2)
+    with pytest.raises(ValueError, match=r"\$RHOPROP_THREADS must be a whole number"):
+        rp.monte_carlo(state, craft, model, 3600.0, n=8, progress=False)
+    monkeypatch.setenv("RHOPROP_THREADS", "1")
+    one = rp.monte_carlo(state, craft, model, 3600.0, n=8, progress=False, seed=2)
+    monkeypatch.delenv("RHOPROP_THREADS")
+    every = rp.monte_carlo(state, craft, model, 3600.0, n=8, progress=False, seed=2)
+    np.testing.assert_array_equal(one.positions, every.positions)
+
+    def complex_density(t, lat, lon, h):
+        mean = 3e-12 * np.exp(-(np.asarray(h) - 400e3) / 60e3)
+        return mean * (1 + 1j), 0.1 * mean
+
+    bad = rp.density.FromFunction(complex_density, name="complex")
+    with pytest.raises(TypeError, match="returned a complex mean"):
+        bad.mean_std(np.datetime64("2023-01-01"), 0.0, 0.0, 400e3)

@@ -51,6 +51,15 @@ def worker_count(threads: int | None = None) -> int:
     return count
 
 
+def core_threads() -> int | None:
+    """Threads of a core call given none: ``$RHOPROP_THREADS`` when set (checked as
+    :func:`worker_count` checks it: a bad value was ignored here), else None (the core's
+    pool, ``$RAYON_NUM_THREADS`` or every CPU)."""
+    if not os.environ.get(THREADS_ENV, "").strip():
+        return None
+    return worker_count()
+
+
 def set_threads(threads: int) -> None:
     """Makes ``threads`` the default of this process: the Python pools (through
     ``$RHOPROP_THREADS``) and the core's pool (``$RAYON_NUM_THREADS``, read at the next

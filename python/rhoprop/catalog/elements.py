@@ -10,6 +10,7 @@ radius), i.e. 12.7416 B* m^2/kg, unless the caller gives a drag parameter per ob
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -586,12 +587,34 @@ def _newest_of_each(
     kept, older = [], {}
     for norad, group in groups.items():
         group.sort(key=lambda o: o.state.epoch)
-        newest = group[-1]
+        newest = _noted_same_epoch(group)
         kept.append(newest)
         rest = [o for o in group[:-1] if o.state.epoch != newest.state.epoch]
         if rest:
             older[norad] = rest
     return kept, older
+
+
+def _noted_same_epoch(group: list[CatalogObject]) -> CatalogObject:
+    """The newest of ``group`` (sorted by epoch; of equal epochs the last in the input),
+    its note naming the other element sets of that epoch that differ (they were dropped
+    without a word)."""
+    newest = group[-1]
+    same = [
+        o
+        for o in group[:-1]
+        if o.state.epoch == newest.state.epoch
+        and not np.array_equal(o.state.state, newest.state.state)
+    ]
+    if not same:
+        return newest
+    gap = max(float(np.linalg.norm(o.state.position - newest.state.position)) for o in same)
+    return dataclasses.replace(
+        newest,
+        covariance_note=f"{newest.covariance_note}; {len(same)} other element set(s) of the "
+        f"same epoch set aside (the last in the input kept; positions differ by up to "
+        f"{gap / 1e3:.3g} km)",
+    )
 
 
 #: Largest RMS residual (m) of a fit to SGP4 that :func:`fit_objects` accepts: TLE

@@ -95,6 +95,8 @@ class FromFunction(SampledModel):
             )
         arrays = []
         for what, value in zip(("mean", "std"), out, strict=True):
+            if np.iscomplexobj(value):
+                raise TypeError(f"{self!r}: fn returned a complex {what}; it must be real (kg/m^3)")
             try:
                 a = np.asarray(value, dtype=float)
             except (TypeError, ValueError) as err:

@@ -12,7 +12,7 @@ from .. import _core, _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike
 from ..options import Integrator, Perturbation
-from ..parallel import worker_count
+from ..parallel import core_threads, worker_count
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
 from .dynamics import Dynamics, integrator_argument, resolve, zonal_degree_argument
@@ -172,6 +172,8 @@ def monte_carlo(
         if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
             raise ValueError(f"threads must be a positive integer, got {threads!r}")
         threads = worker_count(int(threads))  # the limit of every pool
+    else:
+        threads = core_threads()
     dyn = resolve(
         "monte_carlo",
         dynamics,
