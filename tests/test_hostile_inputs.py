@@ -438,3 +438,152 @@ def test_same_epoch_sets_threads_env_and_complex_models_are_named(tmp_path, monk
     bad = rp.density.FromFunction(complex_density, name="complex")
     with pytest.raises(TypeError, match="returned a complex mean"):
         bad.mean_std(np.datetime64("2023-01-01"), 0.0, 0.0, 400e3)
+
+
+# ------------------------------------------------ properties of the newer surfaces
+SMALL = settings(
+    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+SAMPLE = Path(__file__).parent / "data" / "sample.tle"
+
+
+@SMALL
+@given(st.text(max_size=120), st.sampled_from(["radii", "drag"]))
+@example("norad_id,radius_m\n1,nan\n", "radii")
+@example("norad_id,drag_parameter\n1,-0.01\n", "drag")
+def test_user_csvs_of_any_text_read_or_raise_value_error(tmp_path_factory, text, kind):
+    from rhoprop.catalog.job import read_drag_file
+    from rhoprop.conjunction.screen_job import read_radii
+
+    path = tmp_path_factory.mktemp("csv") / f"{kind}.csv"
+    path.write_text(text, encoding="utf-8")
+    read = read_radii if kind == "radii" else read_drag_file
+    try:
+        values = read(path)
+    except ValueError as err:
+        assert f"{kind}.csv" in str(err)
+        return
+    assert all(isinstance(k, int) and np.isfinite(v) and v > 0 for k, v in values.items())
+
+
+@SMALL
+@given(st.integers(1, 7), st.integers(1, 30), numbers)
+def test_a_space_weather_csv_with_any_field_reads_or_names_the_file(
+    tmp_path_factory, row, column, value
+):
+    from test_spaceweather import CSV_TEXT
+
+    lines = CSV_TEXT.splitlines()
+    fields = lines[row].split(",")
+    fields[column] = str(value)
+    lines[row] = ",".join(fields)
+    path = tmp_path_factory.mktemp("sw") / "SW-All.csv"
+    path.write_text("\n".join(lines) + "\n")
+    try:
+        sw = rp.SpaceWeather(path)
+    except ValueError as err:
+        assert "SW-All.csv" in str(err)
+        return
+    drivers = sw.drivers(np.datetime64("2002-09-07T01:00"))
+    for values in (drivers.f107, drivers.f107a, drivers.ap):
+        assert np.isfinite(values).all() and (values >= 0).all()
+
+
+OMM = {
+    "OBJECT_NAME": "X",
+    "OBJECT_ID": "1998-067A",
+    "EPOCH": "2023-11-13T00:00:00",
+    "MEAN_MOTION": 15.5,
+    "ECCENTRICITY": 0.0005,
+    "INCLINATION": 51.6,
+    "RA_OF_ASC_NODE": 10,
+    "ARG_OF_PERICENTER": 20,
+    "MEAN_ANOMALY": 30,
+    "EPHEMERIS_TYPE": 0,
+    "CLASSIFICATION_TYPE": "U",
+    "NORAD_CAT_ID": 25544,
+    "ELEMENT_SET_NO": 999,
+    "REV_AT_EPOCH": 1000,
+    "BSTAR": 1e-4,
+    "MEAN_MOTION_DOT": 1e-5,
+    "MEAN_MOTION_DDOT": 0,
+}
+
+
+@SMALL
+@given(st.sampled_from(sorted(OMM)), numbers, st.sampled_from(["raise", "record"]))
+def test_an_omm_field_of_any_value_loads_or_is_named(tmp_path_factory, key, value, errors):
+    record = dict(OMM, **{key: value})
+    path = tmp_path_factory.mktemp("omm") / "x.json"
+    try:
+        path.write_text(json.dumps([record, OMM]))
+    except TypeError:  # a complex number is not JSON-able: not a file anyone has
+        return
+    try:
+        cat = rp.catalog.load(path, fit=False, errors=errors)
+    except ValueError as err:
+        assert errors == "raise" and "x.json" in str(err)
+        return
+    assert len(cat.objects) >= 1
+    assert all(np.isfinite(o.state.state).all() for o in cat.objects)
+
+
+@SMALL
+@given(numbers, numbers, numbers, numbers)
+def test_a_field_resolution_of_any_values_is_made_or_refused(time, altitude, latitude, longitude):
+    try:
+        res = rp.density.FieldResolution(
+            time=time, altitude=altitude, latitude=latitude, longitude=longitude
+        )
+        atlas = rp.density.Atlas(rp.density.FromFunction(_smooth, name="smooth"), res)
+    except GOOD:
+        return
+    assert atlas.latitude[2] >= 2 and atlas.n_lon >= 3
+
+
+def _smooth(t, lat, lon, h):
+    mean = 3e-12 * np.exp(-(np.asarray(h) - 400e3) / 60e3)
+    return mean, 0.1 * mean
+
+
+@SMALL
+@given(
+    st.one_of(st.floats(0.0, 3.0), numbers),
+    st.one_of(st.integers(-2, 30), numbers),
+    st.one_of(st.integers(-1, 4), numbers),
+)
+def test_reentry_of_any_settings_runs_or_is_refused(drag_sigma, n, groups):
+    objs = rp.catalog.load(SAMPLE, fit=False).objects[:1]
+    try:
+        out = rp.catalog.reentry(
+            objs, MODEL, n=n, groups=groups, drag_sigma=drag_sigma, duration=3600.0, fit=False
+        )
+    except GOOD:
+        return
+    assert 0.0 <= out.decayed_fraction[0] <= 1.0
+
+
+@SMALL
+@given(
+    st.one_of(st.floats(-1.0, 3e6), numbers),
+    st.one_of(st.floats(-2.0, 2.0), numbers),
+    st.one_of(st.floats(-10.0, 3000.0), numbers),
+)
+def test_screen_all_of_any_settings_runs_or_is_refused(distance, days, grid_step):
+    objs = rp.catalog.load(SAMPLE, fit=False).objects[:3]
+    start = max(o.state.epoch for o in objs)
+    try:
+        end = rp.time.add_seconds(start, float(days) * 86400.0)
+        out = rp.conjunction.screen_all(
+            objs,
+            MODEL,
+            start=start,
+            end=end,
+            distance=distance,
+            grid_step=grid_step,
+            pc=False,
+            progress=False,
+        )
+    except GOOD:
+        return
+    assert all(np.isfinite(e.miss_distance) for e in out.events)

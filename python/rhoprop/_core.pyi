@@ -26,6 +26,7 @@ __all__ = [
     "ExponentialAtmosphere",
     "FieldTile",
     "GriddedAtmosphere",
+    "StreamedAtmosphere",
     "ccsp",
     "ccsp_many",
     "equinoctial_elements",

@@ -578,6 +578,8 @@ def add_seconds(epoch: EpochLike, seconds: float, *, round_up: bool = False) -> 
     value = float(seconds)
     if not math.isfinite(value):
         raise ValueError(f"seconds must be finite, got {value}")
+    if abs(value) > 9.2e9:  # s (292 years): the span int64 nanoseconds can hold
+        raise ValueError(f"{value:g} s reaches outside the accepted epochs: {_RANGE_HINT}")
     ns = math.ceil(value * 1e9) if round_up else round(value * 1e9)
     return np.datetime64(_shift(to_datetime64(epoch), np.array([ns]))[0], "ns")
 

@@ -34,6 +34,7 @@ from ..parallel import map_in_threads, worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, resolve
 from ..propagation.kappa import Constant, KappaProcess
+from ..propagation.montecarlo import drag_sigma_argument
 from ..time import DurationLike, add_seconds
 from .elements import CatalogObject, fit_objects, raise_named
 
@@ -218,6 +219,7 @@ def reentry(
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(groups, bool) or not isinstance(groups, (int, np.integer)) or groups < 1:
         raise ValueError(f"groups must be a positive integer, got {groups!r}")
+    drag_sigma = None if drag_sigma is None else drag_sigma_argument(drag_sigma)
     per_group = max(int(np.ceil(n / groups)), 2)
     total = per_group * int(groups)
     if horizon is not None:
