@@ -66,6 +66,9 @@ def test_gridded_errors():
         rp.density.Gridded(t, [0, 1e3], [-10, 0, 10], [0, 30, 60, 90], ones, ones)
     with pytest.raises(ValueError, match="uniformly spaced"):
         rp.density.Gridded(t, [0, 1e3], [-10, 0, 15], [0, 90, 180, 270], ones, ones)
+    # Unsorted times named the core's seconds ("time node 1 = -86400"), not the epochs.
+    with pytest.raises(ValueError, match=r"times\[1\] \(2002-09-07T00:00:00.000000000\) is before"):
+        rp.density.Gridded(t[::-1], [0, 1e3], [-10, 0, 10], [0, 90, 180, 270], ones, ones)
 
 
 def test_gridded_from_xarray():

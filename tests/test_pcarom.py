@@ -256,3 +256,25 @@ def test_field_matches_direct_evaluation():
     a = rom.mean_std(node, 30.0, 45.0, 400e3)
     b = field.mean_std(node, 30.0, 45.0, 400e3)
     np.testing.assert_allclose(b, a, rtol=1e-9)
+
+
+def test_coefficient_sigmas_that_are_not_a_density_uncertainty_are_refused():
+    # coeff_std of 1,000 overflowed exp in the lognormal moments (a RuntimeWarning, then
+    # infinite densities); the constructor now names the epoch and node.
+    rom = synthetic()
+    for big in (1e3, 1e200):
+        with pytest.raises(
+            ValueError, match=r"coeff_std gives log10 density a 1-sigma of .* at epoch"
+        ):
+            PcaRom(
+                rom.lst,
+                rom.lat,
+                rom.alt,
+                rom.mean_log10,
+                rom.modes,
+                EPOCHS,
+                rom.coeff_mean,
+                np.full_like(rom.coeff_std, big),
+            )
+    # The test ROM's own (0.5-2 per unit mode, about 0.1-0.6 in log10) are taken.
+    assert synthetic().rank == 3

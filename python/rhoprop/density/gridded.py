@@ -43,6 +43,13 @@ class Gridded(SampledModel):
         epochs = to_datetime64_array(times, "times")
         if epochs.ndim != 1 or len(epochs) < 2:
             raise ValueError("times must be a 1-D array of at least 2 valid UTC epochs")
+        back = np.flatnonzero(epochs[1:] < epochs[:-1])
+        if back.size:
+            i = int(back[0]) + 1
+            raise ValueError(
+                f"times[{i}] ({epochs[i]}) is before times[{i - 1}] ({epochs[i - 1]}): times "
+                "must not decrease (a time given twice marks a step)"
+            )
         m = np.asarray(mean, dtype=float)
         s = np.asarray(std, dtype=float)
         shape = (len(epochs), np.size(alt), np.size(lat), np.size(lon))

@@ -36,6 +36,10 @@ BLOCK = 1 << 16
 #: Largest number of sampled densities held at once by the "sampling" method.
 SAMPLE_BLOCK = 1 << 22
 METHODS = ("analytic", "sampling")
+#: Largest 1-sigma of log10 density the coefficients may give anywhere (a factor 100 at
+#: one sigma; HASDM-ML-DP's is about 0.1): beyond it the lognormal moments overflow or
+#: mean nothing, and the coefficients are most likely not those of log10 density.
+MAX_LOG10_SIGMA = 2.0
 _NS_PER_HOUR = 3_600_000_000_000
 
 
@@ -151,6 +155,18 @@ class PcaRom(SampledModel):
         if (self.coeff_std < 0).any():
             bad = tuple(int(i) for i in np.argwhere(self.coeff_std < 0)[0])
             raise ValueError(f"coeff_std must be >= 0; got {self.coeff_std[bad]} at index {bad}")
+        with np.errstate(over="ignore"):  # an overflow is inf, refused below
+            log_sigma = np.sqrt((u.reshape(-1, rank) ** 2) @ (self.coeff_std**2).T)  # (nodes, ne)
+        if log_sigma.max() > MAX_LOG10_SIGMA:
+            node, epoch = np.unravel_index(int(np.argmax(log_sigma)), log_sigma.shape)
+            i_lst, i_lat, i_alt = np.unravel_index(int(node), grid[:3])
+            raise ValueError(
+                f"coeff_std gives log10 density a 1-sigma of {log_sigma.max():.3g} at epoch "
+                f"{e[epoch]} (LST {self.lst[i_lst]:g} h, lat {self.lat[i_lat]:g} deg, alt "
+                f"{self.alt[i_alt]:g} m); more than {MAX_LOG10_SIGMA:g} (a factor "
+                f"{10**MAX_LOG10_SIGMA:g} at one sigma) is not a density uncertainty: are the "
+                "coefficients those of log10 density?"
+            )
 
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
