@@ -587,3 +587,22 @@ def test_screen_all_of_any_settings_runs_or_is_refused(distance, days, grid_step
     except GOOD:
         return
     assert all(np.isfinite(e.miss_distance) for e in out.events)
+
+
+def test_a_journal_with_a_byte_that_is_not_utf8_is_no_raw_decode_error(tmp_path):
+    # An earlier run's .rhoprop-journal with a Latin-1 byte raised a UnicodeDecodeError
+    # naming no file on --overwrite. Its readable lines still count; the overwrite goes on.
+    out = tmp_path / "out"
+    folder = rp.io.OutputFolder(out, command="rhoprop test")
+    (out / "a.txt").write_text("x")
+    (out / ".rhoprop-journal").write_bytes(b"a.txt\n\xe9t\xe9.oem\n")
+    del folder
+    rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
+    assert not (out / "a.txt").exists()
+    # A file whose name is the damaged line is not ours to delete: refused, kept.
+    folder = rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
+    (out / "b.txt").write_text("y")
+    (out / ".rhoprop-journal").write_bytes(b"\xe9b.txt\n")
+    with pytest.raises(FileExistsError):
+        rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
+    assert (out / "b.txt").exists()

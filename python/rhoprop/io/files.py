@@ -213,7 +213,10 @@ def _listed_files(directory: Path) -> set[str] | None:
         return None
     names = set(data["files"]) | {MANIFEST, JOURNAL}
     try:
-        names |= set((directory / JOURNAL).read_text().splitlines())
+        # A damaged line (a byte that is not UTF-8) names no file of ours: whatever it
+        # meant stays foreign, and the overwrite refuses instead of deleting it.
+        journal = (directory / JOURNAL).read_text(encoding="utf-8", errors="surrogateescape")
+        names |= set(journal.splitlines())
     except OSError:
         pass
     return names
