@@ -593,16 +593,29 @@ def test_a_journal_with_a_byte_that_is_not_utf8_is_no_raw_decode_error(tmp_path)
     # An earlier run's .rhoprop-journal with a Latin-1 byte raised a UnicodeDecodeError
     # naming no file on --overwrite. Its readable lines still count; the overwrite goes on.
     out = tmp_path / "out"
-    folder = rp.io.OutputFolder(out, command="rhoprop test")
+    rp.io.OutputFolder(out, command="rhoprop test")
     (out / "a.txt").write_text("x")
     (out / ".rhoprop-journal").write_bytes(b"a.txt\n\xe9t\xe9.oem\n")
-    del folder
     rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
     assert not (out / "a.txt").exists()
     # A file whose name is the damaged line is not ours to delete: refused, kept.
-    folder = rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
+    rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
     (out / "b.txt").write_text("y")
     (out / ".rhoprop-journal").write_bytes(b"\xe9b.txt\n")
     with pytest.raises(FileExistsError):
         rp.io.OutputFolder(out, command="rhoprop test", overwrite=True)
     assert (out / "b.txt").exists()
+
+
+def test_a_client_that_is_not_a_dask_client_is_refused_before_the_run():
+    # screen_all(..., client=object()) and propagate_catalog ran their local stages and
+    # then failed with AttributeError 'scatter'.
+    objs = rp.catalog.load(SAMPLE, fit=False).objects[:3]
+    start = max(o.state.epoch for o in objs)
+    end = rp.time.add_seconds(start, 3600.0)
+    with pytest.raises(TypeError, match=r"screen_all: client must be a dask.*\(no submit, scatter"):
+        rp.conjunction.screen_all(
+            objs, MODEL, start=start, end=end, distance=5e5, client=object(), progress=False
+        )
+    with pytest.raises(TypeError, match=r"propagate_catalog: client must be a dask"):
+        rp.catalog.propagate_catalog(objs, MODEL, end=end, client="tcp://x:8786", progress=False)

@@ -107,6 +107,20 @@ def vector3(name: str, value: object) -> np.ndarray:
     return arr
 
 
+def client(function: str, value: object) -> None:
+    """TypeError unless ``value`` is None or looks like a ``dask.distributed.Client``
+    (``submit``, ``scatter``, ``gather``): an object without them failed with an
+    AttributeError after the run's local stages."""
+    if value is None:
+        return
+    missing = [m for m in ("submit", "scatter", "gather") if not callable(getattr(value, m, None))]
+    if missing:
+        raise TypeError(
+            f"{function}: client must be a dask.distributed.Client or None, got "
+            f"{type(value).__name__} (no {', '.join(missing)})"
+        )
+
+
 def errors_argument(function: str, value: object) -> Errors:
     """``errors=`` of ``function`` checked: "raise" or "record"; the old spelling "skip"
     (of ``catalog.load`` and ``conjunction.screen``) is "record" with a

@@ -363,6 +363,7 @@ def propagate_catalog(
     if method not in ("ccsp", "monte_carlo"):
         raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
     errors = _validate.errors_argument("propagate_catalog", errors)
+    _validate.client("propagate_catalog", client)
     bad = [o for o in objs if not isinstance(o, CatalogObject)]
     if bad:
         raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")
