@@ -1,7 +1,7 @@
 """Realism of catalog predictions on real data, week by week: CelesTrak "active" snapshots
 of 2023 (``$RHOPROP_TEST_DATA/catalogs`` and ``catalogs/history``, default
 ``../shared/data``) predicted forward and compared with the same objects' element sets
-of a later snapshot (issue 24).
+of a later snapshot.
 
 Development weeks (start snapshot -> truth snapshot): 2023-07-04 -> 07-07,
 2023-08-07 -> 08-13, 2023-08-13 -> 08-20, 2023-11-13 -> 11-19 (``--weeks`` picks some by
@@ -42,11 +42,11 @@ Printed per week and configuration, and over all weeks: median and 90th percenti
 |along-track error| for rhoprop's mean and for SGP4; the predicted along-track sigma
 (median); the fractions inside 1, 2 and 3 sigma along-track (|dT| / sigma_T <= k) and by
 the RTN-position Mahalanobis distance (d^T P^-1 d <= the chi-square(3) quantile of the 1-D
-k-sigma probability: 68.3 / 95.4 / 99.7 %). Goals (issue 24, every week): median <=
+k-sigma probability: 68.3 / 95.4 / 99.7 %). Goals (every week): median <=
 SGP4's (with a history <= 0.7 x SGP4's); along-track inside 2 sigma 85-98 %, inside
 3 sigma >= 95 %; RTN Mahalanobis inside 2 sigma >= 85 %.
 
-Diagnosis (issue 24's 08-07 week): ``--per-object`` also writes
+Diagnosis (of the 08-07 week): ``--per-object`` also writes
 ``catalog_realism_objects.json``: per week, configuration and object the signed RTN errors
 of rhoprop's mean and of SGP4 at the truth epoch (along-track > 0: ahead of the truth, as
 too much drag puts it), perigee, span, the Cd*A/m run and the fit's over its prior, the
@@ -653,7 +653,7 @@ def main() -> None:
         help="also write catalog_realism_objects.json in --out: per week, configuration "
         "and object the signed RTN errors of rhoprop and SGP4, perigee, span, Cd*A/m "
         "fitted and its prior, the element sets' decay and NRLMSIS 2.1's mean density "
-        "along the orbit in the fit window and the prediction (issue 24's diagnosis)",
+        "along the orbit in the fit window and the prediction (for diagnosis)",
     )
     args = parser.parse_args()
     global ALTITUDES_KM

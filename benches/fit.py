@@ -1,4 +1,4 @@
-"""Fit throughput (issue 28): states and Cd*A/m fitted to element sets
+"""Fit throughput: states and Cd*A/m fitted to element sets
 (``rp.catalog.fit_objects``, what ``load(fit=True)`` runs) for LEO objects of the
 2023-11-13 CelesTrak snapshot through NRLMSIS 2.1's atlas, J2..J4, over the day before
 each epoch (``fit.DEFAULT_SPAN``). The batched core fit (8 lanes a trial, many objects a

@@ -1,4 +1,4 @@
-"""Regression check of the benchmarks' ratios (issue 28): reads the JSON the Python
+"""Regression check of the benchmarks' ratios: reads the JSON the Python
 benches wrote to ``benches/results/`` and compares each ratio (never an absolute time:
 this machine kind is shared and noisy) with the last recorded figure of the same SIMD
 path in ``benches/baseline.json``. A ratio more than ``--tolerance`` (default 15 %)

@@ -1,4 +1,4 @@
-"""Counts of the API's shape (issue 27): public parameters typed ``Any``, functions over
+"""Counts of the API's shape: public parameters typed ``Any``, functions over
 80 lines (docstring excluded) in ``catalog/`` and ``conjunction/``, regular expressions
 applied to exception messages, and ``_core`` functions typed to return ``dict[str, Any]``.
 ``tests/test_architecture.py`` keeps them at their limits.

@@ -1,5 +1,5 @@
 """The independent reference of the core's batched fit (``rhoprop._core.fit_orbits``):
-the Gauss-Newton that ``rhoprop.catalog.fit`` ran in Python before issue 28, one
+the Gauss-Newton that ``rhoprop.catalog.fit`` ran in Python before the core's fit, one
 single-trajectory propagation (``rp.propagate``'s core call) per Jacobian column and
 direction, the step by numpy's SVD least squares. Slow on purpose; used by
 ``tests/test_fit_core.py`` and as the baseline of ``benches/fit.py``."""

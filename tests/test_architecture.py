@@ -240,7 +240,7 @@ def test_models_that_travel_pickle_themselves(model):
 
 
 def test_api_shape_stays_within_its_limits():
-    # Issue 27's bars: at most 10 public parameters typed Any (each commented where a value
+    # The API shape's bars: at most 10 public parameters typed Any (each commented where a value
     # is truly arbitrary), no function over 80 lines in catalog/ and conjunction/, no
     # regular expression over an exception's message, no _core function returning a dict.
     import api_shape
@@ -249,3 +249,41 @@ def test_api_shape_stays_within_its_limits():
     assert not api_shape.long_functions(), api_shape.long_functions()
     assert not api_shape.message_regexes(), api_shape.message_regexes()
     assert not api_shape.dict_returns(), api_shape.dict_returns()
+
+
+def test_the_top_level_namespace_is_what_all_lists():
+    # `import rhoprop` exposed rp.Any, rp.TYPE_CHECKING, rp.annotations and rp.importlib;
+    # dir(rp) listed them and hid nothing. Now dir(rp) is __all__, and every other public
+    # attribute is one of the package's own modules (imported by its submodules).
+    import types
+
+    assert dir(rp) == sorted(rp.__all__)
+    for name, value in vars(rp).items():
+        if name.startswith("_") or name in rp.__all__:
+            continue
+        assert isinstance(value, types.ModuleType), name
+        assert value.__name__.startswith("rhoprop."), name
+
+
+def test_no_tracker_references():
+    # The project's files name no outside issue tracker: a comment, docstring or doc says
+    # what a test protects or what goal was met, not which numbered ticket asked for it.
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    pattern = re.compile(r"\bissues? ?#?\d+", re.IGNORECASE)
+    files = [root / "README.md"]
+    for folder, suffixes in (
+        ("python/rhoprop", (".py", ".pyi")),
+        ("tests", (".py",)),
+        ("benches", (".py", ".md")),
+        ("docs", (".md",)),
+    ):
+        files += sorted(f for f in (root / folder).rglob("*") if f.suffix in suffixes)
+    offenders = [
+        f"{path.relative_to(root)}:{number}"
+        for path in files
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if pattern.search(line)
+    ]
+    assert not offenders, "tracker references: " + ", ".join(offenders)

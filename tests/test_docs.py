@@ -100,7 +100,7 @@ def _api_rewrite():
 
 
 def test_api_reference_escapes_stars_and_splits_multi_name_entries():
-    """Issue 26 item 16: the API reference showed ``Cd*A/m ... B*`` as italics and
+    """The API reference once showed ``Cd*A/m ... B*`` as italics and
     TleAccuracy's ``radial, along_track, cross_track`` as one broken row."""
     ext = _api_rewrite()
     assert ext.escape_stars("Cd*A/m from B*, x**2, ``a*b``, `c*d`, *density*") == (

@@ -1,4 +1,4 @@
-"""Ballistic-coefficient (Cd*A/m) uncertainty (issue 16 item 3): per-member samples in the
+"""Ballistic-coefficient (Cd*A/m) uncertainty: per-member samples in the
 Monte Carlo, a second consider parameter in the CCSP, the catalog's per-object sigma.
 
 References: the Monte Carlo over Cd*A/m samples, and the linearised sensitivity

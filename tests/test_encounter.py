@@ -122,7 +122,7 @@ def _co_orbiting(start: np.datetime64, along: float) -> list[tuple]:
 
 
 def test_screen_all_counts_a_co_orbiting_pair_over_its_encounter_not_in_2d():
-    # The case: objects 1 m apart radially and a few metres along-track, co-orbiting
+    # The reported case: objects 1 m apart radially and a few metres along-track, co-orbiting
     # at mm/s. The 2-D Pc assumed a straight pass and gave each minimum a Pc with no word;
     # now each event says its Pc is counted over the encounter.
     start = np.datetime64("2024-03-01T00:00")

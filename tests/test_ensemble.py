@@ -75,7 +75,7 @@ def test_four_cases_end_to_end_solar_max_spreads_more():
     # The paper's finding: solar maximum (denser, more uncertain) spreads more.
     assert std["solar-max-storm"] > std["solar-min"]
     assert std["solar-max-simulated"] > std["solar-min-simulated"]
-    # Three distinct model families (issue 12; NRLMSIS 2.0, which duplicated 2.1's mass
+    # Three distinct model families (NRLMSIS 2.0, which duplicated 2.1's mass
     # density, left the default): their debiased Cd differ by more than 0.05.
     cds = sorted(ens["solar-min"].cd.values())
     assert len(cds) == 3 and min(np.diff(cds)) > 0.05, cds

@@ -1,4 +1,4 @@
-"""The exception tree (issue 13, item 8): one tree under RhopropError (a ValueError), with
+"""The exception tree: one tree under RhopropError (a ValueError), with
 OutsideRecordError for lookups outside a data record (space weather, PCA ROM) and
 DecayError for results that need an object in orbit; messages give real values."""
 

@@ -1,4 +1,4 @@
-"""The field cache survives misuse (issue 13, item 13): a checksum detects a corrupt entry,
+"""The field cache survives misuse: a checksum detects a corrupt entry,
 which is recomputed and overwritten; an unwritable or vanished cache warns and keeps the
 field in memory; temporary names are unique (threads of one process share an entry); a
 size cap evicts the least recently used entries. And the field resolution is a keyword of

@@ -1,4 +1,4 @@
-"""Worker processes forked after a core run (issue 26 item 7): `multiprocessing`'s default
+"""Worker processes forked after a core run: `multiprocessing`'s default
 on Linux forks, and a child inherits rayon's global pool without its threads, so it waited
 for ever. The core's pool is now made again in each process (rust/python/src/pool.rs)."""
 

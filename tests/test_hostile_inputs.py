@@ -1,4 +1,4 @@
-"""Hostile and edge inputs (issue 26): each probe of the adversarial campaign as a minimal
+"""Hostile and edge inputs: each probe of the adversarial campaign as a minimal
 reproducer, and property-based tests (hypothesis) over the public API's numeric, time and
 file inputs. The rule they check: a clear ValueError/TypeError naming the argument, or a
 correct result; never another exception type, a NaN, a silent wrong value or a deleted
@@ -26,7 +26,7 @@ CRAFT = rp.scenarios.paper_spacecraft()
 MODEL = rp.scenarios.benchmark_exponential(0.2)
 GOOD = (ValueError, TypeError)
 
-# ------------------------------------------------------------------ item 6: wrong values
+# ------------------------------------------------------------------ wrong values
 
 
 def test_a_run_past_2262_is_refused_before_it_starts():
@@ -59,7 +59,7 @@ def test_a_masked_astropy_time_is_not_an_epoch():
         rp.time.to_datetime64_array(times)
 
 
-# ------------------------------------------------------------------ item 11: messages
+# ------------------------------------------------------------------ messages
 
 
 def test_omm_files_that_do_not_parse_name_the_file_and_field(tmp_path):

@@ -1,4 +1,4 @@
-"""Input sanity of the plain data types (issue 13, item 7): a state that is not an Earth
+"""Input sanity of the plain data types: a state that is not an Earth
 orbit in SI units is refused when it is made, with what was expected, instead of failing
 later ("adaptive integrator: step size underflow")."""
 
@@ -66,7 +66,7 @@ def test_non_orbits_raise_saying_what_was_expected(position, velocity, message):
 
 
 def test_km_state_fails_at_construction_not_in_the_integrator():
-    # The issue's example: a state in km used to fail in propagate with "adaptive
+    # The motivating example: a state in km used to fail in propagate with "adaptive
     # integrator: step size underflow (h = 1.2e-37 s)".
     with pytest.raises(ValueError, match="looks like km"):
         rp.OrbitState(

@@ -1,4 +1,4 @@
-"""Ctrl-C stops every long call (issue 13, item 4): a subprocess starts a run that would
+"""Ctrl-C stops every long call: a subprocess starts a run that would
 take seconds to minutes, gets a real SIGINT about a second later, and must exit with
 KeyboardInterrupt within 2 s of it, without finishing the run. The bounds are generous on
 purpose: the binding polls for Ctrl-C every 50 ms and the catalog finishes at most its
@@ -62,7 +62,7 @@ RUNS = {
         "print('started', flush=True)\n"
         "catalog.propagate_catalog(list(cat) * 1000, model, '2002-09-10T00:00', progress=False)"
     ),
-    # Minutes: reentry windows of 5,000 members per object on threads (issue 26 item 9:
+    # Minutes: reentry windows of 5,000 members per object on threads (once
     # 17-21 s to stop, as every running object finished its members first).
     "reentry": (
         "from pathlib import Path\n"

@@ -89,7 +89,7 @@ def test_index_lags_and_midnight_rule(indices: rp.density.Jb2008Indices) -> None
     t = np.array(["2009-12-02T00:00", "2009-12-02T00:00:01"], dtype="datetime64[ns]")
     row = (np.datetime64("2009-12-02") - first).astype(int)
     got = indices.at(t)
-    # Issue 26 item 13: 00:00 belongs to the day it starts, as in the reference driver
+    # 00:00 belongs to the day it starts, as in the reference driver
     # (INDX = INT(T1950 - FS1950)): F10 of t - 1 day -> 2009-12-01, at 00:00 as at 00:00:01.
     # The day before differs in all three (so the test tells the rules apart).
     assert got[0, 0] == got[1, 0] == sol[row - 1, 0] != sol[row - 2, 0]

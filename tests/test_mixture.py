@@ -233,8 +233,8 @@ def test_two_equal_normals_are_bimodal_beyond_two_sigma(separation, expected):
 
 
 def test_two_equal_normals_exactly_two_sigma_apart_have_one_flat_mode():
-    """Issue 26 item 14: exactly 2 sigma apart the top is quartic (the Hessian vanishes),
-    and rounding decided between 1 and 0 modes (11 of 300 placements gave 0). Any
+    """Exactly 2 sigma apart the top is quartic (the Hessian vanishes), and rounding
+    once decided between 1 and 0 modes (11 of 300 placements gave 0). Any
     placement and scale must give the one mode, at the midpoint."""
     rng = np.random.default_rng(1)
     for _ in range(300):

@@ -190,8 +190,8 @@ def test_clipping_and_lognormal(setup):
 
 def test_decayed_members_are_reported(setup):
     # At 1e-9 kg/m^3 the mean orbit decays after 2.64 days; with a 50 % density bias the
-    # denser members decay within 2.5 days and are reported, the others are not. (Until
-    # issue 13 a decayed member stayed frozen at its decay state and a decaying mean orbit
+    # denser members decay within 2.5 days and are reported, the others are not. (Formerly
+    # a decayed member stayed frozen at its decay state and a decaying mean orbit
     # was an error; now the member is NaN after its decay and the run completes, see
     # tests/test_decay.py.)
     state, craft = setup
@@ -318,7 +318,7 @@ def test_multistep_members_equal_the_deterministic_multistep_orbit(paper_state, 
 
 @pytest.mark.parametrize("seed", [2**64, 2**64 + 5, 2**70, -1, 1.5, True])
 def test_seeds_outside_64_bits_are_refused_naming_the_seed(setup, seed):
-    # Issue 26 item 11: seed 2**70 raised OverflowError from the binding, and a seed of
+    # Seed 2**70 once raised OverflowError from the binding, and a seed of
     # 2**64 + 5 must not silently give seed 5's numbers.
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.2)
@@ -332,7 +332,7 @@ def test_seeds_outside_64_bits_are_refused_naming_the_seed(setup, seed):
     "process", [rp.kappa.GaussMarkov(), rp.kappa.Interpolated(1080.0)], ids=["gm", "interp"]
 )
 def test_kappa_paths_do_not_depend_on_the_integrator(setup, process):
-    """Issue 26 item 15: Gauss-Markov nodes followed the integration step, so one seed gave
+    """Gauss-Markov nodes once followed the integration step, so one seed gave
     RK4, RK8 and ABM paths 3.1 km apart after 3 days. The nodes are now the process's own
     (180 s): the members differ only by the integrators' own errors, which agree to
     0.06 m over 3 days here (as with Interpolated, whose nodes always were its own)."""
@@ -363,7 +363,7 @@ def test_gauss_markov_nodes_and_correlation_time():
     not __import__("os").path.exists("/proc/self/clear_refs"), reason="Linux peak-RSS reset"
 )
 def test_peak_memory_stays_within_the_max_memory_estimate(tmp_path):
-    """Issue 26 item 10: monte_carlo(n=10**7, max_memory=2e9) passed its guard (estimate
+    """monte_carlo(n=10**7, max_memory=2e9) once passed its guard (estimate
     1.44 GB) and peaked at 4.2 GB: the core held every batch's output and then copied it,
     and the RTN conversion made three full-size temporaries. Measured in a fresh process:
     the growth of the peak RSS (Linux: VmHWM, reset through /proc/self/clear_refs) over a
@@ -395,7 +395,7 @@ def test_peak_memory_stays_within_the_max_memory_estimate(tmp_path):
 
 
 def test_a_too_fine_field_resolution_is_refused_before_allocating():
-    """Issue 26 item 10: FieldResolution(latitude=1e-4) tried to allocate 31.5 GiB."""
+    """FieldResolution(latitude=1e-4) once tried to allocate 31.5 GiB; it is refused first."""
     model = rp.density.Msis("2.1", resolution=rp.density.FieldResolution(latitude=1e-4))
     state = rp.scenarios.paper_state()
     band = rp.density.altitude_band(state.position, state.velocity)

@@ -1,4 +1,4 @@
-"""Nothing lost or silently mixed in outputs (issue 13, item 12): output folders with a
+"""Nothing lost or silently mixed in outputs: output folders with a
 manifest that refuse (or, asked to, clear) an earlier run's files, files written to a
 temporary name and renamed, text from inputs sanitised, scenario output folders inside
 the scenario's folder, and ``rp.io.write_oem`` for single results."""
@@ -63,7 +63,7 @@ def _tree(folder: Path) -> dict[str, bytes]:
 
 
 def test_overwrite_never_deletes_a_file_the_run_did_not_write(tmp_path):
-    """Issue 26 item 2: --overwrite deleted a user file added to an earlier run's folder
+    """--overwrite once deleted a user file added to an earlier run's folder
     and an index.html beside another tool's manifest.json. Now such a folder is refused
     and nothing is deleted."""
     out = tmp_path / "run"
@@ -304,8 +304,8 @@ def test_rhoprop_run_writes_a_manifest_and_refuses_to_mix(tmp_path, capsys):
 
 
 def test_scenario_models_whose_names_clean_to_one_id_write_separate_oem_files():
-    # Issue 26 item 3: "X/Y" and "X_Y" (also "é"/"ü", long names differing at the end)
-    # wrote the same oem/X_Y.oem; one silently replaced the other.
+    # "X/Y" and "X_Y" (also "é"/"ü", long names differing at the end) once wrote the
+    # same oem/X_Y.oem; one silently replaced the other.
     from rhoprop.studies.scenario_file import oem_ids
 
     long_a, long_b = "M" * 120 + "a", "M" * 120 + "b"

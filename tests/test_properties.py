@@ -1,4 +1,4 @@
-"""Property-based tests of the public API's contract (issue 13, item 15): whatever the
+"""Property-based tests of the public API's contract: whatever the
 input, a call gives a result or a clear ValueError/TypeError, never another exception, a
 crash, a hang or a NaN in a result.
 

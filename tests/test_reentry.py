@@ -77,7 +77,7 @@ def test_cli_reentry_prints_and_writes(tmp_path, capsys):
 
 
 def test_reentry_fits_element_sets_by_default(atmosphere):
-    """Issue 25 item 1: windows from B* missed most real decays; fitted ones held them
+    """Windows from B* missed most real decays; fitted ones held them
     (benches/reentry.py). The default fits every object that carries an element set and
     says so; an object without one keeps its values, with the reason."""
     objs = catalog.load(SAMPLE).objects[:2]
@@ -125,7 +125,7 @@ def _load_text(text: str) -> list[CatalogObject]:
 
 
 def test_several_element_sets_of_one_object_are_one_history(atmosphere):
-    """Issue 25 item 2: a file holding an object's history gave one independent window
+    """A file holding an object's history once gave one independent window
     per element set, and nothing said the object appeared more than once."""
     import dataclasses
 
@@ -147,7 +147,7 @@ def test_several_element_sets_of_one_object_are_one_history(atmosphere):
 
 
 def test_the_object_whose_time_nodes_aborted_runs(test_data):
-    """Issue 25 item 5: NORAD 50038 (COSMOS 1408 DEB) raised 'time node 4 =
+    """NORAD 50038 (COSMOS 1408 DEB) once raised 'time node 4 =
     8045.416800000001 is invalid: time nodes must not decrease (previous
     8045.416800000002)' from the band field's float offsets. The atlas builds its tile
     nodes from integer nanoseconds; the run completes and brings every member down."""
@@ -159,7 +159,7 @@ def test_the_object_whose_time_nodes_aborted_runs(test_data):
 
 
 def test_the_density_error_is_held_over_each_members_run(atmosphere):
-    """Issue 25 item 3: the default kappa is the model's density error held over the whole
+    """The default kappa is the model's density error held over the whole
     run (DEFAULT_KAPPA, Constant), not the paper's 18-minute Gauss-Markov that averages
     away over a multi-day decay. A member with density mean + k sigma = (1 + 0.2 k) mean
     (the benchmark atmosphere's 20 %) is exactly a member with Cd*A/m x (1 + 0.2 k), so
@@ -193,7 +193,7 @@ def test_the_density_error_is_held_over_each_members_run(atmosphere):
 
 
 def test_history_fit_takes_the_earlier_element_sets(test_data):
-    """Issue 25 item 2: with history="fit" the fit of the newest element set also takes the
+    """With history="fit" the fit of the newest element set also takes the
     object's earlier ones (fit_objects' history). Two element sets one day apart of a low
     object of CelesTrak's 2023-11-18 and 11-19 snapshots are reconciled (both used); a fit
     needs fit=True."""
@@ -246,7 +246,7 @@ def _earliest_within_a_week(
 
 
 def test_default_windows_hold_real_decays(test_data):
-    """Issue 25's goal on the real reentries (SATCAT decay days, an independent record):
+    """The reentry windows' goal on the real reentries (SATCAT decay days, an independent record):
     the default 95 % windows hold the decay day for >= 70 % of the 49 objects, no wider
     than 80 % of the remaining life (median). The benchmark's own setting, 200 members
     (benches/reentry.py --settings fitted, 2026-12-04): 35 of 49 held (71 %; 35 needed),

@@ -1,4 +1,4 @@
-"""Results for analysis (issue 17, item 2): ``to_xarray()`` on every result type (labelled
+"""Results for analysis: ``to_xarray()`` on every result type (labelled
 dims, UTC datetime64 epochs, units and frame in attributes), netCDF round trips through
 h5netcdf, ``CatalogResult.to_pandas()``, and xarray kept an optional import."""
 

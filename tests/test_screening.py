@@ -1,4 +1,4 @@
-"""Close-approach screening (issue 18, item 1): closest_approach and screen against
+"""Close-approach screening: closest_approach and screen against
 independent references: orbits built to meet at a known time and place, a brute-force
 fine-grid search with a tight DOP853, a brute-force all-pairs screen of a real catalog
 snapshot, the radial prefilter's pads against propagated radii, bad input and Ctrl-C."""

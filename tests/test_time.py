@@ -1,4 +1,4 @@
-"""Time (issue 13, items 6 and 14): elapsed SI seconds across leap seconds, J2000 in TT,
+"""Time: elapsed SI seconds across leap seconds, J2000 in TT,
 the core's UT1 argument unchanged, astropy Time and Julian dates, zone offsets, 23:59:60,
 and epochs that numpy cannot hold."""
 
@@ -482,7 +482,7 @@ def test_sampled_field_across_a_leap_second():
 @pytest.mark.parametrize(
     ("text", "expect"),
     [
-        # Issue 26 item 1: 10-18 fractional digits wrapped (1969-12-12T19:38:51.87).
+        # 10-18 fractional digits round to whole ns (they once wrapped: 1969-12-12T19:38:51.87).
         ("2002-09-07T01:00:00.0000000004Z", "2002-09-07T01:00:00.000000000"),
         ("2002-09-07T01:00:00.123456789012345678Z", "2002-09-07T01:00:00.123456789"),
         ("2002-09-07T01:00:00.0000000005Z", "2002-09-07T01:00:00.000000001"),

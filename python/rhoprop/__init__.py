@@ -7,12 +7,11 @@ density -> propagation -> ensemble -> catalog -> conjunction -> studies -> cli. 
 the conjunction tools, the studies and the ``io``/``scenarios`` aliases load on first use.
 """
 
-from __future__ import annotations
+import importlib as _importlib
+import typing as _typing
 
-import importlib
-from typing import TYPE_CHECKING, Any
-
-from . import density, frames
+from . import cache, constants, density, errors, frames, options, parallel, spaceweather, time
+from . import propagation as propagation
 from ._version import __version__
 from .ensemble import EnsembleResult, GaussianMixture, debias_drag_coefficient
 from .ensemble import ensemble as ensemble  # the function; the package stays importable
@@ -41,7 +40,7 @@ from .propagation import (
 from .spaceweather import SpaceWeather
 from .time import seconds_since_j2000, to_datetime64
 
-if TYPE_CHECKING:
+if _typing.TYPE_CHECKING:
     from . import catalog, conjunction, io, plot, studies
     from .studies import scenarios
 
@@ -56,16 +55,18 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _LAZY:
-        module = importlib.import_module(_LAZY[name])
+        module = _importlib.import_module(_LAZY[name])
         globals()[name] = module
         return module
     raise AttributeError(f"module 'rhoprop' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), *_LAZY])
+    # The public names only (what ``__all__`` lists): the imported helpers and the
+    # implementation modules (``progress``) stay attributes but out of the listing.
+    return sorted(__all__)
 
 
 __all__ = [
@@ -87,20 +88,28 @@ __all__ = [
     "StateMoments",
     "Trajectory",
     "__version__",
+    "cache",
     "catalog",
     "ccsp",
     "conjunction",
+    "constants",
     "debias_drag_coefficient",
     "density",
     "ensemble",
+    "errors",
     "frames",
     "io",
     "kappa",
     "monte_carlo",
+    "options",
+    "parallel",
     "plot",
     "propagate",
+    "propagation",
     "scenarios",
     "seconds_since_j2000",
+    "spaceweather",
     "studies",
+    "time",
     "to_datetime64",
 ]

@@ -121,6 +121,12 @@ def client(function: str, value: object) -> None:
         )
 
 
+def errors_and_client(function: str, errors: object, value: object) -> Errors:
+    """:func:`errors_argument` and :func:`client` of a batch run that takes both."""
+    client(function, value)
+    return errors_argument(function, errors)
+
+
 def errors_argument(function: str, value: object) -> Errors:
     """``errors=`` of ``function`` checked: "raise" or "record"; the old spelling "skip"
     (of ``catalog.load`` and ``conjunction.screen``) is "record" with a

@@ -328,7 +328,7 @@ def propagate_catalog(
             dominated); for an object without a fit whose B* is scaled to a real
             model (below) 0.5, else 0.15 (as ``rp.catalog.reentry``); a number for
             every object (0: none,
-            the behaviour before issue 16); or a callable object -> number. Recorded in
+            the behaviour before Cd*A/m uncertainty); or a callable object -> number. Recorded in
             ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md). An object
             whose Cd*A/m is B*'s plain conversion runs with it scaled to the model's
             density (:func:`~rhoprop.catalog.scaled_bstar_drag`; real-atmosphere models
@@ -362,8 +362,7 @@ def propagate_catalog(
         raise ValueError("the catalog has no objects")
     if method not in ("ccsp", "monte_carlo"):
         raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
-    errors = _validate.errors_argument("propagate_catalog", errors)
-    _validate.client("propagate_catalog", client)
+    errors = _validate.errors_and_client("propagate_catalog", errors, client)
     bad = [o for o in objs if not isinstance(o, CatalogObject)]
     if bad:
         raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")

@@ -337,8 +337,7 @@ def screen_all(
     cfg = _settings(
         start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree, dynamics
     )
-    errors = _validate.errors_argument("screen_all", errors)
-    _validate.client("screen_all", client)
+    errors = _validate.errors_and_client("screen_all", errors, client)
     workers = worker_count(threads)
     budget = _validate.positive("max_memory", max_memory)
     n_mc = _validate.count("monte_carlo_events", monte_carlo_events, minimum=0)

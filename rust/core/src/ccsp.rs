@@ -174,7 +174,7 @@ const KAPPA: usize = 2 * N + 1;
 /// alpha sqrt(l2) in c and the state alpha sqrt(l2) D, and D' = (x_c - x_0) / (alpha
 /// sqrt(l2)) is a one-sided difference, exact to O(alpha drag_sigma) (2.6e-4 relative at
 /// drag_sigma 0.3; rounding ~1e-7): one lane instead of the pair +-, which with the
-/// consider centre no longer flown twice fits the filter in 16 lanes (issue 28). At
+/// consider centre no longer flown twice fits the filter in 16 lanes. At
 /// alpha = 1 (points +-sqrt(3) sigma) the points lay on a straight line in Cartesian space
 /// while the spread is curved along the orbit (kilometres along-track): re-drawn there
 /// every update, they lost 24 % of the along-track sigma by 3 days at drag_sigma = 0.3

@@ -460,7 +460,7 @@ mod tests {
     #[test]
     fn density_stays_positive_and_falling_up_to_geo() {
         // Above ~2,000 km T(z) equals T_inf to rounding; the density came out exactly 0
-        // from 2,400 km when the temperature ratio was taken from T(z) (issue 26 item 6).
+        // from 2,400 km when the temperature ratio was taken from T(z).
         let mut last = f64::INFINITY;
         for h_km in (1000..=36000).step_by(250) {
             let rho = jacchia_roberts(57754.0, 45.0, 0.0, h_km as f64 * 1e3, 100.0, 100.0, 2.0)
