@@ -316,3 +316,56 @@ def test_scenario_models_whose_names_clean_to_one_id_write_separate_oem_files():
     assert ids["X/Y"].startswith("X_Y_") and ids["X_Y"].startswith("X_Y_")
     assert all(c.isascii() and c.isprintable() and c not in " /" for c in "".join(ids.values()))
     assert oem_ids(list(reversed(names))) == ids  # the same ids whatever the order
+
+
+def test_state_at_an_epoch_interpolates_between_outputs_or_says_they_are_too_coarse():
+    # Against the state the integrator gives at that epoch itself (a run ending there):
+    # 60-s outputs agree to 1 mm, 5-minute outputs to 1 cm; 15-minute outputs are refused
+    # at the default 1 m (the degree-7 fit is 57 m off there).
+    state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+    model = rp.scenarios.benchmark_exponential(0.2)
+    t_odd = 4 * 3600 + 1234.567
+    truth = rp.propagate(state, craft, model, t_odd).state_at(-1)
+    for step, tol_m in ((60.0, 1e-3), (300.0, 1e-2)):
+        tr = rp.propagate(state, craft, model, 6 * 3600.0, output_step=step)
+        got = tr.state_at(truth.epoch)
+        assert got.epoch == truth.epoch
+        assert np.linalg.norm(got.position - truth.position) < tol_m
+        assert np.linalg.norm(got.velocity - truth.velocity) < tol_m / 100
+        # An output's own epoch gives its state exactly.
+        assert np.array_equal(tr.state_at(tr.epochs[7]).position, tr.positions[7])
+    coarse = rp.propagate(state, craft, model, 6 * 3600.0, output_step=900.0)
+    with pytest.raises(ValueError, match=r"too far apart to interpolate .* to 1 m"):
+        coarse.state_at(truth.epoch)
+    with pytest.raises(ValueError, match="outside the outputs"):
+        coarse.state_at("2002-09-08T12:00")
+    with pytest.raises(TypeError, match="a bool"):
+        coarse.state_at(True)
+    assert coarse.state_at(-1).epoch == coarse.epochs[-1]
+
+
+def test_an_oem_recommends_hermite_only_where_its_states_interpolate(tmp_path):
+    # INTERPOLATION metadata (CCSDS 502.0-B-3): written where a degree-7 Hermite fit holds
+    # the states to 1 m (60-s outputs), left out where it cannot (hourly LEO states); the
+    # maintained reader takes the file and interpolates it to within a metre of the state
+    # the integrator gives at that epoch.
+    from oem import OrbitEphemerisMessage
+
+    state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+    model = rp.scenarios.benchmark_exponential(0.2)
+    dense = rp.propagate(state, craft, model, 3 * 3600.0, output_step=60.0)
+    (path,) = io.write_oem(dense, tmp_path / "dense", object_id="DENSE")
+    text = path.read_text()
+    assert "INTERPOLATION = HERMITE\nINTERPOLATION_DEGREE = 7" in text
+    message = OrbitEphemerisMessage.open(str(path))
+    (segment,) = message.segments
+    assert segment.metadata["INTERPOLATION"] == "HERMITE"
+    from astropy.time import Time
+
+    t_odd = 2 * 3600 + 1234.567
+    truth = rp.propagate(state, craft, model, t_odd).state_at(-1)
+    read = message(Time(str(truth.epoch), scale="utc"))
+    assert np.linalg.norm(np.asarray(read.position) * 1e3 - truth.position) < 1.0
+    hourly = rp.propagate(state, craft, model, 6 * 3600.0)
+    (path,) = io.write_oem(hourly, tmp_path / "hourly", object_id="HOURLY")
+    assert "INTERPOLATION" not in path.read_text()

@@ -87,6 +87,7 @@ def _oem_text(
         "TIME_SYSTEM = UTC",
         f"START_TIME = {_iso(epochs[0])}",
         f"STOP_TIME = {_iso(epochs[-1])}",
+        *_interpolation(epochs, mean),
         "META_STOP",
         "",
     ]
@@ -106,6 +107,25 @@ def _oem_text(
         lines += ["COVARIANCE_STOP"]
     lines.append("")
     return "\n".join(lines)
+
+
+def _interpolation(epochs: np.ndarray, mean: np.ndarray) -> list[str]:
+    """INTERPOLATION = HERMITE, INTERPOLATION_DEGREE = 7 where a reader can interpolate the
+    states to 1 m that way (checked as ``Trajectory.state_at`` checks it, at the middle of
+    the first, a central and the last interval); none where the states are too far apart
+    (hourly LEO states) or fewer than four."""
+    from ..propagation.interpolate import interpolate_state
+
+    n = len(epochs)
+    if n < 4:
+        return []
+    t = (np.asarray(epochs, dtype="datetime64[ns]") - epochs[0]).astype(np.int64) / 1e9
+    for i in sorted({0, (n - 1) // 2, n - 2}):
+        try:
+            interpolate_state(t, mean[:, :3], mean[:, 3:], 0.5 * (t[i] + t[i + 1]))
+        except ValueError:
+            return []
+    return ["INTERPOLATION = HERMITE", "INTERPOLATION_DEGREE = 7"]
 
 
 def _wrap(text: str, width: int = 70) -> list[str]:

@@ -22,9 +22,10 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from .. import frames
+from .. import _validate, frames
 from .._version import __version__
-from ..time import offsets_to_epochs
+from ..time import EpochLike, offsets_to_epochs, seconds_between, to_datetime64
+from .interpolate import DEFAULT_TOLERANCE, interpolate_state
 from .kappa import KappaProcess
 from .state import OrbitState
 
@@ -291,9 +292,27 @@ class Trajectory:
         """States (nt, 6): position m, velocity m/s."""
         return np.concatenate([self.positions, self.velocities], axis=1)
 
-    def state_at(self, index: int = -1) -> OrbitState:
-        """The output ``index`` as an :class:`OrbitState`."""
-        return OrbitState(self.epochs[index], self.positions[index], self.velocities[index])
+    def state_at(
+        self, at: int | EpochLike = -1, *, tolerance: float = DEFAULT_TOLERANCE
+    ) -> OrbitState:
+        """The state at output index ``at`` (an integer, default the last), or at the UTC
+        epoch ``at`` (an output's own state, else interpolated between the outputs by a
+        degree-7 Hermite polynomial, :mod:`rhoprop.propagation.interpolate`). An epoch
+        outside the outputs, next to a decayed one, or where the outputs are too far apart
+        to interpolate to ``tolerance`` m (the fits of degree 7 and 5 differ by more) is a
+        ValueError saying so."""
+        if isinstance(at, bool):
+            raise TypeError("at must be an output index or a UTC epoch, got a bool")
+        if isinstance(at, (int, np.integer)):
+            return OrbitState(self.epochs[at], self.positions[at], self.velocities[at])
+        epoch = to_datetime64(at, "at")
+        tol = _validate.positive("tolerance", tolerance)
+        t = seconds_between(self.epoch, epoch)
+        try:
+            r, v = interpolate_state(self.times, self.positions, self.velocities, t, tol)
+        except ValueError as err:
+            raise ValueError(f"state_at({epoch}): {err}") from None
+        return OrbitState(epoch, r, v)
 
     def moments(self) -> StateMoments:
         """The states with zero covariance (a deterministic orbit)."""
