@@ -392,25 +392,7 @@ def test_same_epoch_sets_threads_env_and_complex_models_are_named(tmp_path, monk
     # Two different element sets of one NORAD id at one epoch: one was dropped with no
     # word; RHOPROP_THREADS=garbage was ignored by the Monte Carlo; a model returning
     # complex densities was cast to real with only a ComplexWarning.
-    omm = {
-        "OBJECT_NAME": "X",
-        "OBJECT_ID": "1998-067A",
-        "EPOCH": "2023-11-13T00:00:00",
-        "MEAN_MOTION": 15.5,
-        "ECCENTRICITY": 0.0005,
-        "INCLINATION": 51.6,
-        "RA_OF_ASC_NODE": 10,
-        "ARG_OF_PERICENTER": 20,
-        "MEAN_ANOMALY": 30,
-        "EPHEMERIS_TYPE": 0,
-        "CLASSIFICATION_TYPE": "U",
-        "NORAD_CAT_ID": 25544,
-        "ELEMENT_SET_NO": 999,
-        "REV_AT_EPOCH": 1000,
-        "BSTAR": 1e-4,
-        "MEAN_MOTION_DOT": 1e-5,
-        "MEAN_MOTION_DDOT": 0,
-    }
+    omm = OMM  # below, with the property tests
     path = tmp_path / "two.json"
     path.write_text(json.dumps([omm, dict(omm, MEAN_ANOMALY=31)]))
     (obj,) = rp.catalog.load(path, fit=False)
