@@ -28,3 +28,38 @@ def test_a_short_run_prints_nothing(monkeypatch, capsys):
     bar(4)
     bar.close()
     assert capsys.readouterr().err == ""
+
+
+def test_sampling_tiles_and_a_grown_cache_are_said(monkeypatch, capsys, tmp_path):
+    # Sampling a model into the cache (about a second a day) printed nothing before the
+    # run's own progress; the paper study filled the cache with a gigabyte without a word.
+    import numpy as np
+
+    import rhoprop as rp
+    from rhoprop import cli
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL", 0.0)
+    monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
+
+    def slow(t, lat, lon, h):
+        time.sleep(0.01)
+        mean = 3e-12 * np.exp(-(np.asarray(h) - 400e3) / 60e3)
+        return mean, 0.1 * mean
+
+    resolution = rp.density.FieldResolution(
+        time=3600.0, altitude=50e3, latitude=15.0, longitude=30.0
+    )
+    model = rp.density.FromFunction(slow, name="slow", cache_key="slow v1", resolution=resolution)
+    model.atlas.field("2002-09-07T00:00", "2002-09-09T12:00")
+    err = capsys.readouterr().err
+    assert "sampling FromFunction into the cache: 3/3 days" in err, err
+    model.atlas.field("2002-09-07T00:00", "2002-09-09T12:00")  # from memory: no word
+    assert capsys.readouterr().err == ""
+
+    before = cli._cache_bytes()
+    (tmp_path / "tiles" / "big.npz").write_bytes(b"0" * 60_000_000)
+    cli._say_cache_growth(before)
+    err = capsys.readouterr().err
+    assert "the cache grew by 60 MB" in err and "rhoprop cache clear" in err, err
+    cli._say_cache_growth(cli._cache_bytes())
+    assert capsys.readouterr().err == ""

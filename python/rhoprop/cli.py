@@ -638,6 +638,37 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Growth of the cache (bytes) from which a command says so when it ends.
+CACHE_NOTICE_BYTES = 50_000_000
+
+
+def _cache_bytes() -> int | None:
+    """Bytes in the cache now (None where it cannot be read)."""
+    from .cache import cache_info
+
+    try:
+        return int(cache_info()["total_bytes"])
+    except (OSError, ValueError):
+        return None
+
+
+def _say_cache_growth(before: int | None) -> None:
+    """One line on stderr when the command grew the cache by :data:`CACHE_NOTICE_BYTES`
+    or more (the paper study fills it with a gigabyte of density tiles): where it is,
+    how big, and the commands that list and empty it."""
+    from .cache import cache_dir, max_bytes
+
+    after = _cache_bytes()
+    if before is None or after is None or after - before < CACHE_NOTICE_BYTES:
+        return
+    print(
+        f"rhoprop: the cache grew by {(after - before) / 1e6:,.0f} MB to {after / 1e6:,.0f} MB "
+        f"({cache_dir()}; at most {max_bytes() / 1e9:g} GB a folder, least recently used "
+        "dropped first): 'rhoprop cache info' lists it, 'rhoprop cache clear' empties it",
+        file=sys.stderr,
+    )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rhoprop`` console script."""
     parser = build_parser()
@@ -656,11 +687,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             set_threads(args.threads)
         except ValueError as err:
             parser.error(f"--threads: {err}")
+    before = _cache_bytes()
     try:
         with warnings.catch_warnings():
             # The commands list each element set they set aside on stderr themselves.
             warnings.filterwarnings("ignore", r".* Earth radii set aside", RuntimeWarning)
-            return int(args.run(args))
+            code = int(args.run(args))
+        _say_cache_growth(before)
+        return code
     except KeyboardInterrupt:
         print("\ninterrupted", file=sys.stderr)
         return 130

@@ -55,6 +55,7 @@ import numpy.typing as npt
 from .. import _core
 from ..cache import bytes_from_env, cache_dir, entry_lock, load_entry, store_entry
 from ..errors import OutsideRecordError
+from ..progress import ProgressBar
 from ..time import EpochLike, EpochsLike, add_seconds, to_datetime64, ut1_seconds
 from ._inputs import StateLike
 from .field import (
@@ -343,11 +344,39 @@ class Atlas:
             field = self._fields.get(key)
         if field is not None:
             return field
-        tiles = [self.tile(w0, w1) for w0, w1 in windows]
+        tiles = self._tiles(windows)
         field = _core.GriddedAtmosphere.from_tiles(0.0, tiles, True)
         with self._lock:
             self._fields[key] = field
         return field
+
+    def _tiles(self, windows: list[tuple[np.datetime64, np.datetime64]]) -> list[Any]:
+        """The tiles of ``windows``, with progress (a bar on a terminal, plain lines in a
+        log) when two or more must be sampled: about a second a day, with nothing said
+        it looked like a hang before the run's own progress began."""
+        fresh = [w for w in windows if self._must_sample(*w)]
+        if len(fresh) < 2:
+            return [self.tile(w0, w1) for w0, w1 in windows]
+        bar = ProgressBar(
+            len(fresh), f"sampling {type(self.model).__name__} into the cache", unit="days"
+        )
+        tiles, done = [], 0
+        try:
+            for w in windows:
+                tiles.append(self.tile(*w))
+                if w in fresh:
+                    done += 1
+                    bar(done)
+        finally:
+            bar.close()
+        return tiles
+
+    def _must_sample(self, w0: np.datetime64, w1: np.datetime64) -> bool:
+        """Whether the tile over [w0, w1] is neither in memory nor in the disk cache."""
+        key, name = self._key(w0, w1)
+        if _MEMORY.get(key) is not None:
+            return False
+        return name is None or not (cache_dir() / "tiles" / name).is_file()
 
     def _key(self, w0: np.datetime64, w1: np.datetime64) -> tuple[str, str | None]:
         """(memory key, disk file name or None) of the tile over [w0, w1]."""
