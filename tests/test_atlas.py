@@ -300,3 +300,13 @@ def test_a_tile_that_fails_in_a_streamed_run_raises_its_own_error():
     model = rp.density.FromFunction(failing, name="failing", resolution=COARSE)
     with pytest.raises(ZeroDivisionError, match="broke on day 10"):
         rp.propagate(state, rp.scenarios.paper_spacecraft(), model, 12 * 86400.0)
+
+
+def test_runs_over_the_same_days_share_one_streamed_field():
+    # ccsp_many groups its runs by atmosphere object: a new streamed field per run split
+    # objects with the same span into separate core calls.
+    model = rp.density.FromFunction(exp_function, name="analytic", resolution=COARSE)
+    state = rp.scenarios.paper_state()
+    a = model.atmosphere(state, 12 * 86400.0)
+    b = model.atmosphere(state, 12 * 86400.0 - 60.0)  # the same day tiles
+    assert isinstance(a, _core.StreamedAtmosphere) and a is b

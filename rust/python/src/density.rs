@@ -195,7 +195,7 @@ impl PyFieldTile {
 /// A field whose tiles a Python callable gives when the run reaches them (`source(k)` ->
 /// `FieldTile`, k = 0 .. len - 1), at most `keep` held between lookups: a months-long run
 /// holds a few tiles, not all. Lookups give the bits of the field of all the tiles.
-#[pyclass(frozen, name = "StreamedAtmosphere", module = "rhoprop._core")]
+#[pyclass(frozen, weakref, name = "StreamedAtmosphere", module = "rhoprop._core")]
 pub struct PyStreamed(pub Arc<StreamedField>);
 
 #[pymethods]
