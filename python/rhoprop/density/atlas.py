@@ -45,6 +45,7 @@ import os
 import secrets
 import threading
 import weakref
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -288,21 +289,15 @@ class Atlas:
         besides the one each batch is in (``rhoprop._core.StreamedAtmosphere``): the tiles
         come from memory (under the budget), the disk cache or are sampled then. Results
         are bit-identical to :meth:`field`'s."""
-        key = ("streamed", *windows)
-        with self._lock:
-            field = self._fields.get(key)
-        if field is not None:  # the same object for the same days: runs group by it
-            return field
         edges = np.array([w0 for w0, _ in windows] + [windows[-1][1]], dtype="datetime64[ns]")
-        bounds = [float(x) for x in np.asarray(ut1_seconds(edges), dtype=float)]
 
-        def source(k: int) -> Any:
-            return self.tile(*windows[k])
+        def make() -> Any:
+            bounds = [float(x) for x in np.asarray(ut1_seconds(edges), dtype=float)]
+            return _core.StreamedAtmosphere(
+                0.0, bounds, lambda k: self.tile(*windows[k]), True, STREAM_KEEP
+            )
 
-        field = _core.StreamedAtmosphere(0.0, bounds, source, True, STREAM_KEEP)
-        with self._lock:
-            self._fields[key] = field
-        return field
+        return self._shared(("streamed", *windows), make)
 
     # -- tiles -------------------------------------------------------------------------------
 
@@ -347,15 +342,20 @@ class Atlas:
         """The core field (``rhoprop._core.GriddedAtmosphere``) over [start, end] UTC: the
         tiles of those days, shared with every other field that holds them."""
         windows = self.windows(start, end)
-        key = tuple(windows)
+        return self._shared(
+            tuple(windows),
+            lambda: _core.GriddedAtmosphere.from_tiles(0.0, self._tiles(windows), True),
+        )
+
+    def _shared(self, key: tuple[Any, ...], make: Callable[[], Any]) -> Any:
+        """The field of ``key`` while any run holds it (the same object for the same days,
+        so runs group by it and share its tiles), else ``make()``'s, kept weakly."""
         with self._lock:
             field = self._fields.get(key)
-        if field is not None:
-            return field
-        tiles = self._tiles(windows)
-        field = _core.GriddedAtmosphere.from_tiles(0.0, tiles, True)
-        with self._lock:
-            self._fields[key] = field
+        if field is None:
+            field = make()
+            with self._lock:
+                self._fields[key] = field
         return field
 
     def _tiles(self, windows: list[tuple[np.datetime64, np.datetime64]]) -> list[Any]:
