@@ -96,7 +96,7 @@ def scores(cc: rp.CcspResult, k: int, states: np.ndarray, ref: np.ndarray) -> di
     if cc.element_mean is not None and cc.element_covariance is not None:
         em, ec = cc.element_mean[k], cc.element_covariance[k]
         out["arc_sigma_deg"] = float(np.degrees(np.sqrt(ec[5, 5])))
-        el = rp.frames.to_equinoctial(states, ref)
+        el = rp.frames.to_equinoctial(states, ref, semi_major="energy")
         dl = (el[:, 5] - em[5] + np.pi) % (2 * np.pi) - np.pi
         z = np.abs(dl) / np.sqrt(ec[5, 5])
         d = np.column_stack([el[:, 0] - em[0], dl])

@@ -211,20 +211,19 @@ def ccsp(
     output_times: _F64 | None = None,
     coordinates: str = "equinoctial",
     kappa_scale: float = 1.0,
-    slow_drag: tuple[float, float, float] | None = None,
+    slow: tuple[float, float] | None = None,
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
     Cd*A/m carried as the second consider parameter; output_times are further outputs
-    between updates (the sigma points' moments in flight, not re-drawn); slow_drag
-    (Cd*A/m variance, slow term variance, its half-life s) rescales each output's c term
-    to its own time."""
+    between updates (the sigma points' moments in flight, not re-drawn); kappa_scale
+    weighs the per-update kappa, slow (scale, half-life s, inf: constant) adds a slow
+    density term held over each update and correlated 2^(-dt / half-life) across
+    updates, a third consider parameter."""
 
 def ccsp_many(
     atmosphere: _Atmosphere,
-    objects: list[
-        tuple[float, _F64, float, _F64, _F64, float, float, tuple[float, float, float] | None, _F64]
-    ],
+    objects: list[tuple[float, _F64, float, _F64, _F64, float, float, _F64]],
     scaling: tuple[float, float],
     perturbation: str,
     floor_altitude: float,
@@ -232,10 +231,12 @@ def ccsp_many(
     progress: Callable[[int], object] | None = None,
     coordinates: str = "equinoctial",
     kappa_scale: float = 1.0,
+    slow: tuple[float, float] | None = None,
 ) -> list[_CcspOutput | Exception]:
     """CCSP of several objects, each (epoch, state, drag, initial_covariance,
-    update_times, step, drag_sigma, slow_drag, output_times (empty: none)), in one call: per object
-    the dict of ``ccsp`` or the exception its run raised."""
+    update_times, step, drag_sigma, output_times (empty: none)), in one call: per object
+    the dict of ``ccsp`` or the exception its run raised; kappa_scale and slow as in
+    ``ccsp``, shared."""
 
 def fit_orbits(
     atmosphere: _Atmosphere,
@@ -293,11 +294,13 @@ def geodetic_to_fixed(lla: _F64) -> _F64:
 def rtn_basis(positions: _F64, velocities: _F64) -> _F64:
     """RTN bases (n, 3, 3), rows R, T, N."""
 
-def equinoctial_elements(states: _F64, reference: _F64) -> _F64:
+def equinoctial_elements(states: _F64, reference: _F64, semi_major: str = "osculating") -> _F64:
     """Cartesian states (n, 6) -> equinoctial elements (n, 6) in the axes of `reference`
-    (6,), lambda within pi of the reference's."""
+    (6,), lambda within pi of the reference's; a "osculating" or "energy" (J2 field)."""
 
-def equinoctial_to_cartesian(elements: _F64, reference: _F64) -> _F64:
+def equinoctial_to_cartesian(
+    elements: _F64, reference: _F64, semi_major: str = "osculating"
+) -> _F64:
     """Equinoctial elements (n, 6) -> Cartesian states (n, 6) in the axes of `reference`."""
 
 def jb2008_core(amjd: _F64, geometry: _F64, indices: _F64) -> tuple[_F64, _F64, _F64]:

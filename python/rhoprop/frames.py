@@ -4,7 +4,7 @@ inertial frame other tools expect). Inputs may be one vector (3,) or many (n, 3)
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -139,30 +139,45 @@ def to_rtn(
     return np.asarray(np.einsum("...ij,...j->...i", basis, delta))
 
 
-def to_equinoctial(states: npt.ArrayLike, reference: npt.ArrayLike | None = None) -> np.ndarray:
+def to_equinoctial(
+    states: npt.ArrayLike,
+    reference: npt.ArrayLike | None = None,
+    semi_major: Literal["osculating", "energy"] = "osculating",
+) -> np.ndarray:
     """Inertial states (6,) or (n, 6), m and m/s, as equinoctial elements (a m, h, k, p,
     q, lambda rad): k + i h = e exp(i (omega + Omega)),
     q + i p = tan(i / 2) exp(i Omega), lambda = M + omega + Omega (docs/conventions.md,
     "CCSP coordinates").
+
+    ``semi_major``: ``"osculating"`` (default, the two-body a of the state) or
+    ``"energy"``, -mu / (2 E) with E the energy in the J2 field (constant along a J2
+    orbit, where the osculating a swings by about 13 km at 400 km): the a of a
+    :func:`rhoprop.ccsp` run's ``element_mean``.
 
     ``reference`` (a state (6,); default the first state) fixes the axes (turned 180 deg
     about x when its orbit is retrograde, so the elements stay regular) and lambda is
     returned within pi of the reference's, so a spread of states across lambda = +-pi
     stays one spread. With the initial state of a :func:`rhoprop.ccsp` run as reference,
     Monte Carlo members compare directly with its ``element_mean`` and
-    ``element_covariance``. Raises ValueError for a state not on an elliptic orbit."""
+    ``element_covariance`` (with ``semi_major="energy"``). Raises ValueError for a state
+    not on an elliptic orbit or an unknown ``semi_major``."""
     s, single = _rows("states", states, 6)
     ref = s[0] if reference is None else _rows("reference", reference, 6)[0][0]
-    out = _core.equinoctial_elements(s, np.ascontiguousarray(ref))
+    out = _core.equinoctial_elements(s, np.ascontiguousarray(ref), semi_major)
     return out[0] if single else out
 
 
-def from_equinoctial(elements: npt.ArrayLike, reference: npt.ArrayLike) -> np.ndarray:
-    """Equinoctial elements (6,) or (n, 6) (as :func:`to_equinoctial`) back to inertial
-    states, m and m/s, in the axes of ``reference`` (a state (6,))."""
+def from_equinoctial(
+    elements: npt.ArrayLike,
+    reference: npt.ArrayLike,
+    semi_major: Literal["osculating", "energy"] = "osculating",
+) -> np.ndarray:
+    """Equinoctial elements (6,) or (n, 6) (as :func:`to_equinoctial`, with the same
+    ``semi_major``) back to inertial states, m and m/s, in the axes of ``reference`` (a
+    state (6,))."""
     e, single = _rows("elements", elements, 6)
     ref = _rows("reference", reference, 6)[0][0]
-    out = _core.equinoctial_to_cartesian(e, np.ascontiguousarray(ref))
+    out = _core.equinoctial_to_cartesian(e, np.ascontiguousarray(ref), semi_major)
     return out[0] if single else out
 
 

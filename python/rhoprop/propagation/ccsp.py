@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from .. import _core, _validate, frames
+from .. import _core, _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..options import Perturbation
@@ -160,16 +160,12 @@ def ccsp(
             interval) or ``GaussMarkov`` is that kappa (correlation c = its own over the
             update interval, or the longest spacing of ``update_times``); a ``TwoScale``
             puts its fast term there (kappa scaled by sqrt(1 - w)) and its slow one, a
-            density scale that holds for days, into c
-            (``drag_sigma`` raised to hypot(drag_sigma, sqrt(w r) s), s the model's
-            density-weighted relative sigma over the initial orbit, r = :func:`slow_share`
-            of the run's span: the constant that drives the slow term's along-track
-            variance at the end; each earlier output has its c term rescaled to r of its
-            own time, so a long run's early outputs are as wide as a short run's:
-            0.99-1.01x the Monte Carlo's along-track sigma at 1-14 days of one 14-day
-            run, docs/mc-vs-ccsp.md); ``Constant`` goes whole into c.
-            The result's
-            ``drag_sigma`` is the one flown.
+            density scale that holds for days, into a third consider parameter s, held
+            over each update like kappa and correlated 2^(-dt / slow_half_life) from one
+            update to the next (dt the spacing of the two updates); ``Constant`` is s
+            alone, never decorrelating. Against 2,000 members of the same process the
+            along-track sigma is 0.97-1.03x and 93-96 % of the members lie inside the
+            filter's 95 % region of (a, lambda) at 1-14 days (docs/mc-vs-ccsp.md).
 
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -202,11 +198,8 @@ def ccsp(
         coordinates=coordinates,
         kappa=kappa,
     )
-    flown = args.drag_sigma
 
     def run(atmosphere: AtmosphereLike) -> _CcspOutput:
-        nonlocal flown
-        flown, slow_drag = args.flown_drag_sigma(atmosphere, state)
         return _core.ccsp(
             atmosphere,
             args.epoch,
@@ -219,15 +212,15 @@ def ccsp(
             args.step,
             args.floor,
             args.degree,
-            flown,
+            args.drag_sigma,
             args.outputs if len(args.outputs) else None,
             args.coordinates,
             args.kappa_scale,
-            slow_drag,
+            args.slow,
         )
 
     out = run_in_field(model, state, span, args.floor, run)
-    return _result(state, out, flown)
+    return _result(state, out, args.drag_sigma)
 
 
 @dataclass(frozen=True)
@@ -245,24 +238,7 @@ class _Arguments:
     outputs: np.ndarray  # output times between updates, s (may be empty)
     coordinates: Coordinates
     kappa_scale: float = 1.0
-    slow_fraction: float = 0.0
-    slow_term: tuple[float, float] | None = None  # (w, half-life s) of a TwoScale kappa
-
-    def flown_drag_sigma(
-        self, atmosphere: AtmosphereLike, state: OrbitState
-    ) -> tuple[float, tuple[float, float, float] | None]:
-        """``drag_sigma`` with the slow density term folded in (see :func:`ccsp`), and
-        the core's ``slow_drag`` (Cd*A/m variance, the slow term's variance before its
-        share, its half-life s) that rescales each output's c term to its own time, or
-        None when c holds no time-dependent slow term."""
-        if self.slow_fraction == 0.0:
-            return self.drag_sigma, None
-        s = orbit_relative_sigma(atmosphere, state, self.epoch)
-        flown = math.hypot(self.drag_sigma, math.sqrt(self.slow_fraction) * s)
-        if self.slow_term is None:
-            return flown, None
-        w, half_life = self.slow_term
-        return flown, (self.drag_sigma**2, w * s * s, half_life)
+    slow: tuple[float, float] | None = None  # (scale, half-life s) of a slow density term
 
 
 def _arguments(
@@ -321,9 +297,7 @@ def _arguments(
     check_memory(
         (len(times) + len(outputs) + 1) * OUTPUT_BYTES, DEFAULT_MAX_MEMORY, "the CCSP outputs"
     )
-    (l1, l2), kappa_scale, slow, slow_term = consider_settings(
-        kappa, scaling, times, update_interval
-    )
+    (l1, l2), kappa_scale, slow = consider_settings(kappa, scaling, times, update_interval)
     p0 = DEFAULT_INITIAL_COVARIANCE if initial_covariance is None else initial_covariance
     p0 = np.array(p0, dtype=float)
     if p0.shape != (6, 6):
@@ -340,8 +314,7 @@ def _arguments(
         outputs=outputs,
         coordinates=coordinates_argument(coordinates),
         kappa_scale=kappa_scale,
-        slow_fraction=slow,
-        slow_term=slow_term,
+        slow=slow,
     )
     return args, span
 
@@ -351,10 +324,10 @@ def consider_settings(
     scaling: tuple[float, float] | None,
     update_times: np.ndarray,
     update_interval: float | None,
-) -> tuple[tuple[float, float], float, float, tuple[float, float] | None]:
-    """((lambda1 + n, lambda2 + p), kappa_scale, slow_fraction, slow_term) of a run: how
-    the filter stands for ``kappa`` (see :func:`ccsp`); slow_term is (w, half-life s) of a
-    ``TwoScale`` process, whose slow term each output rescales to its own time, else None."""
+) -> tuple[tuple[float, float], float, tuple[float, float] | None]:
+    """((lambda1 + n, lambda2 + p), kappa_scale, slow) of a run: how the filter stands
+    for ``kappa`` (see :func:`ccsp`); slow is (scale, half-life s; inf: constant) of the
+    slow density term, else None."""
     if scaling is not None:
         if kappa is not None:
             raise ValueError(
@@ -364,7 +337,7 @@ def consider_settings(
         if len(scaling) != 2:
             raise ValueError(f"scaling must be two numbers, got {scaling!r}")
         l1 = _validate.positive("scaling[0]", scaling[0])
-        return (l1, _validate.positive("scaling[1]", scaling[1])), 1.0, 0.0, None
+        return (l1, _validate.positive("scaling[1]", scaling[1])), 1.0, None
     process = TwoScale() if kappa is None else kappa
     if not isinstance(process, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(process).__name__}")
@@ -376,8 +349,8 @@ def consider_settings(
         if update_interval is not None
         else float(np.max(np.diff(update_times, prepend=0.0)))
     )
-    scale, slow = 1.0, 0.0
-    slow_term: tuple[float, float] | None = None
+    scale = 1.0
+    slow: tuple[float, float] | None = None
     if isinstance(process, PiecewiseConstant):
         if update_interval is not None and abs(process.interval - update_interval) > 1e-9:
             raise ValueError(
@@ -390,11 +363,10 @@ def consider_settings(
     elif isinstance(process, TwoScale):
         c = 2.0 ** (-spacing / process.half_life)
         scale = math.sqrt(1.0 - process.slow_fraction)
-        share = slow_share(process.slow_half_life, float(update_times[-1]))
-        slow = process.slow_fraction * share
-        slow_term = (process.slow_fraction, process.slow_half_life)
+        if process.slow_fraction > 0:
+            slow = (math.sqrt(process.slow_fraction), float(process.slow_half_life))
     elif isinstance(process, Constant):
-        c, scale, slow = 1.0 / 3.0, 0.0, 1.0
+        c, scale, slow = 1.0 / 3.0, 0.0, (1.0, math.inf)
     else:
         raise ValueError(
             f"the CCSP holds kappa over each update: it stands for a PiecewiseConstant, "
@@ -402,38 +374,7 @@ def consider_settings(
         )
     if not c > 0:
         raise ValueError(f"kappa's correlation between updates must be > 0, got {c:g}")
-    return (3.0, 1.0 / c), scale, slow, slow_term
-
-
-def slow_share(half_life: float, span: float) -> float:
-    """The along-track variance at the end of ``span`` s that a unit Gauss-Markov density
-    term with ``half_life`` s drives, over that of a constant one: the double integral of
-    x y 2^(-|x - y| / half_life) over [0, span]^2 against (span^2 / 2)^2 (x, y the times
-    left to the end), in closed form (u = span ln 2 / half_life): 4 (2 u^3 / 3 - u^2 + 2 -
-    2 u e^-u - 2 e^-u) / u^4, its series 1 - 4 u / 15 + u^2 / 18 below u = 0.05; the core's
-    ``slow_share`` is the same formula (each output's c term is rescaled with it). 1 for a
-    span short beside the half-life; 0.58 for 14 days at 4.1 days."""
-    u = span * math.log(2.0) / half_life
-    if u < 0.05:
-        return 1.0 - 4.0 * u / 15.0 + u * u / 18.0
-    e = math.exp(-u)
-    return 4.0 * (2.0 * u**3 / 3.0 - u * u + 2.0 - 2.0 * u * e - 2.0 * e) / u**4
-
-
-def orbit_relative_sigma(atmosphere: AtmosphereLike, state: OrbitState, ut1: float) -> float:
-    """Density-weighted relative sigma sum(sigma) / sum(mean) of ``atmosphere`` at 24
-    points around the osculating orbit of ``state`` (at its epoch, UT1 s ``ut1``); at the
-    state's own position alone when the orbit is not elliptic or leaves the field."""
-    try:
-        elements = frames.to_equinoctial(state.state)
-        ring = np.tile(elements, (24, 1))
-        ring[:, 5] += np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
-        positions = frames.from_equinoctial(ring, state.state)[:, :3]
-        mean, sigma = atmosphere.mean_sigma(np.full(24, ut1), np.ascontiguousarray(positions))
-    except ValueError:
-        mean, sigma = atmosphere.mean_sigma(np.full(1, ut1), state.position[None, :].copy())
-    total = float(np.sum(mean))
-    return float(np.sum(sigma)) / total if total > 0 else 0.0
+    return (3.0, 1.0 / c), scale, slow
 
 
 def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResult:
@@ -512,18 +453,17 @@ def ccsp_many(
         )
         prepared.append((state, run["spacecraft"], args, as_atmosphere(model, state, span)))
     results: list[CcspResult | Exception] = [RuntimeError("not run")] * len(prepared)
-    groups: dict[tuple[int, tuple[float, float], float], list[int]] = {}
+    groups: dict[tuple[Any, ...], list[int]] = {}
     for i, (_s, _c, a, atmosphere) in enumerate(prepared):
         # One core call per atmosphere and consider settings (the objects' update
         # spacings set lambda2 for a kappa process).
-        groups.setdefault((id(atmosphere), a.scaling, a.kappa_scale), []).append(i)
+        groups.setdefault((id(atmosphere), a.scaling, a.kappa_scale, a.slow), []).append(i)
     for members in groups.values():
         atmosphere = prepared[members[0]][3]
         first = prepared[members[0]][2]
-        flown = {i: prepared[i][2].flown_drag_sigma(atmosphere, prepared[i][0]) for i in members}
         objects = [
-            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, *flown[i], a.outputs)
-            for i, (s, c, a, _) in ((i, prepared[i]) for i in members)
+            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, a.drag_sigma, a.outputs)
+            for s, c, a, _ in (prepared[i] for i in members)
         ]
         outs = _core.ccsp_many(
             atmosphere,
@@ -535,10 +475,11 @@ def ccsp_many(
             progress,
             coordinates,
             first.kappa_scale,
+            first.slow,
         )
         for i, out in zip(members, outs, strict=True):
-            state = prepared[i][0]
-            results[i] = out if isinstance(out, Exception) else _result(state, out, flown[i][0])
+            state, _c, a, _atm = prepared[i]
+            results[i] = out if isinstance(out, Exception) else _result(state, out, a.drag_sigma)
     return results
 
 

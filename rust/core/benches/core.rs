@@ -136,7 +136,7 @@ fn runs(c: &mut Criterion) {
         max_step: 180.0,
         drag_sigma: 0.0,
         coordinates: Coordinates::Equinoctial,
-        slow_drag: None,
+        slow: None,
     };
     group.bench_function("exponential/3 days, hourly updates", |b| {
         b.iter(|| ccsp(&atm, black_box(&cfg), &Progress::default()).unwrap())

@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use rhoprop_core::ccsp::{
-    ccsp as core_ccsp, ccsp_many as core_ccsp_many, CcspConfig, CcspOutput, Coordinates, SlowDrag,
+    ccsp as core_ccsp, ccsp_many as core_ccsp_many, CcspConfig, CcspOutput, Coordinates, SlowKappa,
 };
 use rhoprop_core::integrators::FixedMethod;
 
@@ -19,7 +19,7 @@ use rhoprop_core::integrators::FixedMethod;
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
     scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0,
-    output_times = None, coordinates = "equinoctial", kappa_scale = 1.0, slow_drag = None))]
+    output_times = None, coordinates = "equinoctial", kappa_scale = 1.0, slow = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -38,7 +38,7 @@ pub fn ccsp<'py>(
     output_times: Option<PyReadonlyArray1<'py, f64>>,
     coordinates: &str,
     kappa_scale: f64,
-    slow_drag: Option<(f64, f64, f64)>,
+    slow: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
@@ -59,7 +59,7 @@ pub fn ccsp<'py>(
         max_step: step,
         drag_sigma,
         coordinates,
-        slow_drag: slow_drag.map(slow_drag_arg),
+        slow: slow.map(slow_arg),
     };
     let out = long_call(py, None, |progress| {
         with_atmosphere!(&atm, |a| core_ccsp(a, &cfg, progress))
@@ -68,8 +68,7 @@ pub fn ccsp<'py>(
 }
 
 /// One object of `ccsp_many`: (epoch, state (6,), drag, initial_covariance (6, 6),
-/// update_times (k,), step, drag_sigma, slow_drag (or None), output_times (m,), empty for
-/// none).
+/// update_times (k,), step, drag_sigma, output_times (m,), empty for none).
 type ObjectArgs<'py> = (
     f64,
     PyReadonlyArray1<'py, f64>,
@@ -78,23 +77,18 @@ type ObjectArgs<'py> = (
     PyReadonlyArray1<'py, f64>,
     f64,
     f64,
-    Option<(f64, f64, f64)>,
     PyReadonlyArray1<'py, f64>,
 );
 
-/// The core's [`SlowDrag`] from (drag_variance, slow_variance, half_life).
-fn slow_drag_arg((drag_variance, slow_variance, half_life): (f64, f64, f64)) -> SlowDrag {
-    SlowDrag {
-        drag_variance,
-        slow_variance,
-        half_life,
-    }
+/// The core's [`SlowKappa`] from (scale, half_life s; infinite: constant).
+fn slow_arg((scale, half_life): (f64, f64)) -> SlowKappa {
+    SlowKappa { scale, half_life }
 }
 
 /// Runs the CCSP filter of several objects through one atmosphere in one call, objects in
 /// parallel with the GIL released (each object's sigma points in one batch); every
 /// result equals `ccsp` of that object alone. `objects` holds one tuple per object
-/// (epoch, state, drag, initial_covariance, update_times, step, drag_sigma, slow_drag,
+/// (epoch, state, drag, initial_covariance, update_times, step, drag_sigma,
 /// output_times);
 /// the other
 /// settings are shared. Returns a list with, per object, the dict of `ccsp` or the
@@ -103,7 +97,8 @@ fn slow_drag_arg((drag_variance, slow_variance, half_life): (f64, f64, f64)) -> 
 /// the call and is raised.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, objects, scaling, perturbation, floor_altitude,
-    zonal_degree = 2, progress = None, coordinates = "equinoctial", kappa_scale = 1.0))]
+    zonal_degree = 2, progress = None, coordinates = "equinoctial", kappa_scale = 1.0,
+    slow = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp_many<'py>(
     py: Python<'py>,
@@ -116,6 +111,7 @@ pub fn ccsp_many<'py>(
     progress: Option<Py<PyAny>>,
     coordinates: &str,
     kappa_scale: f64,
+    slow: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyList>> {
     let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
@@ -123,7 +119,7 @@ pub fn ccsp_many<'py>(
     let cfgs = objects
         .iter()
         .map(
-            |(epoch, state, drag, p0, times, step, drag_sigma, slow_drag, outputs)| {
+            |(epoch, state, drag, p0, times, step, drag_sigma, outputs)| {
                 Ok(CcspConfig {
                     problem: crate::arrays::problem(
                         *epoch,
@@ -146,7 +142,7 @@ pub fn ccsp_many<'py>(
                     max_step: *step,
                     drag_sigma: *drag_sigma,
                     coordinates,
-                    slow_drag: slow_drag.map(slow_drag_arg),
+                    slow: slow.map(slow_arg),
                 })
             },
         )

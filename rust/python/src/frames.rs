@@ -116,6 +116,17 @@ pub fn rtn_basis<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// The kind of semi-major axis from its name.
+fn semi_major_arg(name: &str) -> PyResult<equinoctial::SemiMajor> {
+    match name {
+        "osculating" => Ok(equinoctial::SemiMajor::Osculating),
+        "energy" => Ok(equinoctial::SemiMajor::Energy),
+        _ => Err(PyValueError::new_err(format!(
+            "semi_major must be 'osculating' or 'energy', got {name:?}"
+        ))),
+    }
+}
+
 /// The axes of `reference` (a Cartesian state) for equinoctial elements.
 fn element_axes(reference: &PyReadonlyArray1<'_, f64>) -> PyResult<equinoctial::Axes> {
     let r = fixed::<6>("reference", reference)?;
@@ -123,13 +134,17 @@ fn element_axes(reference: &PyReadonlyArray1<'_, f64>) -> PyResult<equinoctial::
 }
 
 /// Cartesian states (n, 6) m, m/s -> equinoctial elements (n, 6) (a m, h, k, p, q,
-/// lambda rad), in the axes of `reference` and with lambda within pi of its lambda.
+/// lambda rad), in the axes of `reference` and with lambda within pi of its lambda; a
+/// of kind `semi_major` ("osculating" or "energy").
 #[pyfunction]
+#[pyo3(signature = (states, reference, semi_major = "osculating"))]
 pub fn equinoctial_elements<'py>(
     py: Python<'py>,
     states: PyReadonlyArray2<'py, f64>,
     reference: PyReadonlyArray1<'py, f64>,
+    semi_major: &str,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let semi = semi_major_arg(semi_major)?;
     let s = rows("states", &states, 6)?;
     let axes = element_axes(&reference)?;
     let r = fixed::<6>("reference", &reference)?;
@@ -138,7 +153,7 @@ pub fn equinoctial_elements<'py>(
     let mut out = Array2::zeros((s.nrows(), 6));
     for i in 0..s.nrows() {
         let x = Vector6::from_iterator(s.row(i).iter().copied());
-        let el = equinoctial::from_cartesian(&x, axes, &format!("states[{i}]"))
+        let el = equinoctial::from_cartesian_with(&x, axes, semi, &format!("states[{i}]"))
             .map_err(crate::errors::to_py)?;
         let el = equinoctial::unwrap_near(&el, centre[5]);
         for c in 0..6 {
@@ -150,11 +165,14 @@ pub fn equinoctial_elements<'py>(
 
 /// Equinoctial elements (n, 6) -> Cartesian states (n, 6), in the axes of `reference`.
 #[pyfunction]
+#[pyo3(signature = (elements, reference, semi_major = "osculating"))]
 pub fn equinoctial_to_cartesian<'py>(
     py: Python<'py>,
     elements: PyReadonlyArray2<'py, f64>,
     reference: PyReadonlyArray1<'py, f64>,
+    semi_major: &str,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let semi = semi_major_arg(semi_major)?;
     let e = rows("elements", &elements, 6)?;
     let axes = element_axes(&reference)?;
     let mut out = Array2::zeros((e.nrows(), 6));
@@ -167,7 +185,7 @@ pub fn equinoctial_to_cartesian<'py>(
                 el[1] * el[1] + el[2] * el[2]
             )));
         }
-        let x = equinoctial::to_cartesian(&el, axes);
+        let x = equinoctial::to_cartesian_with(&el, axes, semi);
         for c in 0..6 {
             out[[i, c]] = x[c];
         }
