@@ -589,10 +589,11 @@ class CcspResult:
         drag_cross_covariance: covariance of the state with the normalised
             ballistic-coefficient error c (nt, 6), m and m/s (zero when ``drag_sigma`` is
             0); None for results built by hand.
-        element_mean: the filter's own mean in equinoctial elements (nt, 6): a (m), h, k,
-            p, q, lambda (rad, in (-pi, pi]), in the axes of
-            :func:`rhoprop.frames.to_equinoctial` with the initial state as reference;
-            None for Cartesian runs (``coordinates="cartesian"``).
+        element_mean: the filter's own mean in equinoctial elements (nt, 6): a (m, the
+            energy semi-major axis, free of the J2 swing), h, k, p, q, lambda (rad, in
+            (-pi, pi]), in the axes of :func:`rhoprop.frames.to_equinoctial` (with
+            ``semi_major="energy"``) with the initial state as reference; None for
+            Cartesian runs (``coordinates="cartesian"``).
         element_covariance: the filter's covariance in those elements (nt, 6, 6): the
             Gaussian that holds for weeks (``covariance`` is its linear map to Cartesian
             coordinates, which past about a week misses the along-track curvature);

@@ -98,22 +98,34 @@ pub fn from_cartesian_with(
 }
 
 /// Equinoctial elements with a of kind `semi` -> Cartesian state (m, m/s). For the energy
-/// a, the osculating one solves 1 / a_osc = 1 / a + 2 U_J2(r(a_osc)) / mu by fixed-point
-/// iteration: each step shrinks the error by about J2 (R / r)^2, so five steps from
-/// a_osc = a leave 1e-15 of it; a fixed count keeps the map smooth for the Jacobian's
-/// differences.
+/// a, the osculating one solves 1 / a_osc = 1 / a + 2 U_J2(r) / mu. With h, k, p, q and
+/// lambda held, the eccentric longitude does not depend on a: the position scales as
+/// a_osc and the velocity as a_osc^(-1/2), and z / r is fixed, so one Kepler solution at
+/// a gives r / a and z / r and the equation is scalar, solved by fixed-point iteration
+/// (each step shrinks the error by about 3 J2 (R / r)^2; six steps from a_osc = a leave
+/// 1e-18 of it, a fixed count keeps the map smooth for the Jacobian's differences).
 pub fn to_cartesian_with(el: &Vector6<f64>, axes: Axes, semi: SemiMajor) -> Vector6<f64> {
+    let x = to_cartesian(el, axes);
     if semi == SemiMajor::Osculating {
-        return to_cartesian(el, axes);
+        return x;
     }
-    let mut osc = *el;
-    let mut x = to_cartesian(&osc, axes);
-    for _ in 0..5 {
-        let r = Vector3::new(x[0], x[1], x[2]);
-        osc[0] = 1.0 / (1.0 / el[0] + 2.0 * j2_energy(&r) / MU);
-        x = to_cartesian(&osc, axes);
+    let a = el[0];
+    let r = Vector3::new(x[0], x[1], x[2]);
+    let (rho, s2) = (r.norm() / a, r.z * r.z / r.norm_squared());
+    let c = J2 * R_EARTH * R_EARTH * (3.0 * s2 - 1.0) / rho.powi(3);
+    let mut a_osc = a;
+    for _ in 0..6 {
+        a_osc = 1.0 / (1.0 / a + c / a_osc.powi(3));
     }
-    x
+    let (fr, fv) = (a_osc / a, (a / a_osc).sqrt());
+    Vector6::new(
+        x[0] * fr,
+        x[1] * fr,
+        x[2] * fr,
+        x[3] * fv,
+        x[4] * fv,
+        x[5] * fv,
+    )
 }
 
 /// Cartesian state (m, m/s) -> equinoctial elements (a m, h, k, p, q, lambda rad in
