@@ -55,6 +55,11 @@ def test_sampling_tiles_and_a_grown_cache_are_said(monkeypatch, capsys, tmp_path
     assert "sampling FromFunction into the cache: 3/3 days" in err, err
     model.atlas.field("2002-09-07T00:00", "2002-09-09T12:00")  # from memory: no word
     assert capsys.readouterr().err == ""
+    # A model without a cache key is sampled into memory, and says so.
+    unkeyed = rp.density.FromFunction(slow, name="slow", resolution=resolution)
+    unkeyed.atlas.field("2002-09-07T00:00", "2002-09-09T12:00")
+    err = capsys.readouterr().err
+    assert "sampling FromFunction into memory: 3/3 days" in err, err
 
     before = cli._cache_bytes()
     (tmp_path / "tiles" / "big.npz").write_bytes(b"0" * 60_000_000)

@@ -365,8 +365,10 @@ class Atlas:
         fresh = [w for w in windows if self._must_sample(*w)]
         if len(fresh) < 2:
             return [self.tile(w0, w1) for w0, w1 in windows]
+        # A model without a disk cache key is sampled into memory only: say where.
+        where = "the cache" if all(self._key(*w)[1] for w in fresh) else "memory"
         bar = ProgressBar(
-            len(fresh), f"sampling {type(self.model).__name__} into the cache", unit="days"
+            len(fresh), f"sampling {type(self.model).__name__} into {where}", unit="days"
         )
         tiles, done = [], 0
         try:
