@@ -136,7 +136,8 @@ def ccsp(
             by 1.6 km in a day.
         drag_sigma: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
             0.1 = 10 %; at most 3). Default 0: density uncertainty only, the paper's filter
-            (results unchanged). Costs one more sigma point, in the lane the 15 points leave free.
+            (results unchanged). Costs one more sigma point (17 with the default kappa's slow
+            term: about 1.2x the run's cost).
         dynamics: a :class:`~rhoprop.Dynamics` holding ``step``, ``floor_altitude`` and
             ``zonal_degree`` at once (its integrator must be None or "rk8": the filter
             integrates its sigma points with RK8).
