@@ -1160,6 +1160,19 @@ mod tests {
         (t.iter().map(|x| (x - tm) * (x - tm)).sum::<f64>() / (n - 1.0)).sqrt()
     }
 
+    /// The filter's along-track 1-sigma (m) at output `k`, in the RTN frame of its mean,
+    /// and that mean.
+    fn along_track_sigma(out: &CcspOutput, k: usize) -> (f64, [f64; 6]) {
+        let m = out.means[k];
+        let basis = crate::frames::rtn_basis([m[0], m[1], m[2]], [m[3], m[4], m[5]]);
+        let p = out.covariances[k];
+        let tt: f64 = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| basis[1][i] * p[i][j] * basis[1][j])
+            .sum();
+        (tt.sqrt(), m)
+    }
+
     #[test]
     fn along_track_sigma_matches_the_monte_carlo_of_its_process_to_30_days() {
         // The process the filter linearises (docs/conventions.md, "CCSP filter"): kappa
@@ -1206,15 +1219,7 @@ mod tests {
         .unwrap();
         let nt = outputs.len();
         let sigma_of = |out: &CcspOutput, t: f64| {
-            let k = out.times.iter().position(|&x| x == t).unwrap();
-            let m = out.means[k];
-            let basis = crate::frames::rtn_basis([m[0], m[1], m[2]], [m[3], m[4], m[5]]);
-            let p = out.covariances[k];
-            let tt: f64 = (0..3)
-                .flat_map(|i| (0..3).map(move |j| (i, j)))
-                .map(|(i, j)| basis[1][i] * p[i][j] * basis[1][j])
-                .sum();
-            (tt.sqrt(), m)
+            along_track_sigma(out, out.times.iter().position(|&x| x == t).unwrap())
         };
         for (j, &t) in outputs.iter().enumerate() {
             let members: Vec<[f64; 3]> = (0..400)
@@ -1547,14 +1552,8 @@ mod tests {
             }
             let share = inside as f64 / members as f64;
             assert!(share > 0.92, "day {}: {share} inside (a, lambda)", days[j]);
-            let m = out.means[k];
-            let basis = crate::frames::rtn_basis([m[0], m[1], m[2]], [m[3], m[4], m[5]]);
-            let p = out.covariances[k];
-            let tt: f64 = (0..3)
-                .flat_map(|i| (0..3).map(move |jj| (i, jj)))
-                .map(|(i, jj)| basis[1][i] * p[i][jj] * basis[1][jj])
-                .sum();
-            let ratio = tt.sqrt() / along_track_spread(&at, &m);
+            let (sigma, m) = along_track_sigma(&out, k);
+            let ratio = sigma / along_track_spread(&at, &m);
             assert!((ratio - 1.0).abs() < 0.06, "day {}: ratio {ratio}", days[j]);
         }
     }
