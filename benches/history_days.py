@@ -8,9 +8,11 @@ per object). Each start day S at 00:00 UTC (every ``--every`` days from 2026-03-
   before S, none of the names of ``catalog_realism.EXCLUDE`` (crewed stations, cargo,
   constellations) and no manoeuvre in the window: no fall of the mean motion between
   consecutive element sets beyond ``RAISE_REV_PER_DAY`` (drag only raises it);
-- prediction: the newest element set before S, run with the library's defaults
-  (``catalog.load`` then ``propagate_catalog``: fitted state and Cd*A/m, CCSP, NRLMSIS
-  2.1) on the space weather as known at S (``SpaceWeather.as_of(S)``: forecast mode);
+- prediction: every element set of the 2 days before S, run with the library's defaults
+  (``catalog.load`` then ``propagate_catalog``: state and Cd*A/m fitted to the newest
+  element set, CCSP, NRLMSIS 2.1; ``--history`` adds the fit of the newest with the others
+  of its last day, ``load(history="fit")``) on the space weather as known at S
+  (``SpaceWeather.as_of(S)``: forecast mode);
   ``--drivers both`` adds the hindcast (the record as observed) beside it;
 - truth: for each horizon H (1, 3, 7 days) the object's element set whose epoch is
   nearest S + H (within 12 h), its SGP4 state at its own epoch, the truth's published
@@ -88,10 +90,14 @@ def start_day(
     model: Any,
     threads: int,
     drags: dict[int, tuple[float, float, int]] | None = None,
+    together: bool = False,
 ) -> dict[float, tuple[dict, dict]]:
     """Predictions and truths of one start: per horizon (pred, truth) dicts by NORAD id.
     ``drags``: Cd*A/m per object from the catalog density sensor, replacing the fitted one
-    (the state stays the fit's)."""
+    (the state stays the fit's). The input is every element set of the 2 days before the
+    start, as a user's history file holds them: ``load``'s default predicts from the
+    newest; ``together``: from the fit of the newest and the others of its last
+    ``rp.catalog.HISTORY_DAYS`` (``load(history="fit")``)."""
     t0 = jd(start)
     chosen: dict[int, tuple[str, str, str, float]] = {}
     for norad in clean:
@@ -101,12 +107,20 @@ def start_day(
         lo, hi = altitudes_km(Satrec.twoline2rv(before[-1][1], before[-1][2]))
         if lo >= 200 and hi <= 700:
             chosen[norad] = before[-1]
+    given = {n: [s for s in history[n] if t0 - 2.0 <= s[3] < t0] for n in chosen}
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "start.tle"
-        path.write_text("".join(f"{s[0]}\n{s[1]}\n{s[2]}\n" for s in chosen.values()))
+        path.write_text("".join(f"{s[0]}\n{s[1]}\n{s[2]}\n" for v in given.values() for s in v))
         # Fitted once here as propagate_catalog's fit="auto" would (every object's
         # Cd*A/m comes from its element set), not again for each horizon.
-        cat = catalog.load(path, fit=True, model=model, errors="record", threads=threads)
+        cat = catalog.load(
+            path,
+            fit=True,
+            model=model,
+            errors="record",
+            threads=threads,
+            history="fit" if together else "newest",
+        )
     objects = {o.norad_id: o for o in cat.objects}
     for norad, (value, _, _) in (drags or {}).items():
         if norad in objects:
@@ -195,6 +209,12 @@ def main() -> None:
         help="with --sensor: each judged object's Cd*A/m from its own decay against the "
         "corrected model, in place of the one fitted to its element set",
     )
+    parser.add_argument(
+        "--history",
+        action="store_true",
+        help="beside the default, each object's element sets of the last "
+        "rp.catalog.HISTORY_DAYS fitted together (load(history='fit'))",
+    )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = parser.parse_args()
     data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data"))
@@ -212,6 +232,8 @@ def main() -> None:
         calibration = sorted(n for n in history if n % 2 == 0)
         sets = catalog.load(data / HISTORY, history="each", errors="record").objects
         print(f"{len(calibration)} calibration objects (even NORAD id), {len(clean)} judged")
+    if args.history:
+        configs = ("default", "history")
     horizons = [float(x) for x in args.horizons.split(",")]
     modes = ("forecast", "hindcast") if args.drivers == "both" else (args.drivers,)
     record = rp.SpaceWeather()
@@ -219,7 +241,7 @@ def main() -> None:
     starts = np.arange(
         np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
     )
-    modes = tuple(f"{m} {c}" if args.sensor else m for m in modes for c in configs)
+    modes = tuple(f"{m} {c}" if args.sensor or args.history else m for m in modes for c in configs)
     pooled = {(m, h): ({}, {}) for m in modes for h in horizons}
     per_start: dict[str, Any] = {}
     print(
@@ -253,7 +275,8 @@ def main() -> None:
                 if args.sensor_drag:
                     drags = density_sensor.drag_parameters(intervals, correction)
                     drags = {n: d for n, d in drags.items() if n in clean}
-            res = start_day(t_start, history, clean, horizons, model, args.threads, drags)
+            together = mode.endswith("history")
+            res = start_day(t_start, history, clean, horizons, model, args.threads, drags, together)
             for h, (pred, truth) in res.items():
                 if not pred:
                     continue

@@ -7,8 +7,9 @@ start S (00:00 UTC of every day with an element set before it and precise orbit 
 - rhoprop's default: the newest element set before S, ``catalog.load`` then
   ``propagate_catalog`` with the library's defaults (fitted state and Cd*A/m, CCSP,
   NRLMSIS 2.1) on the space weather as known at S (forecast mode);
-- rhoprop from the history: ``load(history="fit")``, every element set of the 3 days
-  before S fitted together (each near its own epoch);
+- rhoprop from the history: ``load(history="fit")`` of every element set of the 3 days
+  before S: the newest fitted with the others of its last ``rp.catalog.HISTORY_DAYS``
+  (each near its own epoch);
 - SGP4 of the newest element set (the baseline).
 
 Each prediction at S + 1..5 days (where the precise orbit reaches) is compared with the

@@ -266,3 +266,16 @@ def test_a_fitted_drag_far_from_its_b_star_prior_is_not_taken_for_drag(tle_file,
     for value in (6.9, 1e-4, f.prior / 11):
         err = _fitted(obj, dataclasses.replace(f, drag_parameter=value), window)
         assert isinstance(err, ValueError) and "not drag" in str(err), value
+
+
+def test_a_fit_with_no_more_observations_than_unknowns_is_no_linear_algebra_error(
+    tle_file, atmosphere
+):
+    # Two positions (six numbers) for seven unknowns: the fit is exact, its residual
+    # scale is 0 and once divided the information matrix into infinities (numpy's
+    # "SVD did not converge" out of a whole catalog load). The scale is then 1: the
+    # covariance is the observations' and the prior's.
+    obj = catalog.load(tle_file, errors="record")[0]
+    f = fit_element_set(obj, atmosphere, span=(-600.0, 0.0))
+    assert len(f.times) == 2
+    assert np.all(np.isfinite(f.covariance)) and 0 < f.drag_sigma <= f.prior_sigma * (1 + 1e-9)

@@ -194,7 +194,7 @@ def test_the_density_error_is_held_over_each_members_run(atmosphere):
 
 def test_history_fit_takes_the_earlier_element_sets(test_data):
     """With history="fit" the fit of the newest element set also takes the
-    object's earlier ones (fit_objects' history). Two element sets one day apart of a low
+    object's earlier ones (fit_objects' history). Two element sets under a day apart of a low
     object of CelesTrak's 2023-11-18 and 11-19 snapshots are reconciled (both used); a fit
     needs fit=True."""
     snaps = test_data / "catalogs"
@@ -211,7 +211,7 @@ def test_history_fit_takes_the_earlier_element_sets(test_data):
         (by_id[o.norad_id], o)
         for o in newer
         if o.norad_id in by_id
-        and 0.5 < gap(o) < 2
+        and 0.5 < gap(o) < catalog.HISTORY_DAYS
         and np.linalg.norm(o.state.position) < 6378137.0 + 330e3
         and o.bstar > 1e-4
     )

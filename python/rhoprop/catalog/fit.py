@@ -22,7 +22,9 @@ to its neighbours: every set speaks near its own epoch, the idea of Levit & Mars
 weighted by SGP4's own error growth away from its epoch, in the RTN frame: the published
 TLE accuracy at epoch (:func:`~rhoprop.catalog.covariance.tle_accuracy`: radial,
 along-track, cross-track) with the along-track sigma growing by the regime's drift rate,
-sigma_T(dt) = sqrt(sigma_T0^2 + (drift dt)^2).
+sigma_T(dt) = sqrt(sigma_T0^2 + (drift dt)^2). In a history the positions of one element
+set weigh together as one observation (sigmas times the square root of their number):
+they share the set's error, and counted apart the scatter between sets reads as drag.
 
 Prior on Cd*A/m (:func:`bstar_prior`): B* converted with the density ratio of SGP4's own
 static atmosphere to the fit's model along the element set's orbit (B* was fitted by the
@@ -286,6 +288,7 @@ class _Observations:
     velocities: np.ndarray  # (k, 3) m/s
     bases: np.ndarray  # (k, 3, 3) RTN rows of the SGP4 orbit
     sigmas: np.ndarray  # (k, 3) RTN 1-sigma, m
+    shared: np.ndarray  # (k,) weight divisor: sqrt(positions of the set) in a history
 
 
 #: Relative 1-sigma of the model's density (and so drag) error over a history's arc: the
@@ -336,7 +339,11 @@ def _observe(
         if k < len(sats) - 1:
             sig[:, 1] = np.hypot(sig[:, 1], _model_drift(sats[k], sats[-1], rel[k], grid * spacing))
         sig[:, 2] = acc.cross_track
-        parts.append((grid, np.full(len(grid), k), r, v, sig))
+        # The positions of one element set share its errors (its owner's fit to
+        # tracking): in a history they are about one observation of the orbit, not
+        # len(grid) independent ones, or the sets' scatter reads as a drag signal.
+        shared = np.full(len(grid), np.sqrt(len(grid)) if len(sats) > 1 else 1.0)
+        parts.append((grid, np.full(len(grid), k), r, v, sig, shared))
     grid = np.concatenate([p[0] for p in parts])
     back, forward = max(-int(grid.min()), 0), max(int(grid.max()), 0)
     pos = np.concatenate([p[2] for p in parts])
@@ -351,6 +358,7 @@ def _observe(
         velocities=vel,
         bases=rtn_basis(pos, vel),
         sigmas=np.concatenate([p[4] for p in parts]),
+        shared=np.concatenate([p[5] for p in parts]),
     )
     return obs, newest
 
@@ -575,7 +583,7 @@ class _Job:
 
     def weights(self) -> np.ndarray:
         """(k, 9) RTN rows over the 1-sigmas: weighted residual = W (observed - model)."""
-        w = self.obs.bases / self.obs.sigmas[:, :, None]
+        w = self.obs.bases / (self.obs.sigmas * self.obs.shared[:, None])[:, :, None]
         return np.ascontiguousarray(w.reshape(-1, 9))
 
 
@@ -760,8 +768,11 @@ def _result(fit: _Solution, job: _Job) -> tuple[FitResult, float]:
     count = len(job.sources)
     res3 = obs.positions - fit.nominal[obs.rows, :3]
     residuals = np.einsum("kij,kj->ki", obs.bases, res3)
-    normalised = residuals / obs.sigmas
-    s2 = float(np.sum(normalised**2)) / max(normalised.size - 7, 1)
+    normalised = residuals / obs.sigmas  # per position: each set's own RMS
+    weighted = normalised / obs.shared[:, None]  # as the fit weighed them
+    s2 = float(np.sum(weighted**2)) / max(weighted.size - 7, 1)
+    if not s2 > 0.0:  # as many unknowns as observations: no scale to estimate
+        s2 = 1.0
     info = fit.normal / s2
     info[6, 6] += 1.0 / job.prior_sigma**2
     cov = np.linalg.pinv(info)
