@@ -233,6 +233,8 @@ def main() -> None:
         sets = catalog.load(data / HISTORY, history="each", errors="record").objects
         print(f"{len(calibration)} calibration objects (even NORAD id), {len(clean)} judged")
     if args.history:
+        if args.sensor:
+            parser.error("--history and --sensor are separate comparisons: give one")
         configs = ("default", "history")
     horizons = [float(x) for x in args.horizons.split(",")]
     modes = ("forecast", "hindcast") if args.drivers == "both" else (args.drivers,)
@@ -241,7 +243,7 @@ def main() -> None:
     starts = np.arange(
         np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
     )
-    modes = tuple(f"{m} {c}" if args.sensor or args.history else m for m in modes for c in configs)
+    modes = tuple(f"{m} {c}" if len(configs) > 1 else m for m in modes for c in configs)
     pooled = {(m, h): ({}, {}) for m in modes for h in horizons}
     per_start: dict[str, Any] = {}
     print(

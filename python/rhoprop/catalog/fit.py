@@ -288,7 +288,15 @@ class _Observations:
     velocities: np.ndarray  # (k, 3) m/s
     bases: np.ndarray  # (k, 3, 3) RTN rows of the SGP4 orbit
     sigmas: np.ndarray  # (k, 3) RTN 1-sigma, m
-    shared: np.ndarray  # (k,) weight divisor: sqrt(positions of the set) in a history
+
+    @property
+    def shared(self) -> np.ndarray:
+        """(k,) divisor of each position's weight: in a history, the square root of its
+        element set's number of positions. They share the set's error (its owner's fit
+        to tracking), so together they are about one observation of the orbit, not that
+        many independent ones, or the scatter between sets reads as a drag signal."""
+        counts = np.bincount(self.which)
+        return np.sqrt(counts[self.which]) if len(counts) > 1 else np.ones(len(self.which))
 
 
 #: Relative 1-sigma of the model's density (and so drag) error over a history's arc: the
@@ -339,11 +347,7 @@ def _observe(
         if k < len(sats) - 1:
             sig[:, 1] = np.hypot(sig[:, 1], _model_drift(sats[k], sats[-1], rel[k], grid * spacing))
         sig[:, 2] = acc.cross_track
-        # The positions of one element set share its errors (its owner's fit to
-        # tracking): in a history they are about one observation of the orbit, not
-        # len(grid) independent ones, or the sets' scatter reads as a drag signal.
-        shared = np.full(len(grid), np.sqrt(len(grid)) if len(sats) > 1 else 1.0)
-        parts.append((grid, np.full(len(grid), k), r, v, sig, shared))
+        parts.append((grid, np.full(len(grid), k), r, v, sig))
     grid = np.concatenate([p[0] for p in parts])
     back, forward = max(-int(grid.min()), 0), max(int(grid.max()), 0)
     pos = np.concatenate([p[2] for p in parts])
@@ -358,7 +362,6 @@ def _observe(
         velocities=vel,
         bases=rtn_basis(pos, vel),
         sigmas=np.concatenate([p[4] for p in parts]),
-        shared=np.concatenate([p[5] for p in parts]),
     )
     return obs, newest
 
