@@ -782,8 +782,13 @@ def _result(fit: _Solution, job: _Job) -> tuple[FitResult, float]:
     cov = (cov + cov.T) / 2
     newest = obs.which == count - 1
     rms = np.sqrt(np.mean(residuals[newest] ** 2, axis=0))
-    per_set = [residuals[obs.which == i] for i in range(count)]
-    per_set_norm = [np.sqrt(np.mean(normalised[obs.which == i] ** 2)) for i in range(count)]
+    # Per element set; NaN for one whose window held no observation (a set closer to its
+    # neighbour than the spacing), which the manoeuvre check skips.
+    counts = np.bincount(obs.which, minlength=count).astype(float)
+    counts[counts == 0] = np.nan
+    set_rms = np.sqrt(np.bincount(obs.which, np.sum(residuals**2, axis=1), count) / counts)
+    set_norm = np.sqrt(np.bincount(obs.which, np.sum(normalised**2, axis=1), count) / counts / 3)
+    older_norm = set_norm[:-1][np.isfinite(set_norm[:-1])]
     drag_sigma = float(np.sqrt(max(cov[6, 6], 0.0)))
     result = FitResult(
         state=OrbitState(job.epoch, fit.p[:3].copy(), fit.p[3:6].copy()),
@@ -801,12 +806,12 @@ def _result(fit: _Solution, job: _Job) -> tuple[FitResult, float]:
         prior_sigma=job.prior_sigma,
         prior_note=job.prior_note,
         element_sets=tuple(job.sources),
-        element_set_rms=np.array([np.sqrt(np.mean(np.sum(r**2, axis=1))) for r in per_set]),
+        element_set_rms=set_rms,
         all_times=obs.times,
         all_residuals=residuals,
         observation_set=obs.which,
     )
-    return result, float(max(per_set_norm[:-1])) if count > 1 else 0.0
+    return result, float(older_norm.max()) if older_norm.size else 0.0
 
 
 def fit_span_epochs(epoch: np.datetime64, span: tuple[float, float]) -> tuple[Any, Any]:
