@@ -269,6 +269,8 @@ def test_errors_are_raised_chained_or_recorded_never_swallowed(tmp_path):
     table = pq.read_table(io.write_summary(r, tmp_path / "s.parquet")).to_pydict()
     assert table["status"] == list(r.status) and len(table["reason"]) == 6
     assert len(io.write_oem(r, tmp_path / "oem")) == int((~failed).sum())
+    ephemeris = pq.read_table(io.write_ephemeris(r, tmp_path / "e.parquet")).to_pydict()
+    assert set(ephemeris["object"]) == set(np.flatnonzero(~failed).tolist())
     with pytest.raises(ValueError, match="errors must be 'raise' or 'record'"):
         catalog.propagate_catalog(cat, field, END, errors="ignore")
 
@@ -308,6 +310,49 @@ def test_oem_round_trip_with_an_independent_reader(tmp_path, local_result):
     np.testing.assert_allclose(states * 1e3, local_result.mean[1], rtol=1e-8)
     cov = np.array([c.matrix for c in segment.covariances])  # km^2 ...
     np.testing.assert_allclose(cov * 1e6, local_result.covariance[1], rtol=1e-8, atol=1e-12)
+
+
+def test_ephemeris_table_round_trip_with_pandas_and_agrees_with_the_oem_files(
+    tmp_path, local_result
+):
+    # The catalog's default output: one Parquet table of every object's mean and
+    # covariance, read back by pandas (no rhoprop) and compared with the result and with
+    # the GCRF OEM files (the same rotation, by an independent reader).
+    import json
+
+    import pandas as pd
+    import pyarrow.parquet as pq
+    from oem import OrbitEphemerisMessage
+
+    r = local_result
+    path = io.write_ephemeris(r, tmp_path / "ephemeris.parquet")
+    df = pd.read_parquet(path)
+    assert len(df) == int(r.valid.sum()) and " " not in "".join(df.columns)
+    assert str(df["epoch"].dtype) == "datetime64[ns, UTC]"
+    for k in (0, 3):
+        rows = df[df["object"] == k]
+        assert (rows["norad_id"] == r.objects[k].norad_id).all()
+        np.testing.assert_array_equal(
+            rows["epoch"].dt.tz_localize(None).to_numpy(), r.epochs[r.valid[k]]
+        )
+        np.testing.assert_array_equal(rows[list(io.ephemeris.STATE)], r.mean[k, r.valid[k]])
+        full = np.zeros((len(rows), 6, 6))
+        for name in io.ephemeris.COVARIANCE_COLUMNS:
+            i, j = (io.ephemeris.STATE.index(c) for c in name.split("_")[1:])
+            full[:, i, j] = full[:, j, i] = rows[name].to_numpy()
+        np.testing.assert_array_equal(full, r.covariance[k, r.valid[k]])
+    meta = json.loads(pq.read_schema(path).metadata[b"rhoprop"])
+    assert meta["frame"] == "TEME" and meta["time_scale"] == "UTC"
+    assert [o["norad_id"] for o in meta["objects"]] == [o.norad_id for o in r.objects]
+    gcrf = pd.read_parquet(io.write_ephemeris(r, tmp_path / "g.parquet", frame="GCRF"))
+    (oem_path,) = io.write_oem(r, tmp_path / "oem", ref_frame="GCRF")[1:2]
+    states = [s.vector for s in OrbitEphemerisMessage.open(str(oem_path)).segments[0].states]
+    got = gcrf[gcrf["object"] == 1][list(io.ephemeris.STATE)].to_numpy()
+    np.testing.assert_allclose(got, np.array(states) * 1e3, rtol=1e-8, atol=1e-6)
+    with pytest.raises(ValueError, match="frame must be one of"):
+        io.write_ephemeris(r, tmp_path / "x.parquet", frame="ITRF")
+    with pytest.raises(TypeError, match="takes a CatalogResult"):
+        io.write_ephemeris([1, 2], tmp_path / "x.parquet")
 
 
 def test_parquet_summary(tmp_path, local_result):
@@ -368,14 +413,22 @@ def test_cli_catalog(tmp_path, capsys):
         ["catalog", str(SAMPLE), "--end", END, "--out", str(tmp_path), "--model", "exponential"]
     )
     assert code == 0
-    assert len(list((tmp_path / "oem").glob("*.oem"))) == 6
+    assert not (tmp_path / "oem").exists()  # OEM files on request (--oem)
     assert (tmp_path / "summary.parquet").exists()
     assert "objects/s" in capsys.readouterr().out
     manifest = json.loads((tmp_path / "manifest.json").read_text())
     assert manifest["complete"] and manifest["rhoprop_version"] == rp.__version__
     assert manifest["command"].startswith("rhoprop catalog ")
-    assert sorted(manifest["files"]) == sorted(
-        ["summary.parquet", *(f"oem/{o.norad_id}.oem" for o in catalog.load(SAMPLE))]
+    assert sorted(manifest["files"]) == ["ephemeris.parquet", "summary.parquet"]
+    each = tmp_path.parent / f"{tmp_path.name}_each"
+    base = ["catalog", str(SAMPLE), "--end", END, "--model", "exponential"]
+    assert main([*base, "--out", str(each), "--oem"]) == 0
+    assert sorted(json.loads((each / "manifest.json").read_text())["files"]) == sorted(
+        [
+            "ephemeris.parquet",
+            "summary.parquet",
+            *(f"oem/{o.norad_id}.oem" for o in catalog.load(SAMPLE)),
+        ]
     )
     # The same folder again: refused (it holds that run's files), unless --overwrite.
     args = ["catalog", str(SAMPLE), "--end", END, "--out", str(tmp_path), "--model", "exponential"]
@@ -392,11 +445,11 @@ def test_cli_catalog_duplicate_ids(tmp_path, capsys):
     twice.write_text(text + text)
     out = tmp_path / "out"
     args = ["catalog", str(twice), "--end", END, "--out", str(out), "--model", "exponential"]
-    assert main([*args, "--out", str(tmp_path / "combined")]) == 0
+    assert main([*args, "--out", str(tmp_path / "combined"), "--oem"]) == 0
     assert len(list((tmp_path / "combined" / "oem").glob("*.oem"))) == 6
     assert main([*args, "--duplicates", "error"]) == 1
     assert "occur more than once" in capsys.readouterr().err and not out.exists()
-    assert main([*args, "--duplicates", "suffix"]) == 0
+    assert main([*args, "--duplicates", "suffix", "--oem"]) == 0
     names = sorted(p.name for p in (out / "oem").glob("*.oem"))
     assert len(names) == 12 and "90001_2.oem" in names
 

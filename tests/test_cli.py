@@ -234,7 +234,15 @@ def test_catalog_of_a_2026_element_set_runs_offline_with_observed_drivers(tmp_pa
     assert sw.observed_end >= np.datetime64("2026-03-20")
     out = tmp_path / "run"
     code = main(
-        ["catalog", str(tmp_path / "march.tle"), "--end", "2026-03-17T12:00Z", "--out", str(out)]
+        [
+            "catalog",
+            str(tmp_path / "march.tle"),
+            "--end",
+            "2026-03-17T12:00Z",
+            "--out",
+            str(out),
+            "--oem",
+        ]
     )
     assert code == 0, capsys.readouterr().err
     assert (out / "oem" / "90001.oem").exists()

@@ -269,7 +269,7 @@ def test_cli_catalog_drag_sigma(tmp_path, capsys):
     from rhoprop.cli import main
 
     base = ["catalog", str(SAMPLE), "--end", END, "--model", "exponential"]
-    assert main([*base, "--out", str(tmp_path / "a"), "--drag-sigma", "0.3"]) == 0
+    assert main([*base, "--out", str(tmp_path / "a"), "--drag-sigma", "0.3", "--oem"]) == 0
     table = pq.read_table(tmp_path / "a" / "summary.parquet").to_pydict()
     assert all("relative 1-sigma 0.3, user-supplied" in t for t in table["covariance_includes"])
     assert "relative 1-sigma 0.3" in (tmp_path / "a" / "oem" / "90001.oem").read_text()

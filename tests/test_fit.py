@@ -178,6 +178,7 @@ def test_cli_catalog_fit_and_initial_covariance(tmp_path, tle_file):
             "--fit",
             "--output-step",
             "21600",
+            "--oem",
         ]
     )
     assert code == 0
@@ -196,6 +197,7 @@ def test_cli_catalog_fit_and_initial_covariance(tmp_path, tle_file):
             "exponential",
             "--initial-covariance",
             str(matrix),
+            "--oem",
         ]
     )
     assert code == 0

@@ -61,6 +61,7 @@ def _catalog(args: argparse.Namespace) -> int:
         max_span_days=args.max_span,
         frame=args.frame,
         start=args.start,
+        oem=args.oem,
     )
     return 0
 
@@ -323,7 +324,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="propagate a TLE/OMM catalog with density uncertainty",
         description="Propagate every element set of a TLE (2/3-line) or CCSDS OMM "
         "(JSON/CSV/XML) file from its epoch to --end with the CCSP filter (default) or a "
-        "Monte Carlo; write one CCSDS OEM file per object (mean and covariance) and a "
+        "Monte Carlo; write the ephemeris (mean and covariance) as one Parquet table, "
+        "ephemeris.parquet (with --oem also one CCSDS OEM file per object), and a "
         "Parquet summary. --scheduler runs it on a Dask cluster.",
     )
     cat.add_argument("file", help="TLE or OMM file")
@@ -349,8 +351,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--frame",
         choices=("TEME", "GCRF", "EME2000"),
         default="TEME",
-        help="REF_FRAME of the OEM files (default TEME, SGP4's frame, as computed); GCRF or "
-        "EME2000 rotates states and covariances from TEME (about 43 km in LEO)",
+        help="frame of the ephemeris and REF_FRAME of the OEM files (default TEME, SGP4's "
+        "frame, as computed); GCRF or EME2000 rotates states and covariances from TEME "
+        "(about 43 km in LEO)",
     )
     cat.add_argument(
         "--update-interval",
@@ -401,8 +404,15 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("newest", "error", "suffix"),
         default="newest",
         help="NORAD ids occurring more than once (a history): one object, the newest "
-        "element set (default), an error, or objects of their own in OEM files named "
-        "<id>_2.oem, <id>_3.oem, ...",
+        "element set (default), an error, or objects of their own (with --oem in OEM "
+        "files named <id>_2.oem, <id>_3.oem, ...)",
+    )
+    cat.add_argument(
+        "--oem",
+        action="store_true",
+        help="also write one CCSDS OEM file per object, OUT/oem/<NORAD id>.oem (the "
+        "default output, OUT/ephemeris.parquet, holds every object's mean and covariance "
+        "in one table)",
     )
     cat.add_argument(
         "--fit",

@@ -11,7 +11,15 @@ from typing import Any, Literal, cast
 import numpy as np
 
 from ..density import DensityModel, Exponential, Msis
-from ..io import OutputFolder, command_line, oem_names, sanitise, write_oem, write_summary
+from ..io import (
+    OutputFolder,
+    command_line,
+    oem_names,
+    sanitise,
+    write_ephemeris,
+    write_oem,
+    write_summary,
+)
 from ..options import Duplicates, UncertaintyMethod
 from ..spaceweather import SpaceWeather
 from ..time import to_datetime64
@@ -207,10 +215,13 @@ def run_catalog_file(
     max_span_days: float | None = MAX_SPAN / 86400.0,
     frame: str = "TEME",
     start: str | None = None,
+    oem: bool = False,
 ) -> list[Path]:
-    """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes one OEM
-    file per object to ``out/oem``, ``out/summary.parquet`` (one row per object with its
-    status) and ``out/manifest.json``; ``scheduler`` is a Dask scheduler address (needs
+    """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes the
+    catalog's ephemeris to ``out/ephemeris.parquet`` (:func:`~rhoprop.io.write_ephemeris`:
+    every object's mean and covariance, one row per object and epoch), with ``oem`` also
+    one OEM file per object to ``out/oem``, ``out/summary.parquet`` (one row per object
+    with its status) and ``out/manifest.json``; ``scheduler`` is a Dask scheduler address (needs
     the ``distributed`` extra).
 
     ``skip_bad``: malformed element sets are skipped and objects whose propagation fails
@@ -227,7 +238,8 @@ def run_catalog_file(
     ``drag_sigma``: "auto" or a number (or its text), see ``propagate_catalog``.
     ``max_span_days``: objects with an epoch more days before ``end`` end "stale", not
     run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). ``frame``: the OEM
-    files' REF_FRAME, "TEME" (default, as computed) or "GCRF"/"EME2000" (rotated,
+    ephemeris's frame and the OEM files' REF_FRAME, "TEME" (default, as computed) or
+    "GCRF"/"EME2000" (rotated,
     :func:`~rhoprop.io.write_oem`). ``start``: the first output epoch at or after it
     (UTC ISO; default :func:`default_start`, the epoch 99 % of the element sets are not
     after: the newer few have no valid output before their epoch). Returns the paths
@@ -279,9 +291,12 @@ def run_catalog_file(
     wall = time.perf_counter() - t0
     directory = folder.directory
     # Announced before they are written, so that an interrupted run's files are its own.
-    folder.expect([directory / "oem" / n for n in oem_names(result.objects, kind)])
-    folder.expect([directory / "summary.parquet"])
-    paths = write_oem(result, directory / "oem", duplicates=kind, ref_frame=frame)
+    ephemeris = directory / "ephemeris.parquet"
+    folder.expect([ephemeris, directory / "summary.parquet"])
+    if oem:
+        folder.expect([directory / "oem" / n for n in oem_names(result.objects, kind)])
+    folder.add([write_ephemeris(result, ephemeris, frame=frame)])
+    paths = write_oem(result, directory / "oem", duplicates=kind, ref_frame=frame) if oem else []
     folder.add(paths)
     summary = write_summary(result, directory / "summary.parquet")
     folder.add([summary])
@@ -299,14 +314,15 @@ def run_catalog_file(
         f"{wall:.1f} s ({len(cat) / wall:.1f} objects/s); "
         + ", ".join(f"{v} {k}" for k, v in counts.items())
     )
-    no_file = len(cat) - len(paths)
+    no_data = len(cat) - int(np.count_nonzero(np.asarray(result.valid).any(axis=1)))
     print(
-        f"wrote {len(paths)} OEM files to {directory / 'oem'}"
-        + (f" ({no_file} objects without a valid epoch have none)" if no_file else "")
+        f"wrote {ephemeris}"
+        + (f", {len(paths)} OEM files to {directory / 'oem'}" if oem else "")
+        + (f" ({no_data} objects without a valid epoch have no ephemeris)" if no_data else "")
         + f", {summary} and {manifest}"
     )
     print(atlas_line())
-    return [*paths, summary, manifest]
+    return [ephemeris, *paths, summary, manifest]
 
 
 def _drag_sigma_option(drag_sigma: str | float) -> float | Literal["auto"]:

@@ -1,13 +1,14 @@
 """Files in and out, below the catalog and the studies: CCSDS OEM (``oem``), the Parquet
-summary of a catalog run (``summary``), the event table of an all-on-all screen
-(``events``) and the output folder of a run with its manifest
-and atomic writes (``files``). A new output format is a module here. Two formats stay with
+ephemeris and summary of a catalog run (``ephemeris``, ``summary``), the event table of an
+all-on-all screen (``events``) and the output folder of a run with its manifest and atomic
+writes (``files``). A new output format is a module here. Two formats stay with
 what they describe: CCSDS conjunction data messages in :mod:`rhoprop.conjunction.cdm` (a
 message computes its own Pc, which belongs to the conjunction stage above this one) and
 the xarray datasets in the results'
 ``to_xarray`` (:mod:`rhoprop.propagation`, the catalog).
 """
 
+from .ephemeris import ephemeris_table, write_ephemeris
 from .events import write_event_table
 from .files import MANIFEST, OutputFolder, atomic_path, command_line, sanitise, write_text_atomic
 from .oem import DUPLICATES, duplicate_ids, oem_names, write_oem
@@ -20,9 +21,11 @@ __all__ = [
     "atomic_path",
     "command_line",
     "duplicate_ids",
+    "ephemeris_table",
     "oem_names",
     "sanitise",
     "summary_table",
+    "write_ephemeris",
     "write_event_table",
     "write_oem",
     "write_summary",
