@@ -489,7 +489,8 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
     end = add_seconds(start, 6 * 3600.0)
     out = tmp_path / "out"
     args = ["screen", str(tle), "--start", str(start), "--end", str(end), "--distance", "30000"]
-    assert main([*args, "--model", "exponential", "--out", str(out)]) == 0
+    every = ["--cdm-min-pc", "0"]
+    assert main([*args, "--model", "exponential", "--out", str(out), *every]) == 0
     captured = capsys.readouterr()
     printed = captured.out
     assert "skipped" in captured.err and "Earth radii" in captured.err  # listed, not fatal
@@ -497,6 +498,19 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
     cdms = sorted((out / "cdm").glob("*.cdm"))
     assert len(table["tca"]) == len(cdms) >= 3
     assert f"{len(cdms)} events within 30000 m" in printed
+    # By default a CDM only for the events with mixture Pc >= 1e-7 (the table has all);
+    # --no-cdm none; a threshold that is no probability is refused before any work.
+    assert main([*args, "--model", "exponential", "--out", str(tmp_path / "d")]) == 0
+    assert "(events with Pc >= 1e-07)" in capsys.readouterr().out
+    likely = [n for n, p in enumerate(table["pc"]) if p >= 1e-7]
+    written = sorted(p.name for p in (tmp_path / "d" / "cdm").glob("*.cdm"))
+    assert written == [cdms[n].name for n in likely] and len(likely) < len(cdms)
+    assert main([*args, "--model", "exponential", "--out", str(tmp_path / "n"), "--no-cdm"]) == 0
+    assert not (tmp_path / "n" / "cdm").exists()
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main([*args, "--out", str(tmp_path / "x"), "--cdm-min-pc", "2"])
+    assert "must be a probability" in capsys.readouterr().err and not (tmp_path / "x").exists()
     first = read_cdm(cdms[0])
     assert first.miss_distance == pytest.approx(table["miss_distance"][0], abs=1e-3)
     assert first.collision_probability == pytest.approx(table["pc"][0], rel=1e-9)

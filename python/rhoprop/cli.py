@@ -89,6 +89,14 @@ def _positive(text: str) -> float:
     return value
 
 
+def _probability(text: str) -> float:
+    """An argparse type: a number in [0, 1]."""
+    value = _non_negative(text)
+    if value > 1:
+        raise argparse.ArgumentTypeError(f"must be a probability in [0, 1], got {text}")
+    return value
+
+
 def _reentry(args: argparse.Namespace) -> int:
     from .catalog.job import run_reentry_file
 
@@ -135,6 +143,7 @@ def _screen(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         command=args.command_line,
         max_span_days=args.max_span,
+        cdm_min_pc=None if args.no_cdm else args.cdm_min_pc,
     )
     return 0
 
@@ -549,9 +558,10 @@ def build_parser() -> argparse.ArgumentParser:
         "every pair coming within --distance (spatial grid and distance bounds, then the "
         "minima), and give each event its probability of collision per density model and "
         "for their mixture (CCSP of the objects in events, each object's own covariance). "
-        "Writes OUT/events.parquet, one CCSDS CDM per event in OUT/cdm (with the [cdm] "
-        "extra) and prints the most probable. Element sets that cannot be read or propagated "
-        "(e.g. orbits beyond 10 Earth radii) are skipped and listed (--strict stops "
+        "Writes OUT/events.parquet (every event), a CCSDS CDM in OUT/cdm for each event "
+        "with Pc >= --cdm-min-pc (with the [cdm] extra) and prints the most probable. "
+        "Element sets that cannot be read or propagated (e.g. orbits beyond 10 Earth "
+        "radii) are skipped and listed (--strict stops "
         "instead). B* <= 0 objects load with an assumed "
         "Cd*A/m of 0.022 m^2/kg and 100 % drag uncertainty.",
     )
@@ -587,6 +597,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=True,
         help="compute each event's Pc (default; --no-pc lists the close approaches only)",
     )
+    scr.add_argument(
+        "--cdm-min-pc",
+        type=_probability,
+        default=1e-7,
+        metavar="PC",
+        help="write a CDM for each event whose mixture Pc is at least PC (default 1e-7; 0: "
+        "every event, with --no-pc too); the event table holds every event",
+    )
+    scr.add_argument("--no-cdm", action="store_true", help="write no CDM, the event table only")
     scr.add_argument(
         "--monte-carlo",
         type=int,

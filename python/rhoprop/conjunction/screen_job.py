@@ -19,7 +19,14 @@ from ..time import to_datetime64
 from .all_on_all import AllOnAllResult, screen_all
 from .cdm import CdmObject, ConjunctionMessage
 
-__all__ = ["default_start", "output_events", "read_radii", "run_screen_file"]
+__all__ = [
+    "CDM_MIN_PC",
+    "cdm_events",
+    "default_start",
+    "output_events",
+    "read_radii",
+    "run_screen_file",
+]
 
 #: Events printed by ``rhoprop screen`` (all are written).
 PRINTED = 15
@@ -90,19 +97,48 @@ def _message(res: AllOnAllResult, n: int, created: np.datetime64) -> Conjunction
     )
 
 
-def output_events(res: AllOnAllResult, folder: OutputFolder) -> list[Path]:
-    """``events.parquet`` (one row per event, :meth:`AllOnAllResult.table`) and one KVN
-    CDM per event in ``cdm/`` (``<rank>_<id1>_<id2>.cdm``, rank by mixture Pc; needs
-    ``ccsds-ndm``, the ``[cdm]`` extra: without it the CDMs are left out, said on
-    stderr). Returns the paths written."""
+#: Mixture Pc from which ``rhoprop screen`` writes an event's CDM by default: the event
+#: table holds every event; a message is for the events someone may act on. 1e-7 is below
+#: every operator's manoeuvre threshold (NASA CARA's is 1e-4) with three decades to spare.
+CDM_MIN_PC = 1e-7
+
+
+def cdm_events(res: AllOnAllResult, min_pc: float | None) -> list[int]:
+    """Indices of the events that get a CDM: those with mixture Pc >= ``min_pc`` (a Pc not
+    computed, ``--no-pc``, is never above it); ``min_pc`` 0: every event; None: none."""
+    if min_pc is None:
+        return []
+    _check_threshold(min_pc)
+    if min_pc == 0:
+        return list(range(len(res.events)))
+    pc = np.asarray(res.pc, dtype=float)
+    return [int(n) for n in np.flatnonzero(np.isfinite(pc) & (pc >= min_pc))]
+
+
+def _check_threshold(min_pc: float | None) -> None:
+    if min_pc is not None and not (np.isfinite(min_pc) and 0 <= min_pc <= 1):
+        raise ValueError(f"the CDM threshold must be a probability in [0, 1], got {min_pc}")
+
+
+def output_events(
+    res: AllOnAllResult, folder: OutputFolder, cdm_min_pc: float | None = CDM_MIN_PC
+) -> list[Path]:
+    """``events.parquet`` (one row per event, :meth:`AllOnAllResult.table`) and a KVN CDM
+    in ``cdm/`` (``<rank>_<id1>_<id2>.cdm``, rank by mixture Pc) for each event of
+    :func:`cdm_events` (mixture Pc >= ``cdm_min_pc``, default :data:`CDM_MIN_PC`; 0: every
+    event; None: none). CDMs need ``ccsds-ndm``, the ``[cdm]`` extra: without it they are
+    left out, said on stderr. Returns the paths written."""
+    chosen = cdm_events(res, cdm_min_pc)
     written = [write_event_table(res.table(), folder, "events.parquet")]
+    if not chosen:
+        return written
     try:
         from .cdm import cdm_text
 
         created = np.datetime64("now", "ns")
-        if res.events:
-            (folder.directory / "cdm").mkdir(exist_ok=True)
-        for n, e in enumerate(res.events):
+        (folder.directory / "cdm").mkdir(exist_ok=True)
+        for n in chosen:
+            e = res.events[n]
             name = f"cdm/{n + 1:05d}_{e.id1}_{e.id2}.cdm"
             written.append(folder.write_text(name, cdm_text(_message(res, n, created))))
     except ImportError as err:
@@ -141,18 +177,21 @@ def run_screen_file(
     overwrite: bool = False,
     command: str | None = None,
     max_span_days: float | None = MAX_SPAN / 86400.0,
+    cdm_min_pc: float | None = CDM_MIN_PC,
 ) -> list[Path]:
     """Every element set of ``file`` screened against every other from ``start`` (default
     :func:`default_start`: the epoch 99 % of the element sets are not after) to ``end``
     (UTC ISO) within ``distance`` m through ``models`` (reference first); B* <= 0 objects
     load with an assumed Cd*A/m (``load(nonpositive_bstar="prior")``). Writes
-    ``out/events.parquet``, ``out/cdm/`` and ``out/manifest.json``; prints the events
+    ``out/events.parquet`` (every event), ``out/cdm/`` (a CDM for each event with mixture
+    Pc >= ``cdm_min_pc``: :func:`output_events`) and ``out/manifest.json``; prints the events
     with the largest mixture Pc, the filter counts and the time per stage;
     ``monte_carlo_events`` events of largest Pc also get the member Monte Carlo's Pc
     (``members`` members). ``max_span_days``: element sets further than that from the
     window are listed as skipped, not screened (0 or None: no limit). Returns the paths
     written."""
     span = max_span_option(max_span_days)
+    _check_threshold(cdm_min_pc)  # before any work
     cat = _catalog(file, skip_bad)
     radii = read_radii(radii_file) if radii_file else None
     t0 = to_datetime64(start, "start") if start else default_start(cat)
@@ -171,10 +210,11 @@ def run_screen_file(
         errors="record" if skip_bad else "raise",
         max_span=span,
     )
-    written = output_events(res, folder)
+    written = output_events(res, folder, cdm_min_pc)
     manifest = folder.finish()
     _report(res)
-    print(f"wrote {written[0]}, {len(written) - 1} CDM file(s) and {manifest}")
+    rule = "none asked" if cdm_min_pc is None else f"events with Pc >= {cdm_min_pc:g}"
+    print(f"wrote {written[0]}, {len(written) - 1} CDM file(s) ({rule}) and {manifest}")
     return [*written, manifest]
 
 
