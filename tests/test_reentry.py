@@ -40,6 +40,23 @@ def test_windows_are_ordered_and_count_every_member(atmosphere):
     assert r.epoch_median[0] < r.epoch_median[1]  # the lower object comes down first
     rows = r.rows()
     assert rows[0]["norad_id"] == 1 and rows[0]["epoch_median"].endswith("Z")
+    # Windows of any probability from the members' decay times: the 95 % one is the
+    # q025/q975 pair; an 80 % window lies inside it; each end is a member's own decay
+    # (inverted CDF), counted against the sorted times by hand.
+    assert r.decay_times.shape == (2, 20) and np.isfinite(r.decay_times).all()
+    lo95, hi95 = r.window(0.95)
+    np.testing.assert_array_equal(lo95, r.epoch_q025)
+    np.testing.assert_array_equal(hi95, r.epoch_q975)
+    lo80, hi80 = r.window(0.8)
+    assert (lo95 <= lo80).all() and (lo80 < hi80).all() and (hi80 <= hi95).all()
+    for k in range(2):
+        t = np.sort(r.decay_times[k])
+        start, end = ((e[k] - objs[k].state.epoch) / np.timedelta64(1, "s") for e in (lo80, hi80))
+        # 20 members: the 10 % quantile is the 2nd smallest, the 90 % the 18th.
+        assert start == pytest.approx(t[1], abs=1e-6) and end == pytest.approx(t[17], abs=1e-6)
+    for bad in (0.0, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="level"):
+            r.window(bad)
 
 
 def test_drag_uncertainty_widens_the_window(atmosphere):
@@ -54,6 +71,7 @@ def test_nat_beyond_the_horizon(atmosphere):
     r = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, duration=3600.0, groups=2)
     assert r.decayed_fraction[0] == 0
     assert np.isnat(r.epoch_median[0]) and np.isnat(r.epoch_q025[0]) and np.isnat(r.epoch_q975[0])
+    assert np.isinf(r.decay_times).all() and np.isnat(r.window(0.5)[0][0])
     with pytest.raises(ValueError, match="duration"):
         catalog.reentry([_low(1, 200e3)], atmosphere, duration=-1.0)
     with pytest.raises(TypeError, match="duration"):

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import ModelLike
 from ..parallel import map_in_threads, worker_count
@@ -85,6 +86,9 @@ class ReentryResult:
             not fitted ("" where fitted or not asked to).
         element_sets: (objects,) how many element sets of the object's NORAD id the input
             held (with ``history="newest"`` only the newest was predicted).
+        decay_times: (objects, members) each member's decay time, s after its object's
+            epoch (inf: not down within the horizon); :meth:`window` gives a window of
+            any probability from them.
     """
 
     objects: list[CatalogObject]
@@ -101,6 +105,18 @@ class ReentryResult:
     fit_rms: np.ndarray
     fit_note: list[str]
     element_sets: np.ndarray
+    decay_times: np.ndarray
+
+    def window(self, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+        """The central window holding a fraction ``level`` (0 < level < 1) of the members'
+        decays: (objects,) datetime64[ns] start and end, the (1 - level) / 2 and
+        (1 + level) / 2 quantiles of the decay epochs (UTC), NaT where beyond the horizon.
+        ``window(0.95)`` is (``epoch_q025``, ``epoch_q975``)."""
+        q = _validate.real("level", level)
+        if not 0 < q < 1:
+            raise ValueError(f"level must lie strictly between 0 and 1, got {level!r}")
+        lo = _quantile_epochs(self.objects, self.decay_times, (1 - q) / 2)
+        return lo, _quantile_epochs(self.objects, self.decay_times, (1 + q) / 2)
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per object (NORAD id, name, the epochs as ISO strings or "", the
@@ -271,7 +287,9 @@ def reentry(
     order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
     ran = map_in_threads(lambda i: one(i, objs[i]), order, worker_count(threads), stop)
     done = [ran[k] for k in np.argsort(order)]
-    lo, med, hi, fraction = _windows(objs, [d[0] for d in done], span)
+    decay_times = np.vstack([np.where(d[0] <= span, d[0], np.inf) for d in done])
+    lo, med, hi = (_quantile_epochs(objs, decay_times, q) for q in (0.025, 0.5, 0.975))
+    fraction = np.isfinite(decay_times).mean(axis=1)
     return ReentryResult(
         objects=objs,
         horizon=span,
@@ -287,6 +305,7 @@ def reentry(
         fit_rms=np.array([o.fit.rms_total if o.fit is not None else np.nan for o in objs]),
         fit_note=notes,
         element_sets=np.array([counts[o.norad_id] for o in objs]),
+        decay_times=decay_times,
     )
 
 
@@ -328,20 +347,13 @@ def _histories_and_fits(
     return objs, notes, counts
 
 
-def _windows(
-    objs: list[CatalogObject], decay_times: list[np.ndarray], span: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(2.5 %, median, 97.5 %) decay epochs (NaT beyond the horizon) and the decayed
-    fraction per object, from each object's members' decay times (s after its epoch)."""
-    nat = np.datetime64("NaT", "ns")
-    lo, med, hi = (np.full(len(objs), nat) for _ in range(3))
-    fraction = np.zeros(len(objs))
+def _quantile_epochs(objs: list[CatalogObject], decay_times: np.ndarray, q: float) -> np.ndarray:
+    """The ``q`` quantile of each object's members' decay epochs (NaT where it lies beyond
+    the horizon: the members not down count as later than it), from their decay times
+    (objects, members), s after each object's epoch, inf where not down."""
+    out = np.full(len(objs), np.datetime64("NaT", "ns"))
     for k, times in enumerate(decay_times):
-        within = np.where(times <= span, times, np.inf)
-        fraction[k] = float(np.mean(np.isfinite(within)))
-        ordered = np.sort(within)
-        for out, q in ((lo, 0.025), (med, 0.5), (hi, 0.975)):
-            t = float(np.quantile(ordered, q, method="inverted_cdf"))
-            if np.isfinite(t):
-                out[k] = add_seconds(objs[k].state.epoch, t)
-    return lo, med, hi, fraction
+        t = float(np.quantile(np.sort(times), q, method="inverted_cdf"))
+        if np.isfinite(t):
+            out[k] = add_seconds(objs[k].state.epoch, t)
+    return out
