@@ -378,3 +378,15 @@ def pc_pairs(
 ) -> tuple[int, int, float, float]:
     """Monte Carlo Pc over all pairs of member states (n1, 6), (n2, 6) (m, m/s) ->
     (hits, pairs, pc, variance)."""
+
+def interval_hits(
+    states: _F64,
+    mean_motion: float,
+    span: float,
+    hard_body_radius: float,
+    coarse_points: int,
+    grid_points: int,
+) -> int:
+    """How many LVLH relative states (n, 6) (m, m/s at TCA) come within the hard-body
+    radius (m) over [-span/2, span/2] s of Clohessy-Wiltshire motion (mean motion rad/s),
+    on ``coarse_points`` and ``grid_points`` even times (``encounter.pc_interval``)."""

@@ -19,6 +19,7 @@
 //! - [`propagate`], [`montecarlo`], [`ccsp`]: the three runs the binding exposes;
 //! - [`fit`]: least-squares fits of state and Cd*A/m to pseudo-observations, 8 lanes a trial;
 //! - [`conjunction`]: probability of collision (2-D Gaussian Pc, Monte Carlo pair count);
+//! - [`encounter`]: the hits of the Pc over an encounter interval (CW relative motion);
 //! - [`sieve`]: all-on-all screening's candidate intervals (spatial grid, distance bounds);
 //! - [`error`]: what can go wrong, with messages fit for the user.
 
@@ -32,6 +33,7 @@ pub mod constants;
 pub mod decay;
 pub mod density;
 pub mod dynamics;
+pub mod encounter;
 pub mod ephemeris;
 pub mod equinoctial;
 pub mod error;

@@ -9,6 +9,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rhoprop_core::conjunction::{self, HardBodyShape, NpdPolicy};
+use rhoprop_core::encounter;
 
 /// A (3, 3) matrix, row-major.
 fn matrix3(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<[[f64; 3]; 3]> {
@@ -106,9 +107,41 @@ pub fn pc_pairs(
     Ok((out.hits, out.pairs, out.pc, out.variance))
 }
 
+/// How many relative states (n, 6) (LVLH x y z m, u v w m/s at TCA) come within
+/// `hard_body_radius` m over [-span/2, span/2] s of Clohessy-Wiltshire motion of mean
+/// motion `mean_motion` rad/s, on `coarse_points` and `grid_points` even times; see
+/// `rhoprop.conjunction.encounter.pc_interval`. GIL released; Ctrl-C cancels it.
+#[pyfunction]
+pub fn interval_hits(
+    py: Python<'_>,
+    states: PyReadonlyArray2<'_, f64>,
+    mean_motion: f64,
+    span: f64,
+    hard_body_radius: f64,
+    coarse_points: usize,
+    grid_points: usize,
+) -> PyResult<u64> {
+    let v = rows("states", &states, 6)?;
+    let q: Vec<[f64; 6]> = (0..v.nrows())
+        .map(|i| std::array::from_fn(|k| v[[i, k]]))
+        .collect();
+    long_call(py, None, |p| {
+        encounter::interval_hits(
+            &q,
+            mean_motion,
+            span,
+            hard_body_radius,
+            coarse_points,
+            grid_points,
+            p,
+        )
+    })
+}
+
 /// Registers the conjunction functions (one line in `lib.rs`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pc_2d, m)?)?;
+    m.add_function(wrap_pyfunction!(interval_hits, m)?)?;
     m.add_function(wrap_pyfunction!(pc_pairs, m)?)?;
     m.add(
         "HARD_BODY_SHAPES",
