@@ -373,6 +373,21 @@ def screen_approaches(
     the ends count where ``window_start`` / ``window_end`` say the grid's are the
     window's own)."""
 
+def screen_stretches(
+    times: _F64,
+    positions: _F64,
+    velocities: _F64,
+    samples: npt.NDArray[np.uint64],
+    i: npt.NDArray[np.uint32],
+    j: npt.NDArray[np.uint32],
+    t: _F64,
+    distance: float,
+    progress: Callable[[int], object] | None = None,
+) -> tuple[_F64, _F64]:
+    """Per minimum (i, j, t s) of tracks as for ``screen_approaches``, the (first, last)
+    times s between which the objects stay within ``distance`` m around it (cubic Hermite
+    relative motion, crossings by bisection)."""
+
 def pc_pairs(
     members1: _F64, members2: _F64, hard_body_radius: float
 ) -> tuple[int, int, float, float]:

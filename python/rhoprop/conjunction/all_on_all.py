@@ -32,7 +32,7 @@ from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
-from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event, _hermite
+from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
 from .approach import _models_for as models_for
 from .event_mc import event_monte_carlo
 from .event_pc import check_coverage, check_options, event_probabilities
@@ -800,72 +800,26 @@ class _Run:
             window_start=bool(chunk.times[0] == 0.0),
             window_end=bool(chunk.times[-1] == self.cfg.span),
         )
+        # Each minimum's stretch within the distance: the cubic Hermite relative motion
+        # between the samples, checked at 8 points an interval walking away from the
+        # minimum, crossings by bisection to 1 ms (rhoprop_core::sieve::stretches); held
+        # within the samples both objects have (a stretch that began in an earlier time
+        # chunk starts at its boundary).
+        first, last = _core.screen_stretches(
+            chunk.times, chunk.pos, chunk.vel, chunk.samples, i, j, t, self.cfg.limit
+        )
         self._tell("refinement", total, total)
         out: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
         for m in range(len(t)):
             a, b = self.objs[int(i[m])], self.objs[int(j[m])]
             where = EDGES[int(edge[m])]
             event = _event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy(), where)
-            first, last = within_interval(chunk, int(i[m]), int(j[m]), float(t[m]), self.cfg.limit)
-            span = (add_seconds(self.cfg.start, first), add_seconds(self.cfg.start, last))
+            span = (
+                add_seconds(self.cfg.start, float(first[m])),
+                add_seconds(self.cfg.start, float(last[m])),
+            )
             out[int(i[m]), int(j[m])].append(dataclasses.replace(event, within=span))
         return out
-
-
-#: Points per grid interval at which :func:`within_interval` checks the distance.
-WITHIN_POINTS = 8
-
-
-def within_interval(chunk: _Chunk, i: int, j: int, tca: float, limit: float) -> tuple[float, float]:
-    """(first, last) s from the window's start around ``tca`` between which objects
-    ``i`` and ``j`` stay within ``limit`` m, on the cubic Hermite interpolant of their
-    relative state between the chunk's samples (60-s samples: centimetres for a relative
-    orbit of kilometres), crossings by bisection to 1 ms; held within the samples both
-    objects have (an interval that began in an earlier time chunk starts at its
-    boundary)."""
-    k = int(min(chunk.samples[i], chunk.samples[j]))
-    times = chunk.times[:k]
-    rel_p = chunk.pos[j, :k] - chunk.pos[i, :k]
-    rel_v = chunk.vel[j, :k] - chunk.vel[i, :k]
-    if k < 2:
-        return tca, tca
-    at = int(np.clip(np.searchsorted(times, tca, side="right") - 1, 0, k - 2))
-
-    def distance(q: int, frac: np.ndarray) -> np.ndarray:
-        h = float(times[q + 1] - times[q])
-        p, _ = _hermite(rel_p[q], rel_v[q], rel_p[q + 1], rel_v[q + 1], h, frac[:, None])
-        out: np.ndarray = np.linalg.norm(p, axis=-1)
-        return out
-
-    def crossing(q: int, lo: float, hi: float) -> float:
-        """Time of |rel| = limit between fractions lo (inside) and hi (outside)."""
-        for _ in range(40):
-            mid = 0.5 * (lo + hi)
-            if distance(q, np.array([mid]))[0] <= limit:
-                lo = mid
-            else:
-                hi = mid
-        return float(times[q] + 0.5 * (lo + hi) * (times[q + 1] - times[q]))
-
-    grid = np.linspace(0.0, 1.0, WITHIN_POINTS + 1)
-    h_at = float(times[at + 1] - times[at])
-    s_tca = float(np.clip((tca - times[at]) / h_at, 0.0, 1.0))
-    ends = []
-    for direction in (-1, 1):
-        q, frac = at, s_tca
-        end = float(times[0] if direction < 0 else times[k - 1])
-        while 0 <= q <= k - 2:
-            pts = grid[grid < frac] if direction < 0 else grid[grid > frac]
-            pts = pts[::-1] if direction < 0 else pts
-            d = distance(q, pts) if len(pts) else np.zeros(0)
-            out = np.flatnonzero(d > limit)
-            if len(out):
-                inside = frac if out[0] == 0 else float(pts[out[0] - 1])
-                end = crossing(q, inside, float(pts[out[0]]))
-                break
-            q, frac = q + direction, (1.0 if direction < 0 else 0.0)
-        ends.append(end)
-    return ends[0], ends[1]
 
 
 def _joined(events: list[CloseApproach]) -> list[CloseApproach]:

@@ -34,6 +34,7 @@ from ..catalog.elements import CatalogObject
 from ..catalog.run import propagate_catalog
 from ..ensemble.debias import backward_orbit
 from ..propagation import Spacecraft
+from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
 from ..time import seconds_between, to_seconds
 from .approach import CloseApproach
 from .encounter import encounter_check, pc_interval
@@ -54,7 +55,7 @@ PC_OUTPUT_STEP = 300.0
 DEBIAS_WINDOW = 8 * 3600.0
 DEBIAS_CADENCE = 600.0
 #: Objects whose epochs lie within this of each other share one CCSP run (its common
-#: output epochs start at the earliest epoch), s.
+#: output epochs start at the newest epoch), s.
 BATCH_EPOCH_SPREAD = 2 * 86400.0
 BATCH_SIZE = 100
 
@@ -218,11 +219,29 @@ def _batches(cats: list[CatalogObject]) -> list[list[int]]:
     return groups
 
 
+def _batch_end(
+    batch: list[int],
+    cats: list[CatalogObject],
+    events: list[CloseApproach],
+    needs: dict[int, list[tuple[int, int]]],
+    end: np.datetime64,
+) -> np.datetime64:
+    """Where a batch's CCSP can stop: the first output epoch after its objects' latest
+    TCA (and epoch), on the grid of ``end`` (outputs every :data:`PC_OUTPUT_STEP` s
+    counted back from it, as ``propagate_catalog`` places them), so every TCA keeps the
+    outputs around it that a run to ``end`` gives (a CCSP run is the same up to where it
+    stops)."""
+    last = max(max(max(events[e].tca for e, _ in needs[m]), cats[m].state.epoch) for m in batch)
+    back = seconds_between(last, end)
+    steps = max(int(np.ceil(back / PC_OUTPUT_STEP)) - 1, 0)
+    return np.datetime64(end - np.timedelta64(round(steps * PC_OUTPUT_STEP * 1e9), "ns"))
+
+
 def _rtn_moments(mean: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> tuple[Any, Any]:
     """Position offsets of ``mean`` from ``ref`` (nt, 3) and ``mean``'s state covariances
     (nt, 6, 6), in the RTN axes of ``ref`` (position and velocity blocks rotated alike,
-    as a CDM gives them)."""
-    basis = frames.rtn_basis(ref[:, :3], ref[:, 3:])
+    as a CDM gives them); NaN where ``ref`` is (an output before the object's epoch)."""
+    basis = nan_tolerant_rtn_basis(ref[:, :3], ref[:, 3:])
     off = np.einsum("tij,tj->ti", basis, mean[:, :3] - ref[:, :3])
     b6 = np.zeros((len(basis), 6, 6))
     b6[:, :3, :3] = b6[:, 3:, 3:] = basis
@@ -332,6 +351,7 @@ def _model_moments(
     done = 0
     for batch in _batches(cats):
         base: Any = None  # the reference model's run (models hold it first)
+        end = _batch_end(batch, cats, events, needs, cfg.end)
         for name, model in models.items():
             objs = [
                 dataclasses.replace(cats[m], drag_parameter=float(drag[name][m])) for m in batch
@@ -339,7 +359,7 @@ def _model_moments(
             res = propagate_catalog(
                 objs,
                 model,
-                cfg.end,
+                end,
                 output_step=PC_OUTPUT_STEP,
                 floor_altitude=cfg.floor,
                 zonal_degree=cfg.degree,

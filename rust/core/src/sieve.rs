@@ -981,3 +981,173 @@ mod tests {
         assert!(candidates(&t, &settings(1.0), &p).is_err());
     }
 }
+
+/// Points per grid interval at which [`stretches`] checks the distance.
+pub const WITHIN_POINTS: usize = 8;
+/// Bisection steps of a stretch's end (1e-12 of a 60-s interval: below 1 ms).
+const WITHIN_BISECTIONS: usize = 40;
+
+/// For each minimum (i[m], j[m] at time t[m], s on the grid's scale), the (first, last)
+/// times between which the two objects stay within `distance` m around it: the cubic
+/// Hermite interpolant of their relative state between the samples, checked at
+/// [`WITHIN_POINTS`] points per interval walking away from t, each end's crossing by
+/// bisection; held within the samples both objects have (a stretch reaching the grid's
+/// ends stops there). Parallel over minima; progress counts minima done.
+pub fn stretches(
+    tracks: &Tracks<'_>,
+    i: &[u32],
+    j: &[u32],
+    t: &[f64],
+    distance: f64,
+    progress: &Progress,
+) -> Result<Vec<(f64, f64)>, CoreError> {
+    if i.len() != j.len() || i.len() != t.len() {
+        return Err(CoreError::shape(
+            "minima",
+            "i, j and t must have one length",
+        ));
+    }
+    positive("distance", distance)?;
+    let n = tracks.samples.len();
+    let nt = tracks.times.len();
+    if tracks.positions.len() != n * nt || tracks.velocities.len() != n * nt {
+        return Err(CoreError::shape(
+            "positions",
+            "positions and velocities must hold objects x times samples",
+        ));
+    }
+    for m in 0..i.len() {
+        finite("t", t[m])?;
+        if i[m] as usize >= n || j[m] as usize >= n {
+            return Err(CoreError::invalid(
+                "minimum",
+                m as f64,
+                format!("objects ({}, {}) are not among the {n} tracks", i[m], j[m]),
+            ));
+        }
+    }
+    (0..i.len())
+        .into_par_iter()
+        .map(|m| {
+            if m % 256 == 0 {
+                progress.check()?;
+            }
+            let out = stretch(tracks, i[m] as usize, j[m] as usize, t[m], distance);
+            progress.add(1);
+            Ok(out)
+        })
+        .collect()
+}
+
+/// One minimum's stretch (see [`stretches`]).
+fn stretch(tracks: &Tracks<'_>, i: usize, j: usize, tca: f64, limit: f64) -> (f64, f64) {
+    let nt = tracks.times.len();
+    let k = tracks.samples[i].min(tracks.samples[j]);
+    if k < 2 {
+        return (tca, tca);
+    }
+    let times = &tracks.times[..k];
+    let rel = |q: usize| {
+        let (a, b) = (i * nt + q, j * nt + q);
+        (
+            sub(tracks.positions[b], tracks.positions[a]),
+            sub(tracks.velocities[b], tracks.velocities[a]),
+        )
+    };
+    let dist = |q: usize, s: f64| {
+        let ((r0, v0), (r1, v1)) = (rel(q), rel(q + 1));
+        let x = hermite(r0, v0, r1, v1, times[q + 1] - times[q], s);
+        norm([x[0], x[1], x[2]])
+    };
+    let crossing = |q: usize, mut inside: f64, mut outside: f64| {
+        for _ in 0..WITHIN_BISECTIONS {
+            let mid = 0.5 * (inside + outside);
+            if dist(q, mid) <= limit {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+        }
+        times[q] + 0.5 * (inside + outside) * (times[q + 1] - times[q])
+    };
+    let grid: Vec<f64> = (0..=WITHIN_POINTS)
+        .map(|p| p as f64 / WITHIN_POINTS as f64)
+        .collect();
+    // The interval holding tca: the last sample at or before it, within [0, k - 2].
+    let at = times
+        .partition_point(|&x| x <= tca)
+        .saturating_sub(1)
+        .min(k - 2);
+    let s_tca = ((tca - times[at]) / (times[at + 1] - times[at])).clamp(0.0, 1.0);
+    // Backward from tca, then forward; each end the grid's if no crossing.
+    let mut first = times[0];
+    let (mut q, mut frac) = (at as isize, s_tca);
+    'back: while q >= 0 {
+        let qu = q as usize;
+        let mut inside = frac;
+        for &p in grid.iter().rev().filter(|&&p| p < frac) {
+            if dist(qu, p) > limit {
+                first = crossing(qu, inside, p);
+                break 'back;
+            }
+            inside = p;
+        }
+        q -= 1;
+        frac = 1.0;
+    }
+    let mut last = times[k - 1];
+    let (mut q, mut frac) = (at, s_tca);
+    'forward: while q + 2 <= k {
+        let mut inside = frac;
+        for &p in grid.iter().filter(|&&p| p > frac) {
+            if dist(q, p) > limit {
+                last = crossing(q, inside, p);
+                break 'forward;
+            }
+            inside = p;
+        }
+        q += 1;
+        frac = 0.0;
+    }
+    (first, last)
+}
+
+#[cfg(test)]
+mod stretch_tests {
+    use super::*;
+
+    /// Two objects on straight lines: object 1 at rest at the origin, object 2 passing
+    /// at `miss` m with speed `u` m/s along x, at x = 0 when t = 0; sampled every 60 s.
+    #[test]
+    fn a_straight_pass_stays_within_the_distance_for_its_chord() {
+        let (miss, u, limit) = (300.0, 2.0, 1000.0);
+        let times: Vec<f64> = (0..=60).map(|k| -1800.0 + 60.0 * k as f64).collect();
+        let nt = times.len();
+        let mut pos = vec![[0.0; 3]; 2 * nt];
+        let mut vel = vec![[0.0; 3]; 2 * nt];
+        for (k, &t) in times.iter().enumerate() {
+            pos[nt + k] = [u * t, miss, 0.0];
+            vel[nt + k] = [u, 0.0, 0.0];
+        }
+        let samples = [nt, nt];
+        let fourth = [0.0, 0.0];
+        let tracks = Tracks {
+            times: &times,
+            positions: &pos,
+            velocities: &vel,
+            samples: &samples,
+            fourth: &fourth,
+        };
+        let p = Progress::default();
+        let out = stretches(&tracks, &[0], &[1], &[0.0], limit, &p).unwrap();
+        // |x| <= sqrt(limit^2 - miss^2) / u either side of 0 (the Hermite cubic is exact
+        // for straight motion).
+        let half = (limit * limit - miss * miss).sqrt() / u;
+        assert!((out[0].0 + half).abs() < 1e-6 && (out[0].1 - half).abs() < 1e-6);
+        // A limit the pass never leaves: the grid's ends.
+        let all = stretches(&tracks, &[0], &[1], &[0.0], 1e5, &p).unwrap();
+        assert_eq!(all[0], (times[0], times[nt - 1]));
+        assert!(stretches(&tracks, &[0], &[2], &[0.0], limit, &p).is_err());
+        assert!(stretches(&tracks, &[0], &[1], &[f64::NAN], limit, &p).is_err());
+    }
+}

@@ -41,6 +41,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::equinoctial_to_cartesian, m)?)?;
     m.add_function(wrap_pyfunction!(sieve::screen_candidates, m)?)?;
     m.add_function(wrap_pyfunction!(sieve::screen_approaches, m)?)?;
+    m.add_function(wrap_pyfunction!(sieve::screen_stretches, m)?)?;
     models::register(m)?;
     conjunction::register(m)?;
     constants::register(m)?;

@@ -1,5 +1,6 @@
-//! `screen_candidates` and `screen_approaches`: the all-on-all screening sieve and its
-//! minima (see `rhoprop_core::sieve`).
+//! `screen_candidates`, `screen_approaches` and `screen_stretches`: the all-on-all
+//! screening sieve, its minima and their stretches within the distance (see
+//! `rhoprop_core::sieve`).
 
 use crate::long_call::long_call;
 use numpy::ndarray::Array2;
@@ -197,5 +198,43 @@ pub fn screen_approaches<'py>(
             .map(|a| a.edge as u8)
             .collect::<Vec<_>>()
             .into_pyarray(py),
+    ))
+}
+
+/// (first, last) s of each minimum's stretch within the distance.
+type StretchesOut<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
+/// For each minimum (i, j, t s) of tracks as for `screen_approaches`, the (first, last)
+/// times s between which the objects stay within `distance` m around it (cubic Hermite
+/// relative motion, crossings by bisection). Returns (first (m,), last (m,)). GIL
+/// released; progress counts minima; Ctrl-C cancels it.
+#[pyfunction]
+#[pyo3(signature = (times, positions, velocities, samples, i, j, t, distance, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn screen_stretches<'py>(
+    py: Python<'py>,
+    times: PyReadonlyArray1<'py, f64>,
+    positions: PyReadonlyArray3<'py, f64>,
+    velocities: PyReadonlyArray3<'py, f64>,
+    samples: PyReadonlyArray1<'py, u64>,
+    i: PyReadonlyArray1<'py, u32>,
+    j: PyReadonlyArray1<'py, u32>,
+    t: PyReadonlyArray1<'py, f64>,
+    distance: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<StretchesOut<'py>> {
+    let g = Grid::new(&times, &samples, &positions, &velocities, None)?;
+    let tracks = g.tracks(&positions, &velocities)?;
+    let (ci, cj, ct) = (
+        i.as_array().to_vec(),
+        j.as_array().to_vec(),
+        t.as_array().to_vec(),
+    );
+    let out = long_call(py, progress, |p| {
+        sieve::stretches(&tracks, &ci, &cj, &ct, distance, p)
+    })?;
+    Ok((
+        out.iter().map(|s| s.0).collect::<Vec<_>>().into_pyarray(py),
+        out.iter().map(|s| s.1).collect::<Vec<_>>().into_pyarray(py),
     ))
 }
