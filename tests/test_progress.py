@@ -22,6 +22,31 @@ def test_plain_lines_when_stderr_is_not_a_terminal(monkeypatch, capsys):
     assert lines[-1].startswith("catalog: 10/10 objects (100 %), ")
 
 
+def test_runs_reporting_at_once_keep_their_lines_whole(monkeypatch):
+    # Two models sampled in parallel printed "... 12 ssampling ...": print() wrote each
+    # line's text and its newline apart. Every write is now a whole line.
+    import io
+    import sys
+
+    writes: list[str] = []
+
+    class Recorder(io.StringIO):
+        def write(self, text: str) -> int:
+            writes.append(text)
+            time.sleep(0.001)  # widen the window another thread could write into
+            return len(text)
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL", 0.01)
+    monkeypatch.setattr(sys, "stderr", Recorder())
+    bars = [progress.ProgressBar(8, f"sampling model {k}", unit="days") for k in range(4)]
+    time.sleep(0.2)
+    for bar in bars:
+        bar(8)
+        bar.close()
+    assert len(writes) >= 8
+    assert all(w.endswith("\n") and w.count("\n") == 1 for w in writes), writes[:5]
+
+
 def test_a_short_run_prints_nothing(monkeypatch, capsys):
     monkeypatch.setattr(progress, "LINE_INTERVAL", 5.0)
     bar = progress.ProgressBar(4, "Monte Carlo")

@@ -12,6 +12,8 @@ from typing import Any
 #: the run lasts, whether or not work was reported in between (a heartbeat), and a last
 #: one when a run that printed any ends.
 LINE_INTERVAL = 10.0
+#: One plain progress line is written at a time, whichever run it belongs to.
+_WRITE = threading.Lock()
 
 
 def _plain() -> bool:
@@ -54,7 +56,12 @@ class _Lines:
             self.emit()
 
     def emit(self) -> None:
-        print(self.line(), file=sys.stderr, flush=True)
+        # One write of the whole line under a lock: print() writes the text and the
+        # newline apart, and two runs reporting at once (models sampled in parallel)
+        # joined their lines ("... 12 ssampling ...").
+        with _WRITE:
+            sys.stderr.write(self.line() + "\n")
+            sys.stderr.flush()
         self.printed = True
 
     def close(self) -> None:
