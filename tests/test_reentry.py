@@ -160,7 +160,7 @@ def test_several_element_sets_of_one_object_are_one_history(atmosphere):
         [obj, later, other], atmosphere, n=10, duration=86400.0, fit=False, history="each"
     )
     assert len(each.objects) == 3 and list(each.element_sets) == [2, 2, 1]
-    with pytest.raises(ValueError, match="history must be 'newest', 'fit' or 'each'"):
+    with pytest.raises(ValueError, match="history must be 'auto', 'newest', 'fit' or 'each'"):
         catalog.reentry([obj], atmosphere, history="all")
 
 
@@ -236,8 +236,12 @@ def test_history_fit_takes_the_earlier_element_sets(test_data):
     r = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2, history="fit")
     assert len(r.objects) == 1 and r.element_sets[0] == 2 and r.fitted[0]
     assert len(r.objects[0].fit.element_sets) == 2
-    alone = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2)
+    alone = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2, history="newest")
     assert len(alone.objects[0].fit.element_sets) == 1
+    # The default ("auto") fits the history when it fits at all.
+    default = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2)
+    assert len(default.objects[0].fit.element_sets) == 2
+    np.testing.assert_array_equal(default.decay_times, r.decay_times)
     with pytest.raises(ValueError, match="needs fit=True"):
         catalog.reentry(list(pair), model, fit=False, history="fit")
 

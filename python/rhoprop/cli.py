@@ -495,10 +495,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     reentry.add_argument(
         "--history",
-        choices=("newest", "fit", "each"),
-        default="newest",
-        help="several element sets of one object: predict from the newest (default), from "
-        "the newest with the fit taking the earlier ones too (fit), or from each on its own",
+        choices=("auto", "newest", "fit", "each"),
+        default="auto",
+        help="several element sets of one object: predict from the newest with the fit "
+        "taking the earlier ones of its last day too (fit; the default, auto, with "
+        "fitting, newest with --no-fit), from the newest alone (newest), or from each on "
+        "its own",
     )
     reentry.add_argument(
         "--drag-sigma",

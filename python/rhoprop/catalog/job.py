@@ -366,7 +366,7 @@ def run_reentry_file(
     members: int = 100,
     model: str = "2.1",
     fit: bool = True,
-    history: str = "newest",
+    history: str = "auto",
     drag_sigma: float | None = None,
     skip_bad: bool = False,
     overwrite: bool = False,
@@ -378,9 +378,10 @@ def run_reentry_file(
     decay epochs in UTC, empty beyond the horizon, decayed fraction, Cd*A/m and its
     relative sigma, whether it was fitted and the fit's RMS residual) with
     ``out/manifest.json``. ``fit`` (default True): states and Cd*A/m fitted to the element
-    sets first; ``history``: for an object given several times, "newest" predicts from its
-    newest element set, "fit" from it fitted together with the earlier ones, "each" from
-    every one (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
+    sets first; ``history``: for an object given several times, "auto" (default) is "fit"
+    with ``fit`` and "newest" without, "newest" predicts from its newest element set,
+    "fit" from it fitted together with the earlier ones, "each" from every one
+    (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
     import csv
     import io
 

@@ -115,7 +115,9 @@ fn hermite(r0: [f64; 3], v0: [f64; 3], r1: [f64; 3], v1: [f64; 3], h: f64, s: f6
     })
 }
 
-fn check(tracks: &Tracks<'_>, settings: &SieveSettings) -> Result<usize, CoreError> {
+/// The tracks' layout: positions and velocities of every object at every grid time, no
+/// object with more samples than the grid has.
+fn check_layout(tracks: &Tracks<'_>) -> Result<(), CoreError> {
     let nt = tracks.times.len();
     let n = tracks.samples.len();
     if tracks.positions.len() != n * nt || tracks.velocities.len() != n * nt {
@@ -124,6 +126,18 @@ fn check(tracks: &Tracks<'_>, settings: &SieveSettings) -> Result<usize, CoreErr
             "positions and velocities must hold objects x times samples",
         ));
     }
+    for &s in tracks.samples {
+        if s > nt {
+            return Err(CoreError::invalid("samples", s as f64, "exceeds the grid"));
+        }
+    }
+    Ok(())
+}
+
+fn check(tracks: &Tracks<'_>, settings: &SieveSettings) -> Result<usize, CoreError> {
+    let nt = tracks.times.len();
+    let n = tracks.samples.len();
+    check_layout(tracks)?;
     if tracks.fourth.len() != n {
         return Err(CoreError::shape("fourth", "must hold one value per object"));
     }
@@ -136,11 +150,6 @@ fn check(tracks: &Tracks<'_>, settings: &SieveSettings) -> Result<usize, CoreErr
     for w in tracks.times.windows(2) {
         if w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater) {
             return Err(CoreError::invalid("times", w[1], "must increase"));
-        }
-    }
-    for &s in tracks.samples {
-        if s > nt {
-            return Err(CoreError::invalid("samples", s as f64, "exceeds the grid"));
         }
     }
     for (i, &f) in tracks.fourth.iter().enumerate() {
@@ -1008,14 +1017,8 @@ pub fn stretches(
         ));
     }
     positive("distance", distance)?;
+    check_layout(tracks)?;
     let n = tracks.samples.len();
-    let nt = tracks.times.len();
-    if tracks.positions.len() != n * nt || tracks.velocities.len() != n * nt {
-        return Err(CoreError::shape(
-            "positions",
-            "positions and velocities must hold objects x times samples",
-        ));
-    }
     for m in 0..i.len() {
         finite("t", t[m])?;
         if i[m] as usize >= n || j[m] as usize >= n {
@@ -1149,5 +1152,11 @@ mod stretch_tests {
         assert_eq!(all[0], (times[0], times[nt - 1]));
         assert!(stretches(&tracks, &[0], &[2], &[0.0], limit, &p).is_err());
         assert!(stretches(&tracks, &[0], &[1], &[f64::NAN], limit, &p).is_err());
+        let too_many = [nt + 1, nt];
+        let bad = Tracks {
+            samples: &too_many,
+            ..tracks
+        };
+        assert!(stretches(&bad, &[0], &[1], &[0.0], limit, &p).is_err());
     }
 }
