@@ -86,7 +86,9 @@ def test_cli_reentry_prints_and_writes(tmp_path, capsys):
     )  # fmt: skip
     assert code == 0
     text = (out / "reentry.csv").read_text().splitlines()
-    assert text[0].startswith("norad_id,name,epoch_q025,epoch_median,epoch_q975")
+    assert text[0].startswith(
+        "norad_id,name,epoch_q025,epoch_q10,epoch_median,epoch_q90,epoch_q975"
+    )
     assert len(text) == 1 + len(catalog.load(SAMPLE))
     printed = capsys.readouterr().out
     assert "members each" in printed and "fitted (" in printed  # fitted by default

@@ -425,8 +425,9 @@ def run_reentry_file(
         if row["fit_note"]:
             print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
         if row["element_sets"] > 1:
+            resolved = ("fit" if fit else "newest") if history == "auto" else history
             which = {"newest": "the newest predicted", "fit": "fitted together"}.get(
-                history, "each predicted"
+                resolved, "each predicted"
             )
             print(f"       {row['element_sets']} element sets of this object: {which}")
     sets = f" ({len(cat)} element sets)" if len(cat) != len(rows) else ""

@@ -119,18 +119,22 @@ class ReentryResult:
         return lo, _quantile_epochs(self.objects, self.decay_times, (1 + q) / 2)
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per object (NORAD id, name, the epochs as ISO strings or "", the
-        decayed fraction), for printing and CSV."""
+        """One dict per object (NORAD id, name, the epochs as ISO strings or "": the 95 %
+        window's ends, the median and the 80 % window's ends ``epoch_q10`` /
+        ``epoch_q90``; the decayed fraction ...), for printing and CSV."""
 
         def iso(t: np.datetime64) -> str:
             return "" if np.isnat(t) else str(t.astype("datetime64[s]")) + "Z"
 
+        q10, q90 = self.window(0.8)
         return [
             {
                 "norad_id": o.norad_id,
                 "name": o.name,
                 "epoch_q025": iso(self.epoch_q025[k]),
+                "epoch_q10": iso(q10[k]),
                 "epoch_median": iso(self.epoch_median[k]),
+                "epoch_q90": iso(q90[k]),
                 "epoch_q975": iso(self.epoch_q975[k]),
                 "decayed_fraction": float(self.decayed_fraction[k]),
                 "drag_parameter_m2_kg": float(self.drag_parameter[k]),
