@@ -313,7 +313,7 @@ def test_oem_round_trip_with_an_independent_reader(tmp_path, local_result):
 
 
 def test_ephemeris_table_round_trip_with_pandas_and_agrees_with_the_oem_files(
-    tmp_path, local_result
+    tmp_path, local_result, monkeypatch
 ):
     # The catalog's default output: one Parquet table of every object's mean and
     # covariance, read back by pandas (no rhoprop) and compared with the result and with
@@ -349,6 +349,11 @@ def test_ephemeris_table_round_trip_with_pandas_and_agrees_with_the_oem_files(
     states = [s.vector for s in OrbitEphemerisMessage.open(str(oem_path)).segments[0].states]
     got = gcrf[gcrf["object"] == 1][list(io.ephemeris.STATE)].to_numpy()
     np.testing.assert_allclose(got, np.array(states) * 1e3, rtol=1e-8, atol=1e-6)
+    # Written in row groups of a few objects at a time: the same table.
+    monkeypatch.setattr(io.ephemeris, "ROW_GROUP_OBJECTS", 2)
+    grouped = pd.read_parquet(io.write_ephemeris(r, tmp_path / "grouped.parquet"))
+    pd.testing.assert_frame_equal(grouped, df)
+    assert pq.ParquetFile(tmp_path / "grouped.parquet").num_row_groups == 3
     with pytest.raises(ValueError, match="frame must be one of"):
         io.write_ephemeris(r, tmp_path / "x.parquet", frame="ITRF")
     with pytest.raises(TypeError, match="takes a CatalogResult"):

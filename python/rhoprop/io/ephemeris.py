@@ -23,26 +23,37 @@ STATE = ("x", "y", "z", "vx", "vy", "vz")
 COVARIANCE_COLUMNS = tuple(f"cov_{STATE[i]}_{STATE[j]}" for i in range(6) for j in range(i + 1))
 
 
-def ephemeris_table(result: CatalogResult, frame: str = "TEME") -> dict[str, np.ndarray]:
+#: Objects per row group of the Parquet file: the columns of one group are built at a
+#: time (a whole catalog's at once added about 1 GB to its run's peak memory).
+ROW_GROUP_OBJECTS = 500
+
+
+def ephemeris_table(
+    result: CatalogResult, frame: str = "TEME", objects: slice | None = None
+) -> dict[str, np.ndarray]:
     """The columns of :func:`write_ephemeris`: ``object`` (index in the result),
     ``norad_id``, ``epoch`` (datetime64[ns] UTC), ``x`` .. ``z`` (m), ``vx`` .. ``vz``
     (m/s) and the 21 covariance columns of :data:`COVARIANCE_COLUMNS` (m^2, m^2/s,
     m^2/s^2), in ``frame`` (TEME as computed; GCRF, EME2000 or ICRF rotated by each
     object's epoch's TEME -> GCRF, as :func:`~rhoprop.io.write_oem`). Only valid
-    epochs: an object with none has no row (its status is in the summary)."""
+    epochs: an object with none has no row (its status is in the summary). ``objects``:
+    those of this slice of the result only (default all)."""
     if frame not in OEM_FRAMES:
         raise ValueError(f"frame must be one of {OEM_FRAMES}, got {frame!r}")
-    objects, epochs = np.nonzero(np.asarray(result.valid, dtype=bool))
-    mean = np.asarray(result.mean)[objects, epochs]
-    cov = np.asarray(result.covariance)[objects, epochs]
+    part = objects if objects is not None else slice(None)
+    first = range(len(result.objects))[part].start if len(result.objects) else 0
+    local, epochs = np.nonzero(np.asarray(result.valid[part], dtype=bool))
+    objects_ = local + first
+    mean = np.asarray(result.mean)[objects_, epochs]
+    cov = np.asarray(result.covariance)[objects_, epochs]
     if frame != "TEME":
-        for k in np.unique(objects):
-            rows = objects == k
+        for k in np.unique(objects_):
+            rows = objects_ == k
             mean[rows], cov[rows] = _from_teme(result.objects[k].state.epoch, mean[rows], cov[rows])
     rows_, cols_ = np.tril_indices(6)
     table = {
-        "object": objects.astype(np.int64),
-        "norad_id": np.array([result.objects[k].norad_id for k in objects], dtype=np.int64),
+        "object": objects_.astype(np.int64),
+        "norad_id": np.array([result.objects[k].norad_id for k in objects_], dtype=np.int64),
         "epoch": np.asarray(result.epochs, dtype="datetime64[ns]")[epochs],
         **{name: mean[:, i] for i, name in enumerate(STATE)},
     }
@@ -72,7 +83,8 @@ def write_ephemeris(result: CatalogResult, path: str | Path, *, frame: str = "TE
 
     if not all(hasattr(result, a) for a in ("objects", "valid", "mean", "covariance")):
         raise TypeError(f"write_ephemeris takes a CatalogResult, not a {type(result).__name__}")
-    columns = ephemeris_table(result, frame)
+    if frame not in OEM_FRAMES:
+        raise ValueError(f"frame must be one of {OEM_FRAMES}, got {frame!r}")
     meta = {
         "frame": frame,
         "time_scale": "UTC",
@@ -83,14 +95,13 @@ def write_ephemeris(result: CatalogResult, path: str | Path, *, frame: str = "TE
             for k, o in enumerate(result.objects)
         ],
     }
-    types = {k: pa.from_numpy_dtype(v.dtype) for k, v in columns.items()}
-    types["epoch"] = pa.timestamp("ns", tz="UTC")
-    schema = pa.schema(
-        list(types.items()),
-        metadata={"rhoprop": json.dumps(meta)},
-    )
-    table = pa.table({k: pa.array(v) for k, v in columns.items()}, schema=schema)
+    types = {"object": pa.int64(), "norad_id": pa.int64(), "epoch": pa.timestamp("ns", tz="UTC")}
+    types.update({k: pa.float64() for k in (*STATE, *COVARIANCE_COLUMNS)})
+    schema = pa.schema(list(types.items()), metadata={"rhoprop": json.dumps(meta)})
     out = Path(path)
-    with atomic_path(out) as tmp:
-        pq.write_table(table, tmp, compression="zstd")
+    n = len(result.objects)
+    with atomic_path(out) as tmp, pq.ParquetWriter(tmp, schema, compression="zstd") as writer:
+        for lo in range(0, max(n, 1), ROW_GROUP_OBJECTS):
+            columns = ephemeris_table(result, frame, slice(lo, lo + ROW_GROUP_OBJECTS))
+            writer.write_table(pa.table(columns, schema=schema))
     return out
