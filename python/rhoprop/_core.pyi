@@ -36,6 +36,7 @@ __all__ = [
     "geodetic_to_fixed",
     "gmst",
     "inertial_to_fixed",
+    "interval_hits",
     "jacchia_roberts_geodetic",
     "jb2008_core",
     "jb2008_geodetic",
@@ -46,6 +47,7 @@ __all__ = [
     "rtn_basis",
     "screen_approaches",
     "screen_candidates",
+    "screen_stretches",
     "simd_path",
 ]
 
