@@ -226,7 +226,7 @@ def reentry(
             predicts it once from the newest element set with the fit taking the older
             ones (within :data:`~rhoprop.catalog.elements.HISTORY_DAYS`) too
             (:func:`~rhoprop.catalog.fit_objects` ``history=``; needs ``fit``): on the
-            natural reentries of the dense 2026 history it halved the error at 1-2 days'
+            natural reentries of the dense 2026 history it cut the error at 1-2 days'
             lead (median 17 % of the remaining life against 24 %, forecast drivers;
             ``benches/reentry_history.py``); ``"each"`` predicts every element set on its
             own (one row each, ``element_sets`` still > 1). They are never silently
