@@ -170,9 +170,6 @@ def run_case(
         "levels": levels,
         "error": abs(float((med - case.reference) / DAY)) / remaining if down else None,
         "log_bias": float(np.log(float((med - epoch) / DAY) / remaining)) if down else None,
-        "remaining": remaining,
-        "sets": int(res.element_sets[0]),
-        "fit_rms": float(res.fit_rms[0]) if res.fitted[0] else float("nan"),
         "window": (lo, med, hi),
     }
 

@@ -385,7 +385,7 @@ def run_reentry_file(
     import csv
     import io
 
-    from .reentry_windows import reentry
+    from .reentry_windows import reentry, resolved_history
 
     atmosphere = model_by_name(model)
     # reentry() itself predicts a history once (history="newest") or each element set
@@ -425,9 +425,8 @@ def run_reentry_file(
         if row["fit_note"]:
             print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
         if row["element_sets"] > 1:
-            resolved = ("fit" if fit else "newest") if history == "auto" else history
             which = {"newest": "the newest predicted", "fit": "fitted together"}.get(
-                resolved, "each predicted"
+                resolved_history(history, fit), "each predicted"
             )
             print(f"       {row['element_sets']} element sets of this object: {which}")
     sets = f" ({len(cat)} element sets)" if len(cat) != len(rows) else ""

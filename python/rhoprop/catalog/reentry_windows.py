@@ -317,6 +317,11 @@ def reentry(
     )
 
 
+def resolved_history(history: str, fit: bool) -> str:
+    """What ``history="auto"`` means: ``"fit"`` when fitting, else ``"newest"``."""
+    return ("fit" if fit is True else "newest") if history == "auto" else history
+
+
 def _histories_and_fits(
     objs: list[CatalogObject], model: ModelLike, fit: bool, history: str, threads: int | None
 ) -> tuple[list[CatalogObject], list[str], Counter[int]]:
@@ -326,8 +331,7 @@ def _histories_and_fits(
         raise TypeError(f"fit must be True or False, got {type(fit).__name__}")
     if history not in ("auto", "newest", "fit", "each"):
         raise ValueError(f"history must be 'auto', 'newest', 'fit' or 'each', got {history!r}")
-    if history == "auto":
-        history = "fit" if fit is True else "newest"
+    history = resolved_history(history, fit)
     if history == "fit" and not fit:
         raise ValueError("history='fit' fits the element sets together: it needs fit=True")
     counts = Counter(o.norad_id for o in objs)
@@ -363,7 +367,7 @@ def _quantile_epochs(objs: list[CatalogObject], decay_times: np.ndarray, q: floa
     (objects, members), s after each object's epoch, inf where not down."""
     out = np.full(len(objs), np.datetime64("NaT", "ns"))
     for k, times in enumerate(decay_times):
-        t = float(np.quantile(np.sort(times), q, method="inverted_cdf"))
+        t = float(np.quantile(times, q, method="inverted_cdf"))
         if np.isfinite(t):
             out[k] = add_seconds(objs[k].state.epoch, t)
     return out

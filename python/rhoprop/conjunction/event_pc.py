@@ -231,7 +231,8 @@ def _batch_end(
     counted back from it, as ``propagate_catalog`` places them), so every TCA keeps the
     outputs around it that a run to ``end`` gives (a CCSP run is the same up to where it
     stops)."""
-    last = max(max(max(events[e].tca for e, _ in needs[m]), cats[m].state.epoch) for m in batch)
+    last = max([events[e].tca for m in batch for e, _ in needs[m]])
+    last = max(last, *(cats[m].state.epoch for m in batch))
     back = seconds_between(last, end)
     steps = max(int(np.ceil(back / PC_OUTPUT_STEP)) - 1, 0)
     return np.datetime64(end - np.timedelta64(round(steps * PC_OUTPUT_STEP * 1e9), "ns"))

@@ -41,7 +41,7 @@ def ephemeris_table(
     if frame not in OEM_FRAMES:
         raise ValueError(f"frame must be one of {OEM_FRAMES}, got {frame!r}")
     part = objects if objects is not None else slice(None)
-    first = range(len(result.objects))[part].start if len(result.objects) else 0
+    first = part.indices(len(result.objects))[0]
     local, epochs = np.nonzero(np.asarray(result.valid[part], dtype=bool))
     objects_ = local + first
     mean = np.asarray(result.mean)[objects_, epochs]
@@ -83,8 +83,6 @@ def write_ephemeris(result: CatalogResult, path: str | Path, *, frame: str = "TE
 
     if not all(hasattr(result, a) for a in ("objects", "valid", "mean", "covariance")):
         raise TypeError(f"write_ephemeris takes a CatalogResult, not a {type(result).__name__}")
-    if frame not in OEM_FRAMES:
-        raise ValueError(f"frame must be one of {OEM_FRAMES}, got {frame!r}")
     meta = {
         "frame": frame,
         "time_scale": "UTC",

@@ -1073,9 +1073,8 @@ fn stretch(tracks: &Tracks<'_>, i: usize, j: usize, tca: f64, limit: f64) -> (f6
         }
         times[q] + 0.5 * (inside + outside) * (times[q + 1] - times[q])
     };
-    let grid: Vec<f64> = (0..=WITHIN_POINTS)
-        .map(|p| p as f64 / WITHIN_POINTS as f64)
-        .collect();
+    // The check points of an interval, fractions 0, 1/8, ..., 1 (exact in binary).
+    let point = |p: usize| p as f64 / WITHIN_POINTS as f64;
     // The interval holding tca: the last sample at or before it, within [0, k - 2].
     let at = times
         .partition_point(|&x| x <= tca)
@@ -1088,7 +1087,7 @@ fn stretch(tracks: &Tracks<'_>, i: usize, j: usize, tca: f64, limit: f64) -> (f6
     'back: while q >= 0 {
         let qu = q as usize;
         let mut inside = frac;
-        for &p in grid.iter().rev().filter(|&&p| p < frac) {
+        for p in (0..=WITHIN_POINTS).rev().map(point).filter(|&p| p < frac) {
             if dist(qu, p) > limit {
                 first = crossing(qu, inside, p);
                 break 'back;
@@ -1102,7 +1101,7 @@ fn stretch(tracks: &Tracks<'_>, i: usize, j: usize, tca: f64, limit: f64) -> (f6
     let (mut q, mut frac) = (at, s_tca);
     'forward: while q + 2 <= k {
         let mut inside = frac;
-        for &p in grid.iter().filter(|&&p| p > frac) {
+        for p in (0..=WITHIN_POINTS).map(point).filter(|&p| p > frac) {
             if dist(q, p) > limit {
                 last = crossing(q, inside, p);
                 break 'forward;
