@@ -23,7 +23,11 @@ def _isolated_cache(tmp_path_factory):
 
 @pytest.fixture
 def paper_state() -> rp.OrbitState:
-    return rp.scenarios.paper_state()
+    """The paper's state labelled TEME: the axes the dynamics are written in (the zonal
+    field's pole is z there), so that independent references that put J2 about z
+    compare with it directly. ``rp.scenarios.paper_state()`` itself is GCRF."""
+    s = rp.scenarios.paper_state()
+    return rp.OrbitState(s.epoch, s.position, s.velocity, "TEME")
 
 
 @pytest.fixture

@@ -20,7 +20,7 @@ def grid_states(
     p: np.ndarray, epoch: Any, model: Any, back: int, forward: int, spacing: float, zonal: int
 ) -> np.ndarray:
     """States (back + forward + 1, 6) on the grid epoch + g spacing for parameters p."""
-    state = OrbitState(epoch, p[:3], p[3:6])
+    state = OrbitState(epoch, p[:3], p[3:6], "TEME")  # an element set's frame
     drag = max(float(p[6]), fit_module.MIN_DRAG_PARAMETER)
     parts = [p[None, :6]]
     for steps, sign in ((back, -1.0), (forward, 1.0)):

@@ -251,14 +251,14 @@ def test_equinoctial_gaussian_holds_the_monte_carlo_members_at_two_weeks(setup):
     assert flat.along_track_std[-1] / spread > 2.0
     assert cc.element_mean is not None and cc.element_covariance is not None
     assert flat.element_mean is None
-    lam = rp.frames.to_equinoctial(states, state.state)[:, 5]
+    lam = cc.to_elements(states)[:, 5]  # members in GCRF, elements in the run's axes
     dl = (lam - cc.element_mean[-1, 5] + np.pi) % (2 * np.pi) - np.pi
     inside = np.mean(np.abs(dl) <= 2 * np.sqrt(cc.element_covariance[-1, 5, 5]))
     assert 0.93 <= inside <= 0.97
     # The Cartesian mean is the unscented transform of the element Gaussian: inside the
     # arc the members spread over, off the element mean's orbit by the arc's sag (about
     # a sigma_lambda^2, ~2 km here), a small part of the along-track sigma.
-    on_orbit = rp.frames.from_equinoctial(cc.element_mean[-1], state.state)
+    on_orbit = cc.from_elements(cc.element_mean[-1])
     sag = np.linalg.norm(on_orbit[:3] - cc.mean[-1, :3])
     assert 0 < sag < 0.05 * cc.along_track_std[-1]
 
@@ -368,7 +368,7 @@ def test_default_ccsp_holds_the_default_monte_carlo_at_every_output_of_a_long_ru
         along = (mc.positions[:, j] - mc.positions[:, j].mean(axis=0)) @ basis[1]
         assert cc.along_track_std[k] / along.std(ddof=1) == pytest.approx(1.0, abs=0.1), t
         states = np.concatenate([mc.positions[:, j], mc.velocities[:, j]], axis=1)
-        el = rp.frames.to_equinoctial(states, state.state, semi_major="energy")
+        el = cc.to_elements(states)
         em, ec = cc.element_mean[k], cc.element_covariance[k]
         d = np.column_stack([el[:, 0] - em[0], (el[:, 5] - em[5] + np.pi) % (2 * np.pi) - np.pi])
         sub = ec[np.ix_([0, 5], [0, 5])]

@@ -216,7 +216,7 @@ def test_catalog_options_fail_clearly(tmp_path, monkeypatch, capsys):
     args = ["catalog", str(sample), "--end", "2002-09-08", "--scheduler", "tcp://x:1"]
     assert main(args) == 1
     err = capsys.readouterr().err.strip()
-    assert err == "rhoprop: error: --scheduler needs Dask: pip install 'rhoprop[distributed]'"
+    assert err == "rhoprop: error: --scheduler needs Dask: pip install 'dask[distributed]'"
 
 
 def test_catalog_of_a_2026_element_set_runs_offline_with_observed_drivers(tmp_path, capsys):

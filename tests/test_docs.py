@@ -31,6 +31,7 @@ PAGES: dict[str, tuple[str, ...]] = {
     "plots.md": (),
     "conjunction.md": (),
     "density-sensor.md": (),
+    "reentry.md": (),
 }
 #: Pages whose examples run elsewhere, or that have none.
 ELSEWHERE = {

@@ -159,8 +159,10 @@ def test_ccsp_default_schedule_updates_eccentric_orbits_at_apogee():
     # rp.ccsp with no update_interval: the same run as the catalog's schedule passed
     # explicitly (bit for bit), outputs every hour and at the apogees (this Molniya orbit
     # has a 1,600 km perigee; the Monte Carlo of the catalog test above is within 20 % of
-    # the apogee schedule's).
-    state = kepler_state(26_600e3, 0.7, 0.0)
+    # the apogee schedule's). TEME, a catalog's frame: the schedule is computed in the
+    # axes the run integrates in, bit for bit the same as update_schedule of this state.
+    k = kepler_state(26_600e3, 0.7, 0.0)
+    state = rp.OrbitState(k.epoch, k.position, k.velocity, "TEME")
     craft = rp.Spacecraft(1.0, 0.01)
     atm = rp.scenarios.benchmark_exponential(0.2)
     cov = tle_covariance(state)

@@ -54,7 +54,7 @@ def test_predicted_epochs_work_with_a_warning_and_growing_sigma(records):
     late = after_observed(sw, 240)
     with pytest.raises(OutsideRecordError, match="rhoprop data refresh"):
         sw.drivers(late)
-    with pytest.warns(PredictedDriversWarning, match="days after the last observed day"):
+    with pytest.warns(PredictedDriversWarning, match="epochs after the last observed day"):
         d = fc.drivers([late, after_observed(sw, 700)])
     assert np.isfinite(d.f107).all() and np.isfinite(d.ap).all()
     assert (d.lead_time > 200).all() and d.lead_time[1] > d.lead_time[0]

@@ -86,8 +86,9 @@ def test_frames_reject_bad_shapes():
 
 def test_teme_to_gcrf_matches_astropy():
     # An independent implementation: astropy's TEME -> GCRS (through ITRS, IAU 2006/2000A,
-    # with the frame bias). Ours is Vallado's IAU 1976/1980 route without the 23-mas bias:
-    # 1.5 m apart at 7,000 km measured (2026) and 2.4 m (2000); held to 3 m and 1 mm/s.
+    # with the frame bias). Ours takes the same route in ERFA calls of its own with UT1 =
+    # UTC: 0.4 mm apart at 7,000 km measured (2026), 0.02 mm (2000); held to 1 cm and
+    # 1 mm/s (the IAU 1976/1980 matrices used before were 0.6-1.5 m off).
     # The rotation itself moves a LEO position by about 43 km in 2026.
     from astropy import units as u
     from astropy.coordinates import GCRS, TEME, CartesianDifferential, CartesianRepresentation
@@ -102,7 +103,7 @@ def test_teme_to_gcrf_matches_astropy():
         t = Time(when, scale="utc")
         rep = CartesianRepresentation(r * u.m, differentials=CartesianDifferential(v * u.m / u.s))
         ref = TEME(rep, obstime=t).transform_to(GCRS(obstime=t)).cartesian
-        assert np.linalg.norm(ours[:3] - ref.xyz.to(u.m).value) < 3.0
+        assert np.linalg.norm(ours[:3] - ref.xyz.to(u.m).value) < 0.01
         assert np.linalg.norm(ours[3:] - ref.differentials["s"].d_xyz.to(u.m / u.s).value) < 1e-3
     shift = rp.frames.teme_to_gcrf(np.datetime64("2026-03-15T06:30"), np.concatenate([r, v]))
     assert 40e3 < np.linalg.norm(shift[:3] - r) < 50e3
@@ -110,3 +111,128 @@ def test_teme_to_gcrf_matches_astropy():
     np.testing.assert_allclose(back, np.concatenate([r, v]), atol=1e-6)
     with pytest.raises(ValueError, match="states must have shape"):
         rp.frames.teme_to_gcrf(np.datetime64("2026-03-15"), np.zeros(5))
+
+
+def _astropy_states(when, states, source, target):
+    """An independent conversion: astropy's own frames (its bundled IERS tables)."""
+    from astropy import units as u
+    from astropy.coordinates import (
+        GCRS,
+        ITRS,
+        TEME,
+        CartesianDifferential,
+        CartesianRepresentation,
+    )
+    from astropy.time import Time
+    from astropy.utils import iers
+
+    classes = {"TEME": TEME, "GCRF": GCRS, "ITRF": ITRS}
+    with iers.conf.set_temp("auto_download", False):
+        t = Time(when, scale="utc")
+        rep = CartesianRepresentation(
+            states[:3] * u.m, differentials=CartesianDifferential(states[3:] * u.m / u.s)
+        )
+        out = classes[source](rep, obstime=t).transform_to(classes[target](obstime=t)).cartesian
+    return np.concatenate([out.xyz.to(u.m).value, out.differentials["s"].d_xyz.to(u.m / u.s).value])
+
+
+STATE = np.array([6778e3, 1200e3, -300e3, -1200.0, 7000.0, 1500.0])
+
+
+@pytest.mark.parametrize(
+    ("source", "target"), [("TEME", "ITRF"), ("GCRF", "ITRF"), ("ITRF", "GCRF")]
+)
+def test_convert_to_and_from_itrf_matches_astropy(source, target):
+    # ITRF goes through astropy itself: the same numbers to rounding.
+    when = "2026-03-15T06:30:00"
+    ours = rp.frames.convert(np.datetime64(when), STATE, source, target)
+    ref = _astropy_states(when, STATE, source, target)
+    assert np.linalg.norm(ours[:3] - ref[:3]) < 1e-3
+    assert np.linalg.norm(ours[3:] - ref[3:]) < 1e-6
+    # Earth-fixed velocities carry the Earth's rotation: |v| changes by ~ omega r.
+    if target == "ITRF":
+        assert abs(np.linalg.norm(ours[3:]) - np.linalg.norm(STATE[3:])) > 100.0
+
+
+def test_convert_is_vectorised_and_round_trips():
+    epochs = np.datetime64("2026-03-15T00:00") + np.arange(5) * np.timedelta64(6, "h")
+    states = np.tile(STATE, (5, 1))
+    gcrf = rp.frames.convert(epochs, states, "TEME", "GCRF")
+    for k in range(5):  # each row rotated by its own epoch's matrix
+        np.testing.assert_allclose(gcrf[k], rp.frames.teme_to_gcrf(epochs[k], STATE), atol=1e-9)
+    itrf = rp.frames.convert(epochs, gcrf, "gcrf", "itrs")  # case and aliases
+    np.testing.assert_allclose(rp.frames.convert(epochs, itrf, "ITRF", "GCRF"), gcrf, atol=1e-6)
+    # Back to TEME by astropy's own route (UT1 from its tables): a millimetre apart.
+    back = rp.frames.convert(epochs, itrf, "ITRF", "TEME")
+    assert np.abs(back[:, :3] - states[:, :3]).max() < 0.01
+    assert np.abs(back[:, 3:] - states[:, 3:]).max() < 1e-4  # the frame rates, 0.05 mm/s
+    # GCRF, EME2000 (J2000) and ICRF share axes here: relabelled, not rotated.
+    np.testing.assert_array_equal(rp.frames.convert(epochs, gcrf, "GCRF", "J2000"), gcrf)
+    with pytest.raises(ValueError, match="to_frame must be one of"):
+        rp.frames.convert(epochs, states, "TEME", "ECEF")
+    with pytest.raises(TypeError, match="from_frame must be a frame name"):
+        rp.frames.convert(epochs, states, 3, "TEME")
+    with pytest.raises(ValueError, match="got 5 epochs for 2 states"):
+        rp.frames.convert(epochs, states[:2], "TEME", "GCRF")
+
+
+def test_orbit_state_names_its_frame():
+    s = rp.OrbitState("2026-03-15T06:30Z", STATE[:3], STATE[3:])
+    assert s.frame == "GCRF"
+    t = s.in_frame("TEME")
+    assert t.frame == "TEME" and 40e3 < np.linalg.norm(t.position - s.position) < 50e3
+    np.testing.assert_allclose(t.in_frame("GCRF").state, s.state, atol=1e-6)
+    assert rp.OrbitState(s.epoch, s.position, s.velocity, "j2000").frame == "EME2000"
+    assert s != rp.OrbitState(s.epoch, s.position, s.velocity, "TEME")
+    with pytest.raises(ValueError, match="convert"):
+        rp.OrbitState(s.epoch, s.position, s.velocity, "ITRF")
+    with pytest.raises(ValueError, match="frame must be one of"):
+        rp.OrbitState(s.epoch, s.position, s.velocity, "ECI")
+
+
+def _pole_reference(y0, times, pole):
+    """Two-body + J2 about ``pole`` (a unit vector), no drag: scipy DOP853 on numpy
+    (no rhoprop code)."""
+    from scipy.integrate import solve_ivp
+
+    mu, re, j2 = 3.986004418e14, 6378137.0, 1.08262668e-3
+
+    def rhs(_t, y):
+        r = y[:3]
+        rn = np.linalg.norm(r)
+        z = r @ pole
+        k = -1.5 * j2 * mu * re**2 / rn**5
+        a = -mu * r / rn**3 + k * ((1 - 5 * z**2 / rn**2) * r + 2 * z * pole)
+        return np.concatenate([y[3:], a])
+
+    sol = solve_ivp(rhs, (0, times[-1]), y0, method="DOP853", t_eval=times, rtol=1e-13, atol=1e-7)
+    return sol.y.T
+
+
+def test_a_gcrf_state_flies_about_the_pole_of_date():
+    # The zonal field acts about the true pole of date, which in GCRF is the third row of
+    # ERFA's bias-precession-nutation matrix (0.36 deg from GCRF's z in 2026). A GCRF
+    # state propagated by rhoprop follows the independent integration about that pole to
+    # the metre over a day, and misses the one about GCRF's z by 605 m at 1,400 km; a TEME state
+    # (pole = z) follows the one about z.
+    import erfa
+
+    epoch = np.datetime64("2026-03-15T06:30")
+    days = (epoch - np.datetime64("2000-01-01T11:58:55.816")) / np.timedelta64(1, "s") / 86400
+    pole = erfa.pnm80(2451545.0, days)[2]
+    y0 = np.array([6778e3, 0.0, 0.0, 0.0, 5000.0, 5500.0])  # 1,400 km up: drag-free
+    y0[:3] *= 1.2
+    times = np.array([0.0, 43200.0, 86400.0])
+    vacuum = rp.density.Exponential(1e-30, 400e3, 58.5e3)
+    craft = rp.Spacecraft(2.2, 0.01)
+    for frame, axis in (("GCRF", pole), ("TEME", np.array([0.0, 0.0, 1.0]))):
+        state = rp.OrbitState(epoch, y0[:3], y0[3:], frame)
+        tr = rp.propagate(state, craft, vacuum, 86400.0, output_step=43200.0, integrator="rk8")
+        assert tr.frame == frame
+        ref = _pole_reference(y0, times, axis)
+        assert np.linalg.norm(tr.positions - ref[:, :3], axis=1).max() < 1.0
+    wrong = _pole_reference(y0, times, np.array([0.0, 0.0, 1.0]))
+    gcrf = rp.propagate(
+        rp.OrbitState(epoch, y0[:3], y0[3:]), craft, vacuum, 86400.0, output_step=43200.0
+    )
+    assert np.linalg.norm(gcrf.positions[-1] - wrong[-1, :3]) > 300.0  # 605 m measured

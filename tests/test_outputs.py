@@ -168,10 +168,59 @@ def test_a_catalog_oem_in_gcrf_is_rotated_from_teme(tmp_path):
             np.testing.assert_allclose(
                 np.asarray(y.velocity), m @ np.asarray(x.velocity), atol=1e-9
             )
+        # The same physical states as astropy's TEME -> GCRS of the TEME of the element
+        # set's epoch (the axes the run integrated in; TEME of each output's date would
+        # differ by the nutation of the hours between, ~1 m here), to 1 m.
+        epoch = r.objects[k].state.epoch
+        for x, y in zip(sa, sb, strict=True):
+            ref = _astropy_gcrs(epoch, 1e3 * np.asarray(x.position))
+            assert np.linalg.norm(1e3 * np.asarray(y.position) - ref) < 1.0
         cov_a = next(iter(OrbitEphemerisMessage.open(str(a)).segments[0].covariances)).matrix
         cov_b = next(iter(OrbitEphemerisMessage.open(str(b)).segments[0].covariances)).matrix
         # A rotation keeps the trace of the position block.
         assert np.trace(cov_b[:3, :3]) == pytest.approx(np.trace(cov_a[:3, :3]), rel=1e-9)
+
+
+def _astropy_gcrs(epoch, teme, inverse=False):
+    """astropy's TEME -> GCRS (or back) of a position (3,), m: the independent reference."""
+    from astropy import units as u
+    from astropy.coordinates import GCRS, TEME, CartesianRepresentation
+    from astropy.time import Time
+    from astropy.utils import iers
+
+    with iers.conf.set_temp("auto_download", False):
+        t = epoch if isinstance(epoch, Time) else Time(np.datetime64(epoch, "ns"), scale="utc")
+        source, target = (GCRS, TEME) if inverse else (TEME, GCRS)
+        out = source(CartesianRepresentation(np.asarray(teme) * u.m), obstime=t).transform_to(
+            target(obstime=t)
+        )
+    return out.cartesian.xyz.to(u.m).value
+
+
+def test_a_single_result_oem_is_in_its_frame_or_converted(tmp_path):
+    # A result is in its initial state's frame and its OEM says so; ref_frame="TEME"
+    # rotates it, to astropy's GCRS -> TEME within 1 m (read back with the oem library).
+    from oem import OrbitEphemerisMessage
+
+    state = rp.OrbitState("2026-03-15T06:30Z", [6778e3, 1200e3, -300e3], [-1200.0, 7000.0, 1500.0])
+    craft = rp.Spacecraft(2.2, 0.01)
+    tr = rp.propagate(
+        state, craft, rp.scenarios.benchmark_exponential(0.2), 7200.0, output_step=1800.0
+    )
+    assert tr.frame == "GCRF" and tr.state_at(0).frame == "GCRF"
+    np.testing.assert_allclose(tr.positions[0], state.position, atol=1e-6)  # rotated twice
+    (own,) = io.write_oem(tr, tmp_path / "own")
+    (teme,) = io.write_oem(tr, tmp_path / "teme", ref_frame="TEME")
+    assert "REF_FRAME = GCRF" in own.read_text() and "REF_FRAME = TEME" in teme.read_text()
+    back = list(OrbitEphemerisMessage.open(str(teme)).segments[0].states)
+    assert len(back) == len(tr.times)
+    for k, x in enumerate(back):  # TEME of the initial epoch, the run's axes
+        ref = _astropy_gcrs(tr.epoch, tr.positions[k], inverse=True)
+        assert np.linalg.norm(1e3 * np.asarray(x.position) - ref) < 1.0
+    # Relabelling between GCRF, EME2000 and ICRF moves nothing.
+    (eme,) = io.write_oem(tr, tmp_path / "eme", ref_frame="EME2000")
+    first = next(iter(OrbitEphemerisMessage.open(str(eme)).segments[0].states))
+    np.testing.assert_allclose(1e3 * np.asarray(first.position), state.position, atol=1e-3)
 
 
 def test_non_utf8_bytes_are_skipped_or_named(tmp_path):
@@ -203,7 +252,7 @@ def test_write_oem_takes_a_single_result(tmp_path, single, kind):
     (path,) = io.write_oem(result, tmp_path, object_name="PAPER\nSAT", object_id="2002-001A")
     assert path.name == "2002-001A.oem"
     text = path.read_text()
-    assert "OBJECT_NAME = PAPER_SAT\n" in text and "REF_FRAME = EME2000" in text
+    assert "OBJECT_NAME = PAPER_SAT\n" in text and "REF_FRAME = GCRF" in text  # its own
     segment = OrbitEphemerisMessage.open(str(path)).segments[0]
     m = result.moments()
     states = np.array([s.vector for s in segment.states]) * 1e3
@@ -369,3 +418,28 @@ def test_an_oem_recommends_hermite_only_where_its_states_interpolate(tmp_path):
     hourly = rp.propagate(state, craft, model, 6 * 3600.0)
     (path,) = io.write_oem(hourly, tmp_path / "hourly", object_id="HOURLY")
     assert "INTERPOLATION" not in path.read_text()
+
+
+def test_oem_interpolation_metadata_where_states_interpolate_to_a_metre(tmp_path):
+    # Degree-7 Hermite at 400 km (measured against 10-s outputs): 1-6 cm every 300 s,
+    # 3-12 m every 600 s. The OEM says HERMITE 7 for the first, a COMMENT for the second;
+    # state_at interpolates the first and refuses the second.
+    from oem import OrbitEphemerisMessage
+
+    s, c = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+    m = rp.scenarios.benchmark_exponential(0.2)
+    truth = rp.propagate(s, c, m, 7200.0, output_step=10.0)
+    for step, ok in ((300.0, True), (600.0, False)):
+        tr = rp.propagate(s, c, m, 7200.0, output_step=step)
+        (path,) = io.write_oem(tr, tmp_path / str(int(step)))
+        text = path.read_text()
+        assert ("INTERPOLATION_DEGREE = 7" in text) == ok
+        assert ("too far apart to interpolate" in text) == (not ok)
+        OrbitEphemerisMessage.open(str(path))  # the comment is valid OEM
+        at = rp.time.add_seconds(s.epoch, step / 2)
+        if ok:
+            got = tr.state_at(at).position
+            assert np.linalg.norm(got - truth.state_at(at).position) < 0.1
+        else:
+            with pytest.raises(ValueError, match="degree 7 and 9"):
+                tr.state_at(at)

@@ -421,10 +421,10 @@ def _twin(obj: catalog.CatalogObject, start: np.datetime64) -> tuple:
     u = r / np.linalg.norm(r)
     c, s = np.cos(np.radians(2.0)), np.sin(np.radians(2.0))
     v2 = v * c + np.cross(u, v) * s + u * (u @ v) * (1 - c)
-    flipped = rp.OrbitState(add_seconds(start, 5400.0), r + 30.0 * u, -v2)
+    flipped = rp.OrbitState(add_seconds(start, 5400.0), r + 30.0 * u, -v2, at.frame)
     back = rp.propagate(flipped, rp.Spacecraft(1.0, 1e-12), MODEL, 1800.0, zonal_degree=4)
     epoch = add_seconds(start, 3600.0)
-    state = rp.OrbitState(epoch, back.positions[-1], -back.velocities[-1])
+    state = rp.OrbitState(epoch, back.positions[-1], -back.velocities[-1], back.frame)
     return (state, craft, "TWIN")
 
 
@@ -529,6 +529,25 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
         progress=False,
     )
     assert len(res.events) == len(cdms)
+    # A CDM's states are the screened TEME states rotated to EME2000 (REF_FRAME true):
+    # read back with the maintained reader, they equal astropy's TEME -> GCRS to 1 m.
+    from astropy import units as u
+    from astropy.coordinates import GCRS, TEME, CartesianRepresentation
+    from astropy.time import Time
+
+    from rhoprop.conjunction.cdm import cdm_text
+    from rhoprop.conjunction.screen_job import _message
+
+    ev = res.events[0]
+    path = tmp_path / "one.cdm"
+    path.write_text(cdm_text(_message(res, 0, np.datetime64("2026-12-05"))))
+    back = read_cdm(path)
+    t = Time(ev.tca, scale="utc")
+    for obj, teme in ((back.object1, ev.state1), (back.object2, ev.state2)):
+        ref = TEME(CartesianRepresentation(teme[:3] * u.m), obstime=t).transform_to(GCRS(obstime=t))
+        assert obj.ref_frame == "EME2000"
+        assert np.linalg.norm(obj.position - ref.cartesian.xyz.to(u.m).value) < 1.0
+        assert np.linalg.norm(obj.position - teme[:3]) > 20e3  # the rotation is no relabel
 
 
 def test_default_start_is_not_moved_by_one_element_set_dated_ahead(shell):

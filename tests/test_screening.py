@@ -45,7 +45,8 @@ def _back(position, velocity, dt, at=T, craft=CRAFT):
         0.0,
         2,
     )
-    return rp.OrbitState(add_seconds(at, -dt), s[-1, :3], s[-1, 3:])
+    # TEME: the core integrated in the axes given, the frame screens run in.
+    return rp.OrbitState(add_seconds(at, -dt), s[-1, :3], s[-1, 3:], "TEME")
 
 
 def encounter(miss=MISS, lead1=6 * 3600.0, lead2=5 * 3600.0 + 17.3, inc2=97.0, at=T):
@@ -144,7 +145,7 @@ def test_closest_approach_bad_input():
         closest_approach(tr1, tr1, model=MODEL)
     with pytest.raises(TypeError, match="model"):
         closest_approach(tr1, tr1, model="msis", spacecraft=CRAFT)
-    later = rp.OrbitState(add_seconds(s1.epoch, 7200.0), s1.position, s1.velocity)
+    later = rp.OrbitState(add_seconds(s1.epoch, 7200.0), s1.position, s1.velocity, "TEME")
     tr3 = rp.propagate(later, CRAFT, MODEL, 3600.0, output_step=60.0)
     with pytest.raises(ValueError, match="share no time span"):
         closest_approach(tr1, tr3, model=MODEL, spacecraft=CRAFT)
@@ -158,8 +159,12 @@ def test_screen_finds_an_encounter_between_grid_samples():
     s1, s2 = encounter()
     start = add_seconds(T, -3 * 3600.0)
     decoys = [
-        (rp.OrbitState(s1.epoch, s1.position, -s1.velocity), CRAFT, "retrograde"),
-        (rp.OrbitState(s1.epoch, 1.3 * s1.position, s1.velocity / np.sqrt(1.3)), CRAFT, "high"),
+        (rp.OrbitState(s1.epoch, s1.position, -s1.velocity, "TEME"), CRAFT, "retrograde"),
+        (
+            rp.OrbitState(s1.epoch, 1.3 * s1.position, s1.velocity / np.sqrt(1.3), "TEME"),
+            CRAFT,
+            "high",
+        ),
     ]
     res = screen(
         (s1, CRAFT, "primary"),
@@ -224,7 +229,7 @@ def test_screen_with_a_sampled_model_and_an_eccentric_secondary():
     s1, s2 = encounter()
     start = add_seconds(T, -3 * 3600.0)
     end = add_seconds(T, 3 * 3600.0)
-    eccentric = rp.OrbitState(s1.epoch, s1.position, 1.18 * s1.velocity)
+    eccentric = rp.OrbitState(s1.epoch, s1.position, 1.18 * s1.velocity, "TEME")
     secs = [(s2, CRAFT, "secondary"), (eccentric, CRAFT, "eccentric")]
     kw = {"start": start, "end": end, "distance": 1e3, "progress": False}
     sampled = rp.density.FromFunction(_spherical_exponential)

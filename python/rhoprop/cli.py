@@ -521,7 +521,7 @@ def build_parser() -> argparse.ArgumentParser:
         "conjunction",
         help="a CDM's Pc with density-model uncertainty added",
         description="Read a CCSDS conjunction data message (KVN or XML; needs the "
-        "ccsds-ndm package: pip install 'rhoprop[cdm]'), propagate both objects from "
+        "ccsds-ndm package: pip install ccsds-ndm), propagate both objects from "
         "--lead before TCA through the default density-model families (Cd debiased per "
         "model) and print the Pc from the message's own covariances, from each model and "
         "from their mixture.",

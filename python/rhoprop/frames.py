@@ -1,6 +1,7 @@
 """Frames and time: GMST (IAU-82), inertial <-> Earth-fixed, geodetic WGS-84, the RTN
-frame of a reference orbit, equinoctial elements, and TEME <-> GCRF (SGP4's frame and the
-inertial frame other tools expect). Inputs may be one vector (3,) or many (n, 3)."""
+frame of a reference orbit, equinoctial elements, and named frames: TEME (SGP4's),
+GCRF (EME2000 and ICRF name its axes here) and ITRF, converted by :func:`convert`.
+Inputs may be one vector (3,) or many (n, 3)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,14 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _core, _validate
-from .time import EpochLike, EpochsLike, seconds_since_j2000, to_datetime64_array, ut1_seconds
+from .time import (
+    J2000_UTC,
+    EpochLike,
+    EpochsLike,
+    to_datetime64_array,
+    to_seconds,
+    ut1_seconds,
+)
 
 
 def _rows(name: str, value: Any, width: int = 3) -> tuple[np.ndarray, bool]:
@@ -183,19 +191,15 @@ def from_equinoctial(
 
 def teme_to_gcrf_matrix(epoch: EpochLike) -> np.ndarray:
     """The rotation (3, 3) taking vectors in TEME of the UTC ``epoch`` (SGP4's frame: the
-    true equator of date, x along the mean equinox of date measured on it) to GCRF, as
-    Vallado et al. (2006, "Revisiting Spacetrack Report #3", AIAA 2006-6753) give it:
-    about the true pole by minus the equation of the equinoxes (1994), then the inverse
-    of the IAU 1976 precession and 1980 nutation (ERFA's ``eqeq94`` and ``pnm80``). The
-    23-mas frame bias between the J2000 mean equator and GCRF is not applied (under 1 m
-    in LEO, 5 m at GEO): the result serves as EME2000 and as GCRF alike. Checked against
-    astropy's TEME -> GCRS in ``tests/test_frames.py``."""
-    import erfa  # type: ignore[import-untyped]
-
-    days = seconds_since_j2000(epoch) / 86400.0
-    tt1, tt2 = 2451545.0, days
-    to_true_of_date = erfa.rz(-erfa.eqeq94(tt1, tt2), np.eye(3))
-    out: np.ndarray = erfa.pnm80(tt1, tt2).T @ to_true_of_date
+    true equator of date, x along the mean equinox of date measured on it) to GCRF, by
+    the route astropy and Vallado et al. (2006, "Revisiting Spacetrack Report #3", AIAA
+    2006-6753) take: TEME -> pseudo-Earth-fixed by GMST (IAU-82), then back to the
+    celestial intermediate frame by the Earth rotation angle and to GCRF by ERFA's IAU
+    2006/2000A ``c2i06a`` (frame bias included). Polar motion cancels on that route and
+    UT1 = UTC changes it by under a millimetre. Equal to astropy's TEME -> GCRS to 1 mm in
+    LEO (``tests/test_frames.py``); the IAU 1976/1980 matrices it replaced on 2026-12-05
+    were 0.6-1.5 m from it."""
+    out: np.ndarray = _teme_to_gcrf_matrices(to_datetime64_array(epoch, "epoch").reshape(1))[0]
     return out
 
 
@@ -215,4 +219,118 @@ def gcrf_to_teme(epoch: EpochLike, states: npt.ArrayLike) -> np.ndarray:
     x, single = _rows("states", states, 6)
     m = teme_to_gcrf_matrix(epoch)
     out = np.concatenate([x[:, :3] @ m, x[:, 3:] @ m], axis=1)
+    return out[0] if single else out
+
+
+#: Inertial frames a state may be given in: GCRF, EME2000 and ICRF (one set of axes here:
+#: the 23-mas frame bias between the J2000 mean equator and GCRF is not told apart, under
+#: 1 m in LEO and 5 m at GEO) and TEME, SGP4's true equator and mean equinox of date.
+INERTIAL_FRAMES = ("GCRF", "EME2000", "ICRF", "TEME")
+#: Every frame :func:`convert` takes: the inertial ones and the Earth-fixed ITRF.
+FRAMES = (*INERTIAL_FRAMES, "ITRF")
+#: Names read as another frame's.
+_ALIASES = {"J2000": "EME2000", "ITRS": "ITRF", "GCRS": "GCRF"}
+#: The frames that share GCRF's axes.
+_GCRF_AXES = ("GCRF", "EME2000", "ICRF")
+
+
+def frame_name(name: str, value: object, allowed: tuple[str, ...] = FRAMES) -> str:
+    """``value`` as one of ``allowed`` (case-insensitive; J2000 reads as EME2000, GCRS as
+    GCRF, ITRS as ITRF), else a TypeError or ValueError naming argument ``name``."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a frame name {allowed}, got {type(value).__name__}")
+    frame = _ALIASES.get(value.strip().upper(), value.strip().upper())
+    if frame not in allowed:
+        hint = (
+            "; an Earth-fixed state is converted first: rp.frames.convert(epoch, state, "
+            "'ITRF', 'GCRF')"
+            if frame == "ITRF"
+            else ""
+        )
+        raise ValueError(f"{name} must be one of {allowed}, got {value!r}{hint}")
+    return frame
+
+
+def same_axes(a: str, b: str) -> bool:
+    """Whether frames ``a`` and ``b`` (names as :func:`frame_name` returns) share axes."""
+    return a == b or (a in _GCRF_AXES and b in _GCRF_AXES)
+
+
+def _teme_to_gcrf_matrices(epochs: np.ndarray) -> np.ndarray:
+    """:func:`teme_to_gcrf_matrix` of each epoch (n,) -> (n, 3, 3)."""
+    import erfa  # type: ignore[import-untyped]
+
+    tt = to_seconds(epochs, J2000_UTC) / 86400.0
+    ut1 = ut1_seconds(epochs) / 86400.0  # UT1 = UTC, days since 2000-01-01T12:00
+    j2000 = np.full(tt.shape, 2451545.0)
+    gmst_minus_era = erfa.gmst82(j2000, ut1) - erfa.era00(j2000, ut1)
+    to_cirs = erfa.rz(gmst_minus_era, np.eye(3))
+    return np.asarray(np.swapaxes(erfa.c2i06a(j2000, tt), -1, -2) @ to_cirs)
+
+
+def _rotate(matrices: np.ndarray, states: np.ndarray) -> np.ndarray:
+    """States (n, 6) rotated by matrices (n, 3, 3), position and velocity alike."""
+    pos = np.einsum("nij,nj->ni", matrices, states[:, :3])
+    vel = np.einsum("nij,nj->ni", matrices, states[:, 3:])
+    return np.concatenate([pos, vel], axis=1)
+
+
+def _with_astropy(epochs: np.ndarray, states: np.ndarray, source: str, target: str) -> np.ndarray:
+    """TEME or GCRF <-> ITRF through astropy (IAU 2006/2000A, UT1 - UTC and polar motion
+    from the IERS tables astropy ships, never downloaded: rhoprop runs offline)."""
+    try:
+        from astropy import units as u  # type: ignore[import-untyped]
+        from astropy.coordinates import (  # type: ignore[import-untyped]
+            GCRS,
+            ITRS,
+            TEME,
+            CartesianDifferential,
+            CartesianRepresentation,
+        )
+        from astropy.time import Time  # type: ignore[import-untyped]
+        from astropy.utils import iers  # type: ignore[import-untyped]
+    except ImportError:  # pragma: no cover - astropy is a test dependency
+        raise ImportError(
+            "conversions to and from ITRF use astropy, which is not installed (pip install astropy)"
+        ) from None
+    classes = {"TEME": TEME, "GCRF": GCRS, "ITRF": ITRS}
+    with iers.conf.set_temp("auto_download", False):
+        t = Time(epochs.astype("datetime64[ns]"), scale="utc")
+        rep = CartesianRepresentation(
+            states[:, :3].T * u.m, differentials=CartesianDifferential(states[:, 3:].T * u.m / u.s)
+        )
+        out = classes[source](rep, obstime=t).transform_to(classes[target](obstime=t)).cartesian
+    pos = out.xyz.to(u.m).value.T
+    vel = out.differentials["s"].d_xyz.to(u.m / u.s).value.T
+    return np.ascontiguousarray(np.concatenate([pos, vel], axis=1))
+
+
+def convert(
+    epochs: EpochsLike, states: npt.ArrayLike, from_frame: str, to_frame: str
+) -> np.ndarray:
+    """States [x, y, z, vx, vy, vz] (6,) or (n, 6), m and m/s, at UTC ``epochs`` (one, or
+    one per state) from frame ``from_frame`` to ``to_frame`` (names of :data:`FRAMES`).
+
+    TEME <-> GCRF by :func:`teme_to_gcrf_matrix` of each epoch (ERFA; astropy's route, to
+    1 mm in LEO). Anything <-> ITRF through astropy (UT1 - UTC and polar
+    motion from its bundled IERS tables, never downloaded; its velocities carry the
+    Earth's rotation). GCRF, EME2000 and ICRF are one set of axes here (:data:`INERTIAL_FRAMES`).
+    Tested against astropy and a round trip in ``tests/test_frames.py``."""
+    source = frame_name("from_frame", from_frame)
+    target = frame_name("to_frame", to_frame)
+    x, single = _rows("states", states, 6)
+    values = to_datetime64_array(epochs, "epochs")
+    if values.ndim == 0:
+        values = np.full(len(x), values[()])
+    elif values.ndim != 1 or len(values) != len(x):
+        raise ValueError(f"got {values.size} epochs for {len(x)} states")
+    source = "GCRF" if source in _GCRF_AXES else source
+    target = "GCRF" if target in _GCRF_AXES else target
+    if source == target:
+        out = x.copy()
+    elif "ITRF" in (source, target):
+        out = _with_astropy(values, x, source, target)
+    else:
+        m = _teme_to_gcrf_matrices(values)
+        out = _rotate(m if source == "TEME" else np.swapaxes(m, -1, -2), x)
     return out[0] if single else out

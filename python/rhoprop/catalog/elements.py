@@ -155,7 +155,7 @@ def _object_from_satrec(
             int(sat.satnum),
             epoch,
         )
-    state = OrbitState(epoch, np.array(r) * 1e3, np.array(v) * 1e3)
+    state = OrbitState(epoch, np.array(r) * 1e3, np.array(v) * 1e3, "TEME")
     acc = tle_accuracy(state)
     note = _tle_note(acc)
     if bstar <= 0 and drag == DEFAULT_DRAG_PARAMETER:

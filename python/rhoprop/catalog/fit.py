@@ -340,7 +340,7 @@ def _observe(
         except ValueError as err:
             raise ValueError(f"element set of {epochs[k]}: {err}") from err
         at = int(np.argmin(np.abs(t_own)))
-        acc = tle_accuracy(OrbitState(epochs[k], r[at], v[at]))
+        acc = tle_accuracy(OrbitState(epochs[k], r[at], v[at], "TEME"))
         sig = np.empty((len(grid), 3))
         sig[:, 0] = acc.radial
         sig[:, 1] = np.hypot(acc.along_track, acc.drift_rate * t_own)
@@ -719,7 +719,7 @@ def _run_chunk(
         )
         for j in jobs
     ]
-    where = OrbitState(t0, jobs[0].p0[:3], jobs[0].p0[3:6])
+    where = OrbitState(t0, jobs[0].p0[:3], jobs[0].p0[3:6], "TEME")
     step = FIT_STEP
 
     def run(atmosphere: AtmosphereLike) -> list[Any]:
@@ -791,7 +791,7 @@ def _result(fit: _Solution, job: _Job) -> tuple[FitResult, float]:
     older_norm = set_norm[:-1][np.isfinite(set_norm[:-1])]
     drag_sigma = float(np.sqrt(max(cov[6, 6], 0.0)))
     result = FitResult(
-        state=OrbitState(job.epoch, fit.p[:3].copy(), fit.p[3:6].copy()),
+        state=OrbitState(job.epoch, fit.p[:3].copy(), fit.p[3:6].copy(), "TEME"),
         drag_parameter=float(fit.p[6]),
         covariance=cov,
         drag_sigma=drag_sigma,

@@ -109,7 +109,7 @@ def _need_dask() -> None:
     try:
         import distributed  # noqa: F401
     except ImportError:
-        raise ImportError("--scheduler needs Dask: pip install 'rhoprop[distributed]'") from None
+        raise ImportError("--scheduler needs Dask: pip install 'dask[distributed]'") from None
 
 
 #: Default drag coefficient for a drag file that gives area-to-mass ratios.

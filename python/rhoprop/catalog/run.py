@@ -19,9 +19,12 @@ from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel
 from ..options import Errors, UncertaintyMethod
 from ..progress import ProgressBar
+from ..propagation import OrbitState
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
+from ..propagation.interpolate import DEFAULT_TOLERANCE
 from ..propagation.kappa import KappaProcess, TwoScale
 from ..propagation.results import (
+    StateMoments,
     dataset_attrs,
     epoch_coords,
     label_coords,
@@ -133,6 +136,30 @@ class CatalogResult:
     covariance_note: np.ndarray | None = None
     drag_sigma: np.ndarray | None = None
     gaussian: np.ndarray | None = None
+
+    def moments_at(
+        self, index: int, at: EpochLike, *, tolerance: float = DEFAULT_TOLERANCE
+    ) -> tuple[OrbitState, np.ndarray]:
+        """Object ``index``'s mean state (TEME, an :class:`~rhoprop.OrbitState`) and
+        covariance (6, 6), SI, at the UTC epoch ``at``, interpolated between the outputs
+        as :meth:`rhoprop.propagation.StateMoments.at` does (a ValueError where its
+        outputs are too far apart for ``tolerance`` m, outside them or where not valid:
+        hourly LEO outputs are; ``output_step`` of 600 s or less interpolates)."""
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+            raise TypeError(f"index must be an object's position, got {type(index).__name__}")
+        if not -len(self.objects) <= index < len(self.objects):
+            raise ValueError(f"index {index} is out of range for {len(self.objects)} objects")
+        moments = StateMoments(
+            self.epochs[0],
+            to_seconds(self.epochs, self.epochs[0]),
+            self.mean[index],
+            self.covariance[index],
+            frame="TEME",
+        )
+        try:
+            return moments.at(at, tolerance=tolerance)
+        except ValueError as err:
+            raise ValueError(f"{self.objects[index].name}: {err}") from None
 
     def to_xarray(self) -> xarray.Dataset:
         """The run as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).

@@ -725,7 +725,7 @@ class _Run:
                 tr, decay = _coarse_track(obj, self.dyn, self.cfg.start, span, self.cfg.step)
                 return tr.t, tr.pos, tr.vel, decay
             p0, v0 = start_state
-            s0 = OrbitState(add_seconds(self.cfg.start, float(times[0])), p0, v0)
+            s0 = OrbitState(add_seconds(self.cfg.start, float(times[0])), p0, v0, "TEME")
             out = self.dyn.forward(s0, obj.craft, obj.model, span, self.cfg.step)
             decay = None if out.decayed_at is None else float(times[0]) + out.decayed_at
             return times[0] + out.times, out.positions, out.velocities, decay

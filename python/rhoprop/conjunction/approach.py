@@ -26,7 +26,7 @@ from typing import Any, Literal, Protocol
 
 import numpy as np
 
-from .. import _validate
+from .. import _validate, frames
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import SampledModel
 from ..density.model import ModelLike
@@ -62,7 +62,7 @@ class CloseApproach:
         miss_distance: distance at TCA, m.
         relative_speed: |v2 - v1| at TCA, m/s.
         state1, state2: inertial states [x, y, z, vx, vy, vz] of both objects at TCA (6,),
-            m and m/s.
+            m and m/s, in ``frame``.
         name1, name2: the objects' names.
         id1, id2: the objects' ids (NORAD catalog numbers for catalog objects), or None.
         edge: ``None`` for a minimum inside the window; ``"start"`` when the distance grows
@@ -74,6 +74,9 @@ class CloseApproach:
             functions). A fast encounter passes in a second or two; co-orbiting objects
             can stay within it for hours or the whole window (then every minimum in
             that stretch carries the same interval).
+        frame: the frame of the states: ``"TEME"`` for screens (they run in the catalogs'
+            frame, other states rotated into it), the trajectories' own for
+            :func:`closest_approach`.
     """
 
     tca: np.datetime64
@@ -87,6 +90,7 @@ class CloseApproach:
     id2: int | None = None
     edge: Literal["start", "end"] | None = None
     within: tuple[np.datetime64, np.datetime64] | None = None
+    frame: str = "TEME"
 
     @property
     def within_seconds(self) -> float | None:
@@ -169,6 +173,8 @@ class _Dynamics:
     floor: float
     degree: int
     fine_step: float
+    #: The frame of the tracks' states (a screen's are TEME).
+    frame: str = "TEME"
 
     def run(
         self, track: _Track, t0: float, state: np.ndarray, span: float, step: float | None
@@ -177,7 +183,7 @@ class _Dynamics:
         ``state`` at ``t0`` over ``span`` s (outputs every ``step`` s, or the end only)."""
         if track.craft is None or track.model is None:
             raise AssertionError("re-propagation without a model")  # guarded by callers
-        s0 = OrbitState(add_seconds(self.ref, t0), state[:3], state[3:])
+        s0 = OrbitState(add_seconds(self.ref, t0), state[:3], state[3:], self.frame)
         tr = self.forward(s0, track.craft, track.model, span, step)
         return t0 + tr.times, tr.positions, tr.velocities
 
@@ -307,6 +313,7 @@ def _event(
         id1=a.object_id,
         id2=b.object_id,
         edge=edge,
+        frame=dyn.frame,
     )
 
 
@@ -420,6 +427,11 @@ def closest_approach(
             raise TypeError(f"traj{k} must be a rhoprop Trajectory, got {type(tr).__name__}")
         if len(tr.times) < 2:
             raise ValueError(f"traj{k} has {len(tr.times)} output(s); at least two are needed")
+    if not frames.same_axes(traj1.frame, traj2.frame):
+        raise ValueError(
+            f"traj1 is in {traj1.frame} and traj2 in {traj2.frame}: propagate both from "
+            "states in one frame (OrbitState.in_frame)"
+        )
     craft1, craft2 = _spacecraft_pair(spacecraft)
     if model is not None:
         check_model(model)
@@ -477,7 +489,7 @@ def closest_approach(
         # From the earlier start: re-propagation starts at an output at or before a bracket.
         window = (add_seconds(ref, min(t1[0], t2[0])), add_seconds(ref, last, round_up=True))
         own1.model, own2.model = _models_for(model, states, *window, floor)
-    dyn = _Dynamics(ref, model is not None, floor, degree, step)
+    dyn = _Dynamics(ref, model is not None, floor, degree, step, traj1.frame)
     found: list[tuple[float, np.ndarray, np.ndarray]] = []
     for lo, hi in _merge(brackets):
         if model is None:

@@ -1,6 +1,7 @@
 """CCSDS Conjunction Data Messages (CCSDS 508.0-B-1), KVN or XML, read and written through
-the maintained ``ccsds-ndm`` library (optional: ``pip install "rhoprop[cdm]"``; it is
-GPL-3.0 licensed, so rhoprop never imports it unless a CDM is read or written).
+the maintained ``ccsds-ndm`` library (optional: ``pip install ccsds-ndm``, or the ``cdm``
+extra of a checkout; it is GPL-3.0 licensed, so rhoprop never imports it unless a CDM is
+read or written).
 
 A :class:`ConjunctionMessage` holds what a Pc needs, in SI units: both objects' inertial
 states at TCA (m, m/s), their covariances in their own RTN frames (m^2, m^2/s, m^2/s^2,
@@ -45,8 +46,7 @@ def _library() -> tuple[Any, Any, Any]:
         from ccsds_ndm.ndm_io import NdmIo
     except ImportError as err:  # pragma: no cover - depends on the environment
         raise ImportError(
-            "reading and writing CDMs needs the ccsds-ndm package: "
-            'pip install "rhoprop[cdm]" (or pip install ccsds-ndm)'
+            "reading and writing CDMs needs the ccsds-ndm package: pip install ccsds-ndm"
         ) from err
     return NdmIo(), NDMFileFormats, ndmxml4
 

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import frames
 from ..catalog.elements import Catalog, load
 from ..catalog.job import default_start, max_span_option
 from ..catalog.run import MAX_SPAN
@@ -64,14 +65,15 @@ def read_radii(path: str | Path) -> dict[int, float]:
 
 
 def _message(res: AllOnAllResult, n: int, created: np.datetime64) -> ConjunctionMessage:
-    """Event ``n`` as a CDM: the screened states at TCA (TEME taken as inertial, written
-    as EME2000 like the catalog's OEM files), the reference model's covariances in RTN
-    and the mixture's Pc."""
+    """Event ``n`` as a CDM: the screened states at TCA (TEME, the catalog's frame)
+    rotated to EME2000 (GCRF axes: :func:`rhoprop.frames.convert`), the reference
+    model's covariances in RTN (the same in either frame) and the mixture's Pc."""
     e = res.events[n]
     covs = (res.covariance1[n], res.covariance2[n])
     objs = []
     sides = ((e.state1, e.name1, e.id1, covs[0]), (e.state2, e.name2, e.id2, covs[1]))
-    for state, name, oid, cov in sides:
+    for teme, name, oid, cov in sides:
+        state = frames.convert(e.tca, teme, "TEME", "EME2000")
         objs.append(
             CdmObject(
                 name=name,

@@ -176,6 +176,8 @@ def _as_object(item: Any, where: str, index: int) -> _Object:
                 f"({', '.join(type(x).__name__ for x in item)})"
             )
         name = str(item[2]) if len(item) == 3 else f"{where}"
+        # Screens run in TEME, the catalogs' frame: a state in another is rotated once.
+        state = state.in_frame("TEME")
         return _Object(name, None if len(item) == 3 else index, state, craft, item=item)
     raise TypeError(
         f"{where} must be a rhoprop.catalog.CatalogObject or an (OrbitState, Spacecraft"
@@ -262,7 +264,7 @@ def _coarse_track(
             empty = np.empty((0, 3))
             gone = _Track(obj.name, obj.object_id, obj.craft, np.empty(0), empty, empty)
             return gone, tr.decayed_at - lead
-        state0 = OrbitState(start, tr.positions[-1], tr.velocities[-1])
+        state0 = OrbitState(start, tr.positions[-1], tr.velocities[-1], "TEME")
     elif lead < -1e-9:
         atmosphere = as_atmosphere(obj.model, obj.state, lead)  # backwards: lead < 0
         # The core integrates backwards with the fixed-step RK8 only (as the debiasing's
@@ -277,7 +279,7 @@ def _coarse_track(
             floor_altitude=dyn.floor,
             zonal_degree=dyn.degree,
         )
-        state0 = OrbitState(start, states[-1, :3], states[-1, 3:])
+        state0 = OrbitState(start, states[-1, :3], states[-1, 3:], "TEME")
     tr = dyn.forward(state0, obj.craft, obj.model, span, grid_step)
     track = _Track(
         obj.name, obj.object_id, obj.craft, tr.times, tr.positions, tr.velocities, obj.model

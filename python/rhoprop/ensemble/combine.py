@@ -33,7 +33,6 @@ from ..propagation import (
 )
 from ..propagation.propagate import check_model
 from ..propagation.results import (
-    INERTIAL_FRAME,
     dataset_attrs,
     epoch_coords,
     iso_utc,
@@ -223,12 +222,12 @@ class EnsembleResult:
                 "reference_position": (
                     vec,
                     np.asarray(self.reference_positions, dtype=float),
-                    {"units": "m", "long_name": "reference mean orbit", "frame": INERTIAL_FRAME},
+                    {"units": "m", "long_name": "reference mean orbit", "frame": first.frame},
                 ),
                 "reference_velocity": (
                     vec,
                     np.asarray(self.reference_velocities, dtype=float),
-                    {"units": "m/s", "long_name": "reference mean orbit", "frame": INERTIAL_FRAME},
+                    {"units": "m/s", "long_name": "reference mean orbit", "frame": first.frame},
                 ),
             },
             coords={
@@ -238,7 +237,7 @@ class EnsembleResult:
             },
             attrs=dataset_attrs(
                 "EnsembleResult",
-                INERTIAL_FRAME,
+                first.frame,
                 rtn_frame=rtn,
                 initial_epoch=iso_utc(first.epoch),
                 reference=self.reference,

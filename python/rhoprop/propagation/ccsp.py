@@ -16,6 +16,7 @@ from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..options import Perturbation
 from ..time import DurationLike, ut1_seconds
+from . import run_frame
 from .dynamics import Dynamics, resolve, zonal_degree_argument
 from .kappa import Constant, GaussMarkov, KappaProcess, PiecewiseConstant, TwoScale
 from .montecarlo import drag_sigma_argument
@@ -171,6 +172,9 @@ def ccsp(
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
     """
+    given, given_cov, rot = state, initial_covariance, None
+    if isinstance(state, OrbitState):
+        state, initial_covariance, rot = run_frame.into_run(state, initial_covariance)
     dyn = resolve(
         "ccsp",
         dynamics,
@@ -221,7 +225,7 @@ def ccsp(
         )
 
     out = run_in_field(model, state, span, args.floor, run)
-    return _result(state, out, args.drag_sigma)
+    return _result(state, out, args.drag_sigma, given.frame, rot, given, given_cov)
 
 
 @dataclass(frozen=True)
@@ -378,11 +382,26 @@ def consider_settings(
     return (3.0, 1.0 / c), scale, slow
 
 
-def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResult:
-    """The :class:`CcspResult` of the core's output dict."""
+def _result(
+    state: OrbitState,
+    out: _CcspOutput,
+    drag_sigma: float,
+    frame: str = "TEME",
+    rot: np.ndarray | None = None,
+    given: OrbitState | None = None,
+    given_cov: Any = None,
+) -> CcspResult:
+    """The :class:`CcspResult` of the core's output dict, of a run from ``state`` (in the
+    run's axes), its outputs rotated by ``rot`` into ``frame`` (:mod:`.run_frame`); the
+    first output is the ``given`` state and covariance as they were given."""
     # The binding reports decay as "decayed_at" (None when the filter ran to the end).
     decayed = out.get("decayed_at")
-    moments = StateMoments(state.epoch, out["times"], out["means"], out["covariances"])
+    mean = run_frame.vectors(rot, out["means"])
+    cov = run_frame.covariances(rot, out["covariances"])
+    if rot is not None and given is not None:
+        mean[0] = given.state
+        cov[0] = DEFAULT_INITIAL_COVARIANCE if given_cov is None else given_cov
+    moments = StateMoments(state.epoch, out["times"], mean, cov)
     rtn = moments.rtn_covariance
     return CcspResult(
         epoch=state.epoch,
@@ -391,13 +410,16 @@ def _result(state: OrbitState, out: _CcspOutput, drag_sigma: float) -> CcspResul
         covariance=moments.covariance,
         rtn_covariance=rtn,
         along_track_std=np.sqrt(rtn[:, 1, 1]),
-        cross_covariance=out["cross"],
+        cross_covariance=run_frame.vectors(rot, out["cross"]),
         decayed_at=None if decayed is None else float(decayed),
         drag_sigma=drag_sigma,
-        drag_cross_covariance=out["drag_cross"],
+        drag_cross_covariance=None
+        if out["drag_cross"] is None
+        else run_frame.vectors(rot, out["drag_cross"]),
         element_mean=out.get("element_means"),
         element_covariance=out.get("element_covariances"),
         reference=np.array(state.state, dtype=float),
+        frame=frame,
     )
 
 
@@ -434,15 +456,21 @@ def ccsp_many(
     in :func:`ccsp`, shared by every object."""
     coordinates = coordinates_argument(coordinates)
     prepared = []
+    frames_of: list[tuple[str, np.ndarray | None, OrbitState, Any]] = []
     for run in runs:
-        state = run["state"]
+        given = run["state"]
+        state, cov, rot = (
+            run_frame.into_run(given, run.get("initial_covariance"))
+            if isinstance(given, OrbitState)
+            else (given, run.get("initial_covariance"), None)
+        )
         args, span = _arguments(
             state,
             run["spacecraft"],
             model,
             None,
             update_interval=None,
-            initial_covariance=run.get("initial_covariance"),
+            initial_covariance=cov,
             scaling=None,
             step=run.get("step"),
             floor_altitude=floor_altitude,
@@ -453,6 +481,7 @@ def ccsp_many(
             kappa=run.get("kappa"),
         )
         prepared.append((state, run["spacecraft"], args, as_atmosphere(model, state, span)))
+        frames_of.append((given.frame, rot, given, run.get("initial_covariance")))
     results: list[CcspResult | Exception] = [RuntimeError("not run")] * len(prepared)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, (_s, _c, a, atmosphere) in enumerate(prepared):
@@ -480,7 +509,10 @@ def ccsp_many(
         )
         for i, out in zip(members, outs, strict=True):
             state, _c, a, _atm = prepared[i]
-            results[i] = out if isinstance(out, Exception) else _result(state, out, a.drag_sigma)
+            if isinstance(out, Exception):
+                results[i] = out
+            else:
+                results[i] = _result(state, out, a.drag_sigma, *frames_of[i])
     return results
 
 

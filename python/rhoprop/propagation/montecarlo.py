@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -15,6 +16,7 @@ from ..options import Integrator, Perturbation
 from ..parallel import core_threads, worker_count
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
+from . import run_frame
 from .dynamics import Dynamics, integrator_argument, resolve, zonal_degree_argument
 from .kappa import KappaProcess, TwoScale
 from .propagate import (
@@ -218,6 +220,8 @@ def monte_carlo(
             i, j = np.argwhere(~np.isfinite(cov))[0]
             raise ValueError(f"initial_covariance[{i}][{j}] must be finite, got {cov[i, j]}")
     epoch = ut1_seconds(state.epoch)
+    given = state
+    state, cov, rot = run_frame.into_run(state, cov)
 
     def run(atmosphere: AtmosphereLike) -> tuple[_MonteCarloOutput, Trajectory]:
         bar = ProgressBar(int(n), "Monte Carlo") if progress is True else None
@@ -257,12 +261,20 @@ def monte_carlo(
             floor_altitude=floor,
             zonal_degree=degree,
         )
-        return out, trajectory_from_core(state.epoch, mean)
+        return out, trajectory_from_core(state.epoch, mean, state.frame)
 
     out, mean = run_in_field(model, state, span, floor, run)
     decay = np.asarray(out["decay_times"], dtype=float)
     alive = times[None, :] < decay[:, None]
-    positions, velocities = out["positions"], out["velocities"]
+    positions = run_frame.vectors_in_place(rot, out["positions"])
+    velocities = run_frame.vectors_in_place(rot, out["velocities"])
+    if rot is not None and cov is None and len(times) and times[0] == 0.0:
+        positions[:, 0], velocities[:, 0] = given.position, given.velocity  # as given
+    if rot is not None:
+        mp, mv = run_frame.vectors(rot, mean.positions), run_frame.vectors(rot, mean.velocities)
+        if len(mean.times) and mean.times[0] == 0.0:
+            mp[0], mv[0] = given.position, given.velocity
+        mean = replace(mean, positions=mp, velocities=mv, frame=given.frame)
     # A decayed member's frozen state would bias every statistic: NaN from its decay on.
     positions[~alive] = np.nan
     velocities[~alive] = np.nan
@@ -287,6 +299,7 @@ def monte_carlo(
         reference_velocities=ref_v,
         drag_sigma=drag_sigma,
         drag_factors=np.asarray(out["drag_factors"], dtype=float),
+        frame=given.frame,
     )
 
 

@@ -26,6 +26,7 @@ from ..density.model import (
 )
 from ..options import Integrator
 from ..time import DurationLike, add_seconds, ut1_seconds
+from . import run_frame
 from .dynamics import (
     Dynamics,
     integrator_argument,
@@ -212,15 +213,16 @@ def core_propagate(
     floor_altitude: float,
     zonal_degree: int,
     rtol: float | None = None,
-) -> _core._Propagated:
+) -> tuple[np.ndarray, np.ndarray, float | None, int, int]:
     """The one call of ``_core.propagate``: ``state`` through ``atmosphere`` to ``times``
     (s from its epoch, increasing from 0, or decreasing for a backward run) with Cd*A/m
     ``drag_parameter`` (m^2/kg); returns (times, states, decayed_at, RHS evaluations,
-    clipped evaluations)."""
-    return _core.propagate(
+    clipped evaluations), the states in ``state.frame`` (:mod:`.run_frame`)."""
+    inside, _cov, rot = run_frame.into_run(state)
+    t, states, decayed_at, evaluations, clipped = _core.propagate(
         atmosphere,
         ut1_seconds(state.epoch),
-        state.state,
+        inside.state,
         drag_parameter,
         times,
         integrator,
@@ -229,6 +231,10 @@ def core_propagate(
         floor_altitude,
         zonal_degree,
     )
+    states = run_frame.vectors(rot, states)
+    if rot is not None and len(t) and t[0] == 0.0:
+        states[0] = state.state  # the initial state as given, not rotated there and back
+    return t, states, decayed_at, evaluations, clipped
 
 
 def run_in_field(
@@ -388,4 +394,5 @@ def propagate(
             zonal_degree=degree,
         )
 
-    return trajectory_from_core(state.epoch, run_in_field(model, state, span, floor, run))
+    out = run_in_field(model, state, span, floor, run)
+    return trajectory_from_core(state.epoch, out, state.frame)

@@ -44,7 +44,6 @@ STATE_LABELS = ("x", "y", "z", "vx", "vy", "vz")
 RTN_LABELS = ("R", "T", "N")
 #: The ``frame`` attribute of single results: rhoprop's inertial frame (docs/conventions.md,
 #: "Frames and dynamics").
-INERTIAL_FRAME = "EME2000 (J2000/GCRF axes, precession-nutation neglected)"
 #: The ``rtn_frame`` attribute: what the RTN components are taken in.
 RTN_FRAME = "RTN of the mean orbit: R = r/|r|, N = r x v/|r x v|, T = N x R"
 _STATE_UNITS = "m (x, y, z), m/s (vx, vy, vz)"
@@ -58,7 +57,7 @@ def optional_import(module: str, what: str) -> Any:
         return importlib.import_module(module)
     except ImportError:
         raise ImportError(
-            f"{what} needs the optional package {module}: pip install 'rhoprop[xarray]'"
+            f"{what} needs the optional package {module}: pip install {module}"
         ) from None
 
 
@@ -185,12 +184,13 @@ class StateMoments:
     Attributes:
         epoch: initial epoch (UTC).
         times: output times, s from ``epoch`` (nt,).
-        mean: mean state (nt, 6), m and m/s, inertial.
+        mean: mean state (nt, 6), m and m/s, in ``frame``.
         covariance: state covariance (nt, 6, 6), m^2, m^2/s, m^2/s^2.
         count: for a Monte Carlo, the number of members behind each time's statistics
             (the survivors, (nt,)); None for a filter or a single trajectory. Where fewer
             than two members remain the covariance is NaN (and the mean too where none
             does).
+        frame: the frame of ``mean`` and ``covariance``.
     """
 
     epoch: np.datetime64
@@ -198,6 +198,41 @@ class StateMoments:
     mean: Array
     covariance: Array
     count: Array | None = None
+    frame: str = "GCRF"
+
+    def at(
+        self, at: EpochLike, *, tolerance: float = DEFAULT_TOLERANCE
+    ) -> tuple[OrbitState, Array]:
+        """The mean state and the covariance (6, 6) at the UTC epoch ``at``: an output's
+        own, else the mean interpolated by a degree-7 Hermite polynomial (as
+        :meth:`Trajectory.state_at`, checked to ``tolerance`` m) and the covariance
+        interpolated linearly between the two outputs around it in the RTN frame of
+        their means (position and velocity blocks alike), then turned into the
+        interpolated mean's axes: the covariance's growth and its turn with the orbit
+        are kept, what changes faster than the output spacing is not. A ValueError
+        where the mean cannot be interpolated (outside the outputs, too far apart, next
+        to a decay) or the covariance is NaN."""
+        epoch = to_datetime64(at, "at")
+        tol = _validate.positive("tolerance", tolerance)
+        t = seconds_between(self.epoch, epoch)
+        try:
+            r, v = interpolate_state(self.times, self.mean[:, :3], self.mean[:, 3:], t, tol)
+        except ValueError as err:
+            raise ValueError(f"moments at {epoch}: {err}") from None
+        hi = int(np.clip(np.searchsorted(self.times, t), 1, len(self.times) - 1))
+        lo = hi - 1
+        f = float(np.clip((t - self.times[lo]) / (self.times[hi] - self.times[lo]), 0.0, 1.0))
+        big = np.zeros((2, 6, 6))
+        big[:, :3, :3] = big[:, 3:, 3:] = rtn_basis(
+            self.mean[[lo, hi], :3], self.mean[[lo, hi], 3:]
+        )
+        rtn = big @ self.covariance[[lo, hi]] @ np.swapaxes(big, 1, 2)
+        here = np.zeros((6, 6))
+        here[:3, :3] = here[3:, 3:] = frames.rtn_basis(r, v)
+        cov = here.T @ ((1.0 - f) * rtn[0] + f * rtn[1]) @ here
+        if not np.isfinite(cov).all():
+            raise ValueError(f"moments at {epoch}: no covariance there (NaN)")
+        return OrbitState(epoch, r, v, self.frame), (cov + cov.T) / 2.0
 
     @property
     def epochs(self) -> Array:
@@ -272,6 +307,8 @@ class Trajectory:
             altitude, or None. Outputs stop before it.
         evaluations: number of right-hand-side evaluations.
         clipped: number of density evaluations clipped at zero.
+        frame: the frame of the states, the initial state's (one of
+            :data:`rhoprop.frames.INERTIAL_FRAMES`).
     """
 
     epoch: np.datetime64
@@ -281,6 +318,7 @@ class Trajectory:
     decayed_at: float | None = None
     evaluations: int = 0
     clipped: int = 0
+    frame: str = "GCRF"
 
     @property
     def epochs(self) -> Array:
@@ -299,12 +337,12 @@ class Trajectory:
         epoch ``at`` (an output's own state, else interpolated between the outputs by a
         degree-7 Hermite polynomial, :mod:`rhoprop.propagation.interpolate`). An epoch
         outside the outputs, next to a decayed one, or where the outputs are too far apart
-        to interpolate to ``tolerance`` m (the fits of degree 7 and 5 differ by more) is a
-        ValueError saying so."""
+        to interpolate to ``tolerance`` m (twice the difference of the fits of degree 7 and
+        9 exceeds it) is a ValueError saying so."""
         if isinstance(at, bool):
             raise TypeError("at must be an output index or a UTC epoch, got a bool")
         if isinstance(at, (int, np.integer)):
-            return OrbitState(self.epochs[at], self.positions[at], self.velocities[at])
+            return OrbitState(self.epochs[at], self.positions[at], self.velocities[at], self.frame)
         epoch = to_datetime64(at, "at")
         tol = _validate.positive("tolerance", tolerance)
         t = seconds_between(self.epoch, epoch)
@@ -312,11 +350,12 @@ class Trajectory:
             r, v = interpolate_state(self.times, self.positions, self.velocities, t, tol)
         except ValueError as err:
             raise ValueError(f"state_at({epoch}): {err}") from None
-        return OrbitState(epoch, r, v)
+        return OrbitState(epoch, r, v, self.frame)
 
     def moments(self) -> StateMoments:
         """The states with zero covariance (a deterministic orbit)."""
-        return StateMoments(self.epoch, self.times, self.states, np.zeros((len(self.times), 6, 6)))
+        zero = np.zeros((len(self.times), 6, 6))
+        return StateMoments(self.epoch, self.times, self.states, zero, frame=self.frame)
 
     def to_xarray(self) -> xarray.Dataset:
         """The trajectory as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
@@ -330,13 +369,13 @@ class Trajectory:
         dims = ("epoch", "component")
         ds: xarray.Dataset = xr.Dataset(
             {
-                "position": _vector(dims, self.positions, "m", "position", INERTIAL_FRAME),
-                "velocity": _vector(dims, self.velocities, "m/s", "velocity", INERTIAL_FRAME),
+                "position": _vector(dims, self.positions, "m", "position", self.frame),
+                "velocity": _vector(dims, self.velocities, "m/s", "velocity", self.frame),
             },
             coords={**epoch_coords(self.epochs, self.times), **label_coords("component")},
             attrs=dataset_attrs(
                 "Trajectory",
-                INERTIAL_FRAME,
+                self.frame,
                 initial_epoch=iso_utc(self.epoch),
                 decayed_at_s=np.nan if self.decayed_at is None else float(self.decayed_at),
                 evaluations=int(self.evaluations),
@@ -346,10 +385,13 @@ class Trajectory:
         return ds
 
 
-def trajectory_from_core(epoch: np.datetime64, out: tuple[Any, ...]) -> Trajectory:
-    """A :class:`Trajectory` from the tuple ``_core.propagate`` returns."""
+def trajectory_from_core(
+    epoch: np.datetime64, out: tuple[Any, ...], frame: str = "GCRF"
+) -> Trajectory:
+    """A :class:`Trajectory` in ``frame`` from the tuple ``core_propagate`` returns."""
     t, states, decayed_at, evaluations, clipped = out
     return Trajectory(
+        frame=frame,
         epoch=epoch,
         times=t,
         positions=states[:, :3],
@@ -401,6 +443,8 @@ class MonteCarloResult:
         drag_sigma: relative 1-sigma of Cd*A/m the members were drawn with (0: none).
         drag_factors: factor on Cd*A/m of each member (n,), exp(drag_sigma c) with
             c ~ N(0, 1) (all 1 when ``drag_sigma`` is 0); None for results built by hand.
+        frame: the frame of positions, velocities and the reference, the initial
+            state's (:data:`rhoprop.frames.INERTIAL_FRAMES`).
     """
 
     epoch: np.datetime64
@@ -419,6 +463,7 @@ class MonteCarloResult:
     reference_velocities: Array
     drag_sigma: float = 0.0
     drag_factors: Array | None = None
+    frame: str = "GCRF"
 
     @property
     def epochs(self) -> Array:
@@ -468,7 +513,14 @@ class MonteCarloResult:
         their number per time (``count``)."""
         alive = self.alive
         mean, cov = sample_moments(np.concatenate([self.positions, self.velocities], axis=2), alive)
-        return StateMoments(self.epoch, self.times, mean, cov, alive.sum(axis=0))
+        return StateMoments(self.epoch, self.times, mean, cov, alive.sum(axis=0), self.frame)
+
+    def moments_at(
+        self, at: EpochLike, *, tolerance: float = DEFAULT_TOLERANCE
+    ) -> tuple[OrbitState, Array]:
+        """The members' mean state and covariance (6, 6) at the UTC epoch ``at``,
+        interpolated between the outputs (:meth:`StateMoments.at`)."""
+        return self.moments().at(at, tolerance=tolerance)
 
     def to_xarray(self, *, members: bool = True) -> xarray.Dataset:
         """The ensemble as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
@@ -492,8 +544,8 @@ class MonteCarloResult:
         data: dict[str, Any] = {}
         if members:
             mvec = ("member", "epoch", "component")
-            data["position"] = _vector(mvec, self.positions, "m", "position", INERTIAL_FRAME)
-            data["velocity"] = _vector(mvec, self.velocities, "m/s", "velocity", INERTIAL_FRAME)
+            data["position"] = _vector(mvec, self.positions, "m", "position", self.frame)
+            data["velocity"] = _vector(mvec, self.velocities, "m/s", "velocity", self.frame)
             data["rtn_error"] = (
                 ("member", "epoch", "rtn"),
                 np.asarray(self.rtn_errors, dtype=float),
@@ -538,11 +590,11 @@ class MonteCarloResult:
             ("mean_orbit_position", _padded(self.mean_orbit.positions, nt), "m"),
             ("mean_orbit_velocity", _padded(self.mean_orbit.velocities, nt), "m/s"),
         ):
-            data[name] = _vector(vec, values, units, name.replace("_", " "), INERTIAL_FRAME)
+            data[name] = _vector(vec, values, units, name.replace("_", " "), self.frame)
         rtn_attrs = {"units": "m", "frame": "RTN of the reference orbit"}
         data["rtn_mean"] = (("epoch", "rtn"), stats.mean, rtn_attrs)
         data["rtn_std"] = (("epoch", "rtn"), stats.std, {**rtn_attrs, "ddof": 1})
-        data.update(moment_vars(("epoch",), moments.mean, moments.covariance, INERTIAL_FRAME))
+        data.update(moment_vars(("epoch",), moments.mean, moments.covariance, self.frame))
         ds: xarray.Dataset = xr.Dataset(
             data,
             coords={
@@ -552,7 +604,7 @@ class MonteCarloResult:
             },
             attrs=dataset_attrs(
                 "MonteCarloResult",
-                INERTIAL_FRAME,
+                self.frame,
                 rtn_frame=RTN_FRAME,
                 initial_epoch=iso_utc(self.epoch),
                 members=len(self.decay_times),
@@ -575,8 +627,8 @@ class CcspResult:
     Attributes:
         epoch: initial epoch (UTC).
         times: update times, s from ``epoch`` (nt,), starting at 0.
-        mean: mean state (nt, 6), m and m/s, inertial.
-        covariance: state covariance (nt, 6, 6), SI units.
+        mean: mean state (nt, 6), m and m/s, in ``frame``.
+        covariance: state covariance (nt, 6, 6), SI units, in ``frame``.
         rtn_covariance: position covariance in the RTN frame of the mean (nt, 3, 3), m^2.
         along_track_std: sqrt of the along-track variance (nt,), m.
         cross_covariance: covariance of the state with the normalised density offset kappa
@@ -592,14 +644,20 @@ class CcspResult:
         element_mean: the filter's own mean in equinoctial elements (nt, 6): a (m, the
             energy semi-major axis, free of the J2 swing), h, k, p, q, lambda (rad, in
             (-pi, pi]), in the axes of :func:`rhoprop.frames.to_equinoctial` (with
-            ``semi_major="energy"``) with the initial state as reference; None for
-            Cartesian runs (``coordinates="cartesian"``).
+            ``semi_major="energy"``) with ``reference`` as reference, in the axes the
+            run integrated in (TEME of the initial epoch:
+            :mod:`rhoprop.propagation.run_frame`; :meth:`to_elements` takes states of
+            ``frame`` there, :meth:`from_elements` back); None for Cartesian runs
+            (``coordinates="cartesian"``).
         element_covariance: the filter's covariance in those elements (nt, 6, 6): the
             Gaussian that holds for weeks (``covariance`` is its linear map to Cartesian
             coordinates, which past about a week misses the along-track curvature);
             None for Cartesian runs.
-        reference: the initial state (6,) whose axes the elements are in; None for
+        reference: the initial state (6,) in the axes the run integrated in (equal to
+            the initial state for a TEME one), whose axes the elements are in; None for
             results built by hand.
+        frame: the frame of ``mean``, ``covariance`` and the cross-covariances, the
+            initial state's (:data:`rhoprop.frames.INERTIAL_FRAMES`).
     """
 
     epoch: np.datetime64
@@ -615,11 +673,39 @@ class CcspResult:
     element_mean: Array | None = None
     element_covariance: Array | None = None
     reference: Array | None = None
+    frame: str = "GCRF"
 
     @property
     def epochs(self) -> Array:
         """Update epochs, datetime64[ns] (nt,)."""
         return offsets_to_epochs(self.epoch, self.times)
+
+    def _run_axes(self) -> Array:
+        """The rotation from the axes the run integrated in (TEME of the initial epoch)
+        to ``frame``'s (the identity for TEME)."""
+        if self.frame == "TEME":
+            return np.eye(3)
+        return frames.teme_to_gcrf_matrix(self.epoch)
+
+    def to_elements(self, states: npt.ArrayLike) -> Array:
+        """States (6,) or (n, 6) in ``frame``, m and m/s, as the filter's equinoctial
+        elements (energy semi-major axis, the axes of ``reference``): comparable with
+        ``element_mean`` and ``element_covariance``, e.g. a Monte Carlo's members."""
+        x = np.asarray(states, dtype=float)
+        if self.reference is None:
+            raise ValueError("a result built by hand has no reference axes for elements")
+        rot = self._run_axes()
+        inside = np.concatenate([x[..., :3] @ rot, x[..., 3:] @ rot], axis=-1)
+        return frames.to_equinoctial(inside, self.reference, semi_major="energy")
+
+    def from_elements(self, elements: npt.ArrayLike) -> Array:
+        """The filter's equinoctial elements (6,) or (n, 6) back to states in ``frame``
+        (the inverse of :meth:`to_elements`)."""
+        if self.reference is None:
+            raise ValueError("a result built by hand has no reference axes for elements")
+        x = frames.from_equinoctial(elements, self.reference, semi_major="energy")
+        rot = self._run_axes()
+        return np.concatenate([x[..., :3] @ rot.T, x[..., 3:] @ rot.T], axis=-1)
 
     def arc_sag_share(self) -> Array:
         """Per output (nt,), the along-track arc's radial sag over the radial 1-sigma
@@ -635,7 +721,14 @@ class CcspResult:
 
     def moments(self) -> StateMoments:
         """The filter's mean and covariance."""
-        return StateMoments(self.epoch, self.times, self.mean, self.covariance)
+        return StateMoments(self.epoch, self.times, self.mean, self.covariance, frame=self.frame)
+
+    def moments_at(
+        self, at: EpochLike, *, tolerance: float = DEFAULT_TOLERANCE
+    ) -> tuple[OrbitState, Array]:
+        """The mean state and covariance (6, 6) at the UTC epoch ``at``, interpolated
+        between the outputs (:meth:`StateMoments.at`)."""
+        return self.moments().at(at, tolerance=tolerance)
 
     def to_xarray(self) -> xarray.Dataset:
         """The filter's outputs as an ``xarray.Dataset`` (needs the ``[xarray]`` extra).
@@ -647,15 +740,13 @@ class CcspResult:
         ``decayed_at_s`` (NaN: the filter ran to the end), rhoprop version.
         """
         xr = optional_import("xarray", "CcspResult.to_xarray()")
-        data = moment_vars(
-            ("epoch",), self.mean, self.covariance, INERTIAL_FRAME, self.rtn_covariance
-        )
+        data = moment_vars(("epoch",), self.mean, self.covariance, self.frame, self.rtn_covariance)
         data["cross_covariance"] = _cross_covariance_var(
-            self.cross_covariance, "the normalised density offset kappa"
+            self.cross_covariance, "the normalised density offset kappa", self.frame
         )
         if self.drag_cross_covariance is not None:
             data["drag_cross_covariance"] = _cross_covariance_var(
-                self.drag_cross_covariance, "the normalised Cd*A/m error"
+                self.drag_cross_covariance, "the normalised Cd*A/m error", self.frame
             )
         ds: xarray.Dataset = xr.Dataset(
             data,
@@ -665,7 +756,7 @@ class CcspResult:
             },
             attrs=dataset_attrs(
                 "CcspResult",
-                INERTIAL_FRAME,
+                self.frame,
                 rtn_frame=RTN_FRAME,
                 initial_epoch=iso_utc(self.epoch),
                 decayed_at_s=np.nan if self.decayed_at is None else float(self.decayed_at),
@@ -675,7 +766,7 @@ class CcspResult:
         return ds
 
 
-def _cross_covariance_var(values: Any, with_what: str) -> tuple[Any, ...]:
+def _cross_covariance_var(values: Any, with_what: str, frame: str) -> tuple[Any, ...]:
     """An xarray variable (dims, values, attributes) of the state's covariance with a
     consider parameter, per epoch."""
     return (
@@ -684,6 +775,6 @@ def _cross_covariance_var(values: Any, with_what: str) -> tuple[Any, ...]:
         {
             "units": "m (x, y, z), m/s (vx, vy, vz)",
             "long_name": f"covariance of the state with {with_what}",
-            "frame": INERTIAL_FRAME,
+            "frame": frame,
         },
     )

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from .. import _validate
+from .. import _validate, frames
 from ..constants import MU, R_EARTH, R_POLE
 from ..time import EpochLike, to_datetime64
 
@@ -24,7 +24,7 @@ SPEED_RANGE = (0.3, 1.5)
 
 @dataclass(frozen=True, eq=False)
 class OrbitState:
-    """An inertial orbit state.
+    """An inertial orbit state in a named frame.
 
     Args:
         epoch: UTC epoch: ISO string (``"2002-09-07T01:00:00Z"``, also with a ``+hh:mm``
@@ -32,27 +32,49 @@ class OrbitState:
             (see :mod:`rhoprop.time`; Julian dates through :func:`rhoprop.time.from_jd`).
         position: inertial position (3,), m.
         velocity: inertial velocity (3,), m/s.
+        frame: the frame of ``position`` and ``velocity``, one of
+            :data:`rhoprop.frames.INERTIAL_FRAMES`: ``"GCRF"`` (default; ``"EME2000"``
+            and ``"ICRF"`` name the same axes here) or ``"TEME"`` (SGP4's, as element sets
+            give it). An Earth-fixed (ITRF) state is converted first with
+            :func:`rhoprop.frames.convert`.
 
-    The inertial frame is treated as J2000/GCRF; the Earth-fixed frame is a rotation about
-    z by GMST (IAU-82), precession-nutation neglected.
+    Runs integrate in the true-of-date axes of the initial epoch (TEME's: the zonal
+    field's pole, the Earth's rotation by GMST and the Sun and Moon of date are written
+    there); a GCRF state is rotated into them and every result back out, so results are
+    in the frame of their initial state and say so (``frame``).
 
     Raises:
         ValueError: for a position inside the WGS-84 ellipsoid or beyond 10 Earth radii,
-            a speed outside 0.3-1.5 times the circular speed at that radius, and values
-            that look like km or km/s (the message says what was expected).
+            a speed outside 0.3-1.5 times the circular speed at that radius, values that
+            look like km or km/s (the message says what was expected), or an unknown
+            frame.
     """
 
     epoch: np.datetime64
     position: np.ndarray
     velocity: np.ndarray
+    frame: str
 
-    def __init__(self, epoch: EpochLike, position: npt.ArrayLike, velocity: npt.ArrayLike) -> None:
+    def __init__(
+        self,
+        epoch: EpochLike,
+        position: npt.ArrayLike,
+        velocity: npt.ArrayLike,
+        frame: str = "GCRF",
+    ) -> None:
         object.__setattr__(self, "epoch", to_datetime64(epoch))
         r = _validate.vector3("position", position)
         v = _validate.vector3("velocity", velocity)
         _check_orbit(r, v)
         object.__setattr__(self, "position", r)
         object.__setattr__(self, "velocity", v)
+        object.__setattr__(self, "frame", frames.frame_name("frame", frame, frames.INERTIAL_FRAMES))
+
+    def in_frame(self, frame: str) -> OrbitState:
+        """This state converted to inertial ``frame`` (:func:`rhoprop.frames.convert`)."""
+        target = frames.frame_name("frame", frame, frames.INERTIAL_FRAMES)
+        s = frames.convert(self.epoch, self.state, self.frame, target)
+        return OrbitState(self.epoch, s[:3], s[3:], target)
 
     @property
     def state(self) -> np.ndarray:
@@ -60,19 +82,25 @@ class OrbitState:
         return np.concatenate([self.position, self.velocity])
 
     def __eq__(self, other: object) -> bool:
-        """Equal epochs and bitwise-equal position and velocity (the dataclass default
+        """Equal epochs and frames and bitwise-equal position and velocity (the dataclass default
         compared the arrays element-wise and raised)."""
         if not isinstance(other, OrbitState):
             return NotImplemented
         return bool(
             self.epoch == other.epoch
+            and self.frame == other.frame
             and np.array_equal(self.position, other.position)
             and np.array_equal(self.velocity, other.velocity)
         )
 
     def __hash__(self) -> int:
         return hash(
-            (int(self.epoch.astype(np.int64)), self.position.tobytes(), self.velocity.tobytes())
+            (
+                int(self.epoch.astype(np.int64)),
+                self.frame,
+                self.position.tobytes(),
+                self.velocity.tobytes(),
+            )
         )
 
 

@@ -414,16 +414,20 @@ class SpaceWeather:
                 t, self.f107_obs[day - 1], self.f107_obs_ctr81[day], ap, lead, f_sigma, a_sigma
             )
             if len(t) and lead.max() > 0:
-                self._warn_predicted(float(lead.max()))
+                self._warn_predicted()
         self._check_finite(drivers)
         return drivers
 
-    def _warn_predicted(self, lead: float) -> None:
+    def _warn_predicted(self) -> None:
+        """The warning, its text the same for every call on this record so that Python
+        shows it once per call site (a 12-day run asked for drivers ~100 times, each with
+        its own lead in the text: a wall of warnings); ``Drivers.lead_time`` has the
+        leads."""
         assert self._forecast is not None
         last = self.date[self._n_daily - 1]
         warnings.warn(
-            f"predicted space-weather drivers in use: epochs up to {lead:.1f} days after the "
-            f"last observed day ({self._forecast - _DAY}) of {self.source} (forecast to "
+            f"predicted space-weather drivers in use: epochs after the last observed day "
+            f"({self._forecast - _DAY}) of {self.source} (forecast to "
             f"{last}); density sigma grows with lead time (rhoprop.spaceweather."
             "forecast_sigma). Run 'rhoprop data refresh' for the latest record.",
             PredictedDriversWarning,

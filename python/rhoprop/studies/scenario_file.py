@@ -124,7 +124,7 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
     sc = _table(doc, "scenario")
     _unknown(sc, "scenario", {"name", "epoch", "duration"})
     st = _table(doc, "state")
-    _unknown(st, "state", {"position", "velocity"})
+    _unknown(st, "state", {"position", "velocity", "frame"})
     cr = _table(doc, "spacecraft")
     _unknown(cr, "spacecraft", {"cd", "area_to_mass"})
     try:
@@ -132,6 +132,7 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
             _get(sc, "scenario", "epoch", str),
             _get(st, "state", "position", list),
             _get(st, "state", "velocity", list),
+            _get(st, "state", "frame", str) if "frame" in st else "GCRF",
         )
     except (ValueError, TypeError) as err:
         raise ScenarioError(f"[state] / scenario.epoch: {err}") from err
