@@ -20,6 +20,18 @@ and writes ``benches/results/screening_all.json``:
 
       RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py --all
       [--days 3] [--distance 5000] [--limit N] [--no-pc]
+
+``--dask 1,2,4`` runs the same all-on-all screen (``--limit`` objects, default 1,500)
+locally and then with every stage on a ``distributed.LocalCluster`` of 1, 2 and 4
+single-threaded worker processes, checks that each gives the local run's events, and
+prints the wall time per stage for each and a fitted model of how a stage's time splits
+between work that divides among workers and a part that does not (the client's own work,
+transfers, scheduling): t(N) = a + b / N, least squares over the runs. With N machines
+of this one's speed the model extrapolates b / N; on one 2-core machine, 4 workers only
+show the overhead of the split. Writes ``benches/results/screening_dask.json``:
+
+      RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py --dask 1,2,4
+      [--limit 1500] [--days 1] [--no-pc]
 """
 
 from __future__ import annotations
@@ -66,7 +78,11 @@ def main() -> None:
     parser.add_argument("--all", action="store_true", help="all-on-all (screen_all)")
     parser.add_argument("--limit", type=int, default=None, help="--all: first N objects only")
     parser.add_argument("--no-pc", action="store_true", help="--all: skip the Pc stage")
+    parser.add_argument("--dask", default=None, help="worker counts, e.g. 1,2,4 (see docs)")
     args = parser.parse_args()
+    if args.dask:
+        dask_scaling(args)
+        return
     if args.all:
         all_on_all(args)
         return
@@ -218,6 +234,76 @@ def all_on_all(args: argparse.Namespace) -> None:
         "threads": res.threads,
         "chunks": res.chunks,
     }
+    out.write_text(json.dumps(record, indent=2, default=str) + "\n")
+
+
+def dask_scaling(args: argparse.Namespace) -> None:
+    """The all-on-all screen locally and on LocalClusters of ``--dask`` workers."""
+    import distributed
+
+    from rhoprop.conjunction import screen_all
+    from rhoprop.studies.scenarios import default_models
+
+    snapshot = Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz"
+    cat = catalog.load(snapshot, errors="record", nonpositive_bstar="prior")
+    objs = cat.objects[: args.limit or 1500]
+    start = max(o.state.epoch for o in objs)
+    days = args.days if args.days != 3.0 else 1.0
+    end = start + np.timedelta64(int(days * 86400), "s")
+    models = default_models()
+    kw = dict(start=start, end=end, distance=args.distance, pc=not args.no_pc)
+    kw.update(errors="record", progress=False)
+    screen_all(objs, models, **kw)  # warm: the atlas tiles sampled and cached
+    local = screen_all(objs, models, **kw)
+    key = [(e.id1, e.id2, e.tca) for e in local.events]
+    runs = {"local": local}
+    for n in (int(x) for x in args.dask.split(",")):
+        with (
+            distributed.LocalCluster(
+                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0"
+            ) as cluster,
+            distributed.Client(cluster) as client,
+        ):
+            res = screen_all(objs, models, client=client, **kw)
+        same = [(e.id1, e.id2, e.tca) for e in res.events] == key and np.array_equal(
+            res.pc_models, local.pc_models, equal_nan=True
+        )
+        print(f"{n} worker(s): {len(res.events)} events, same as local: {same}", flush=True)
+        runs[f"{n} workers"] = res
+    stages = [k for k in local.timings if max(r.timings[k] for r in runs.values()) > 0.05]
+    print(
+        f"\n{len(objs)} objects, {days:g} day(s), {args.distance:g} m, "
+        f"{len(local.events)} events; wall seconds per stage"
+    )
+    print("| stage | " + " | ".join(runs) + " | a (s) | b (s) |")
+    print("| --- |" + " ---: |" * (len(runs) + 2))
+    counts = np.array([int(k.split()[0]) for k in runs if k != "local"], dtype=float)
+    cores = os.cpu_count() or 1
+    fit = counts <= cores  # more workers than cores measure only the split's overhead
+    model = {}
+    for stage in [*stages, "wall"]:
+        times = [r.wall if stage == "wall" else r.timings[stage] for r in runs.values()]
+        y = np.array(times[1:])[fit]
+        design = np.column_stack([np.ones(fit.sum()), 1 / counts[fit]])
+        a, b = np.linalg.lstsq(design, y)[0]
+        model[stage] = {
+            "a": float(a),
+            "b": float(b),
+            "seconds": dict(zip(runs, times, strict=True)),
+        }
+        row = " | ".join(f"{t:.1f}" for t in times)
+        print(f"| {stage} | {row} | {a:.1f} | {b:.1f} |")
+    wall = model["wall"]
+    print(
+        f"a + b / N fitted on the runs with at most {cores} workers (this machine's cores); "
+        "a: what does not divide (client work: the density fields, the per-event Pc, "
+        "transfers), b: what does"
+    )
+    for n in (8, 32):
+        print(f"extrapolated to {n} machines like this one: {wall['a'] + wall['b'] / n:.0f} s")
+    out = Path(__file__).parent / "results" / "screening_dask.json"
+    out.parent.mkdir(exist_ok=True)
+    record = {"machine": info(), "objects": len(objs), "days": days, "model": model}
     out.write_text(json.dumps(record, indent=2, default=str) + "\n")
 
 

@@ -269,3 +269,25 @@ def test_options_that_must_be_positive_are_refused_by_name_before_any_output(tmp
         err = capsys.readouterr().err
         assert f"argument {option}: must be a " in err and ("positive" in err or ">= 0" in err)
         assert not out.exists()
+
+
+def test_screen_on_a_dask_scheduler_writes_the_local_events(tmp_path, capsys):
+    # `rhoprop screen --scheduler ADDRESS` runs every stage on that cluster: the same
+    # event table as the local run (the synthetic sample, 2,000 km: 4 events, no Pc).
+    distributed = pytest.importorskip("distributed")
+    import pyarrow.parquet as pq
+
+    sample = Path(__file__).parent / "data" / "sample.tle"
+    args = ["screen", str(sample), "--start", "2002-09-07T00:00", "--end", "2002-09-07T06:00"]
+    args += ["--distance", "2000000", "--model", "exponential", "--no-pc", "--no-cdm"]
+    assert main([*args, "--out", str(tmp_path / "local")]) == 0
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0"
+    ) as cluster:
+        where = cluster.scheduler_address
+        assert main([*args, "--out", str(tmp_path / "dask"), "--scheduler", where]) == 0
+    local = pq.read_table(tmp_path / "local" / "events.parquet").to_pydict()
+    remote = pq.read_table(tmp_path / "dask" / "events.parquet").to_pydict()
+    assert len(local["tca"]) >= 1 and remote["tca"] == local["tca"]
+    assert remote["miss_distance"] == local["miss_distance"]
+    capsys.readouterr()

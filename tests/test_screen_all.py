@@ -388,14 +388,23 @@ def test_screen_all_stops_on_ctrl_c():
     assert time.perf_counter() - sent < 10.0
 
 
-def test_dask_pc_stage_equals_local(shell):
-    # The Pc stage's CCSP on a 2-worker LocalCluster gives the local run's numbers.
+def test_dask_screen_equals_local(shell):
+    # Every stage on a 2-worker LocalCluster (propagation in blocks of objects, the sieve
+    # in ranges of grid intervals, the refinement in slices of candidates, the Pc stage's
+    # CCSP), over several time chunks (a small max_memory): the local run's events, states,
+    # stretches, counts and Pc, bit for bit.
     distributed = pytest.importorskip("distributed")
     objs, start = shell
     objs = objs[:80]
-    kw = dict(start=start, end=add_seconds(start, 6 * 3600.0), distance=30e3, progress=False)
+    kw = dict(
+        start=start,
+        end=add_seconds(start, 6 * 3600.0),
+        distance=30e3,
+        progress=False,
+        max_memory=1e5,  # 26 samples a chunk for 80 objects
+    )
     local = screen_all(objs, MODEL, **kw)
-    assert len(local.events) >= 1
+    assert len(local.events) >= 1 and local.chunks >= 3
     with (
         distributed.LocalCluster(
             n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
@@ -403,9 +412,13 @@ def test_dask_pc_stage_equals_local(shell):
         distributed.Client(cluster) as client,
     ):
         remote = screen_all(objs, MODEL, client=client, **kw)
-    assert [(e.id1, e.id2, e.tca) for e in remote.events] == [
-        (e.id1, e.id2, e.tca) for e in local.events
+    assert [(e.id1, e.id2, e.tca, e.within, e.edge) for e in remote.events] == [
+        (e.id1, e.id2, e.tca, e.within, e.edge) for e in local.events
     ]
+    for a, b in zip(remote.events, local.events, strict=True):
+        np.testing.assert_array_equal(a.state1, b.state1)
+        np.testing.assert_array_equal(a.state2, b.state2)
+    assert remote.counts == local.counts and remote.chunks == local.chunks
     np.testing.assert_array_equal(remote.pc_models, local.pc_models)
 
 

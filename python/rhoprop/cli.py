@@ -144,6 +144,7 @@ def _screen(args: argparse.Namespace) -> int:
         command=args.command_line,
         max_span_days=args.max_span,
         cdm_min_pc=None if args.no_cdm else args.cdm_min_pc,
+        scheduler=args.scheduler,
     )
     return 0
 
@@ -628,6 +629,11 @@ def build_parser() -> argparse.ArgumentParser:
         "memory; 0: no limit",
     )
     scr.add_argument("--out", default="rhoprop-screen", help="output directory")
+    scr.add_argument(
+        "--scheduler",
+        default=None,
+        help="Dask scheduler address: every stage runs on that cluster (same events)",
+    )
     scr.add_argument(
         "--strict",
         action="store_true",

