@@ -494,3 +494,22 @@ def test_epoch_strings_with_10_to_18_fractional_digits_round_to_the_nanosecond(t
     assert rp.time.to_datetime64(text) == np.datetime64(expect, "ns")
     state = rp.OrbitState(text, [7e6, 0.0, 0.0], [0.0, 7.5e3, 0.0])
     assert state.epoch == np.datetime64(expect, "ns")
+
+
+def test_a_skyfield_time_is_an_epoch():
+    # skyfield's Time (its UTC fields, leap seconds as 23:59:60) is accepted like
+    # astropy's; it was refused with "got Time".
+    skyfield = pytest.importorskip("skyfield.api")
+    ts = skyfield.load.timescale(builtin=True)
+    assert rp.time.to_datetime64(ts.utc(2026, 3, 15, 6, 30, 12.25)) == np.datetime64(
+        "2026-03-15T06:30:12.250"
+    )
+    many = rp.time.to_datetime64_array(ts.utc(2026, 3, 15, 6, [0, 30]))
+    np.testing.assert_array_equal(
+        many, np.array(["2026-03-15T06:00", "2026-03-15T06:30"], dtype="datetime64[ns]")
+    )
+    # 2016-12-31T23:59:60.5, inside the leap second: its end, as rhoprop's strings.
+    leap = rp.time.to_datetime64(ts.utc(2016, 12, 31, 23, 59, 60.5))
+    assert leap == rp.time.to_datetime64("2016-12-31T23:59:60.5Z")
+    with pytest.raises(ValueError, match="skyfield Time of shape"):
+        rp.time.to_datetime64(ts.utc(2026, 3, 15, 6, [0, 30]))

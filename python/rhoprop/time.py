@@ -182,6 +182,34 @@ def _astropy_time(value: Any) -> bool:
     return module is not None and isinstance(value, module.Time)
 
 
+def _skyfield_time(value: Any) -> bool:
+    """Whether ``value`` is a skyfield Time (without importing skyfield)."""
+    module = sys.modules.get("skyfield.timelib")
+    return module is not None and isinstance(value, module.Time)
+
+
+def _from_skyfield(value: Any, name: str) -> NDArray[np.datetime64]:
+    """A skyfield Time (any shape) as UTC ``datetime64[ns]``: its own UTC calendar fields
+    (a leap second reads 23:59:60, as rhoprop's strings do), to the nanosecond."""
+    utc = value.utc
+    fields = [np.atleast_1d(np.asarray(f)) for f in utc]
+    shape = np.shape(np.asarray(utc[0]))
+    year, month, day, hour, minute = (f.astype(np.int64).ravel() for f in fields[:5])
+    second = fields[5].astype(float).ravel()
+    whole = np.floor(second).astype(np.int64)
+    nanos = np.rint((second - whole) * 1e9).astype(np.int64)
+    carry = nanos >= 1_000_000_000
+    whole, nanos = whole + carry, np.where(carry, nanos - 1_000_000_000, nanos)
+    texts = [
+        f"{y:04d}-{mo:02d}-{d:02d}T{h:02d}:{mi:02d}:{sec:02d}.{ns:09d}Z"
+        for y, mo, d, h, mi, sec, ns in zip(
+            year, month, day, hour, minute, whole, nanos, strict=True
+        )
+    ]
+    out = np.array([_parse(t, name) for t in texts], dtype="datetime64[ns]")
+    return out.reshape(shape)
+
+
 def _check_range(value: np.datetime64 | NDArray[np.datetime64], name: str) -> None:
     """ValueError naming ``name`` for NaT or epochs outside [1678, 2262) (checked in whole
     seconds, so coarse units never overflow)."""
@@ -340,7 +368,8 @@ def _jd_to_datetime64(jd1: Any, jd2: Any, name: str) -> NDArray[np.datetime64]:
 def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
     """One UTC epoch as ``datetime64[ns]``: an ISO-8601 string (``Z`` or ``+hh:mm`` zone
     converted to UTC; ``23:59:60`` on leap-second days), ``datetime`` (naive = UTC; aware
-    converted), ``date``, ``numpy.datetime64`` or a scalar astropy ``Time`` (any scale).
+    converted), ``date``, ``numpy.datetime64``, a scalar astropy ``Time`` (any scale) or
+    a scalar skyfield ``Time``.
 
     Raises:
         TypeError: for other types (a Julian date: use :func:`from_jd`).
@@ -365,13 +394,22 @@ def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
             )
         single: np.datetime64 = out.reshape(1)[0]
         return single
+    if _skyfield_time(epoch):
+        sky = _from_skyfield(epoch, name)
+        if sky.ndim != 0:
+            raise ValueError(
+                f"{name} must be one epoch, got a skyfield Time of shape {sky.shape} "
+                "(arrays of epochs go where the API takes several)"
+            )
+        one: np.datetime64 = sky.reshape(1)[0]
+        return one
     if isinstance(epoch, np.ndarray) and epoch.ndim == 0 and epoch.dtype.kind in "MUO":
         item: Any = epoch[()]
         return to_datetime64(item, name)
     hint = " (for a Julian date use rhoprop.time.from_jd)" if _is_number(epoch) else ""
     raise TypeError(
-        f"{name} must be an ISO string, datetime, numpy.datetime64 or astropy Time, got "
-        f"{type(epoch).__name__}{hint}"
+        f"{name} must be an ISO string, datetime, numpy.datetime64, astropy Time or skyfield "
+        f"Time, got {type(epoch).__name__}{hint}"
     )
 
 
@@ -389,6 +427,8 @@ def to_datetime64_array(epochs: EpochsLike, name: str = "epochs") -> NDArray[np.
     """
     if _astropy_time(epochs):
         return _from_time(epochs, name)
+    if _skyfield_time(epochs):
+        return _from_skyfield(epochs, name)
     if isinstance(epochs, (str, _dt.date, np.datetime64)):
         return np.asarray(to_datetime64(epochs, name))
     arr = _no_finer_than_ns(np.asarray(epochs))
