@@ -385,24 +385,19 @@ def to_datetime64(epoch: EpochLike, name: str = "epoch") -> np.datetime64:
         return _parse(epoch, name)
     if isinstance(epoch, (_dt.datetime, _dt.date)):
         return _from_datetime(epoch, name)
-    if _astropy_time(epoch):
-        out = _from_time(epoch, name)
-        if out.ndim != 0:
-            raise ValueError(
-                f"{name} must be one epoch, got an astropy Time of shape {out.shape} "
-                "(arrays of epochs go where the API takes several)"
-            )
-        single: np.datetime64 = out.reshape(1)[0]
-        return single
-    if _skyfield_time(epoch):
-        sky = _from_skyfield(epoch, name)
-        if sky.ndim != 0:
-            raise ValueError(
-                f"{name} must be one epoch, got a skyfield Time of shape {sky.shape} "
-                "(arrays of epochs go where the API takes several)"
-            )
-        one: np.datetime64 = sky.reshape(1)[0]
-        return one
+    for is_kind, convert, kind in (
+        (_astropy_time, _from_time, "an astropy"),
+        (_skyfield_time, _from_skyfield, "a skyfield"),
+    ):
+        if is_kind(epoch):
+            out = convert(epoch, name)
+            if out.ndim != 0:
+                raise ValueError(
+                    f"{name} must be one epoch, got {kind} Time of shape {out.shape} "
+                    "(arrays of epochs go where the API takes several)"
+                )
+            single: np.datetime64 = out.reshape(1)[0]
+            return single
     if isinstance(epoch, np.ndarray) and epoch.ndim == 0 and epoch.dtype.kind in "MUO":
         item: Any = epoch[()]
         return to_datetime64(item, name)

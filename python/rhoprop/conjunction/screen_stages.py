@@ -229,15 +229,30 @@ class DaskStages:
                 )
             )
         out: dict[int, Track] = {}
-        try:
-            for idx, fut in futures:
-                for i, track in zip(idx, fut.result(), strict=True):
-                    out[i] = track
-                    tick(i, track)
-        except BaseException:
-            self.client.cancel([f for _i, f in futures])
-            raise
+
+        def keep(k: int, tracks: list[Track]) -> None:  # as each block comes in
+            for i, track in zip(futures[k][0], tracks, strict=True):
+                out[i] = track
+                tick(i, track)
+
+        self._gather([f for _idx, f in futures], keep)
         return out
+
+    def _gather(
+        self, futures: list[Any], each: Callable[[int, Any], object] | None = None
+    ) -> list[Any]:
+        """The futures' results in order (``each(k, result)`` as each comes in); an
+        error or Ctrl-C cancels the rest."""
+        results = []
+        try:
+            for k, f in enumerate(futures):
+                results.append(f.result())
+                if each is not None:
+                    each(k, results[-1])
+        except BaseException:
+            self.client.cancel(futures)
+            raise
+        return results
 
     def sieve(
         self,
@@ -266,11 +281,7 @@ class DaskStages:
                     pure=False,
                 )
             )
-        try:
-            parts = [f.result() for f in futures]
-        except BaseException:
-            self.client.cancel(futures)
-            raise
+        parts = self._gather(futures)
         i = np.concatenate([p[0] for p in parts]).astype(np.int64)
         j = np.concatenate([p[1] for p in parts]).astype(np.int64)
         k = np.concatenate([p[2] for p in parts]).astype(np.int64)
@@ -293,9 +304,5 @@ class DaskStages:
             self.client.submit(refine_slice, shared, cand[lo:hi], degree, limit, span, pure=False)
             for lo, hi in _parts(len(cand), self.pieces)
         ]
-        try:
-            parts = [f.result() for f in futures]
-        except BaseException:
-            self.client.cancel(futures)
-            raise
+        parts = self._gather(futures)
         return tuple(np.concatenate([p[m] for p in parts]) for m in range(8))
