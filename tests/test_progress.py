@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from rhoprop import progress
 
 
@@ -93,3 +95,38 @@ def test_sampling_tiles_and_a_grown_cache_are_said(monkeypatch, capsys, tmp_path
     assert "the cache grew by 60 MB" in err and "rhoprop cache clear" in err, err
     cli._say_cache_growth(cli._cache_bytes())
     assert capsys.readouterr().err == ""
+
+
+def test_a_log_hears_from_the_process_every_interval_across_stages(monkeypatch):
+    # Stage b starts 0.3 intervals after stage a's last line: its first line comes one
+    # interval after that line, not one interval after its own start (a whole-catalog
+    # screen left 12 s between a stage's last line and the next one's first).
+    import sys
+
+    interval = 0.4
+    monkeypatch.setattr(progress, "LINE_INTERVAL", interval)
+    monkeypatch.setattr(progress, "_POLL", 0.01)
+    monkeypatch.setattr(progress, "_LAST_LINE", [0.0])
+    stamps: list[float] = []
+
+    class Log:
+        def write(self, text: str) -> None:
+            stamps.append(time.monotonic())
+
+        def flush(self) -> None:
+            pass
+
+        def isatty(self) -> bool:
+            return False
+
+    monkeypatch.setattr(sys, "stderr", Log())
+    a = progress._Lines(1, "a", "x")
+    time.sleep(1.1 * interval)
+    a._stop.set()
+    a._thread.join()  # a's last line is its heartbeat at one interval
+    time.sleep(0.3 * interval)
+    b = progress._Lines(1, "b", "x")
+    time.sleep(1.5 * interval)
+    b.close()
+    gaps = np.diff(stamps)
+    assert len(stamps) >= 3 and gaps.max() < 1.2 * interval, gaps
