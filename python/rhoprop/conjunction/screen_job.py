@@ -16,6 +16,7 @@ from ..catalog.job import connect, default_start, max_span_option, need_dask
 from ..catalog.run import MAX_SPAN
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
+from ..progress import ProgressBar
 from ..time import to_datetime64
 from .all_on_all import AllOnAllResult, screen_all
 from .cdm import CdmObject, ConjunctionMessage
@@ -139,10 +140,16 @@ def output_events(
 
         created = np.datetime64("now", "ns")
         (folder.directory / "cdm").mkdir(exist_ok=True)
-        for n in chosen:
-            e = res.events[n]
-            name = f"cdm/{n + 1:05d}_{e.id1}_{e.id2}.cdm"
-            written.append(folder.write_text(name, cdm_text(_message(res, n, created))))
+        # Thousands of messages take tens of seconds: a log hears of it.
+        bar = ProgressBar(len(chosen), "writing CDMs", unit="files")
+        try:
+            for k, n in enumerate(chosen):
+                e = res.events[n]
+                name = f"cdm/{n + 1:05d}_{e.id1}_{e.id2}.cdm"
+                written.append(folder.write_text(name, cdm_text(_message(res, n, created))))
+                bar(k + 1)
+        finally:
+            bar.close()
     except ImportError as err:
         print(f"CDMs not written: {err}", file=sys.stderr)
     return written
