@@ -75,6 +75,8 @@ STAGE_UNITS = {
     "propagation": "objects",
     "sieve": "grid intervals",
     "refinement": "candidates",
+    "Pc (Cd debiasing: orbits)": "objects",
+    "Pc (Cd debiasing: densities)": "blocks of 20,000 points",
     "Pc (CCSP per model)": "objects",
     "Pc (per event)": "events",
 }

@@ -156,8 +156,20 @@ def _catalog_object(obj: Any) -> CatalogObject:
     )
 
 
-def debiased_drag(objs: list[Any], models: dict[str, Any], ref: str) -> dict[str, np.ndarray]:
-    """Per model, each object's Cd*A/m debiased against the reference (m^2/kg)."""
+#: Points of the debiasing's density evaluations per model call: a model library call
+#: holds the interpreter, so the run reports (and its log's heartbeat runs) between them.
+DEBIAS_BLOCK = 20_000
+
+
+def debiased_drag(
+    objs: list[Any],
+    models: dict[str, Any],
+    ref: str,
+    report: Callable[[str, int, int], object] | None = None,
+) -> dict[str, np.ndarray]:
+    """Per model, each object's Cd*A/m debiased against the reference (m^2/kg);
+    ``report(stage, done, total)`` hears of the objects' backward orbits and then of the
+    density evaluations."""
     base = np.array([o.craft.drag_parameter for o in objs])
     out = {ref: base}
     others = [k for k in models if k != ref]
@@ -165,6 +177,8 @@ def debiased_drag(objs: list[Any], models: dict[str, Any], ref: str) -> dict[str
         return out
     epochs, pts, owner = [], [], []
     for m, o in enumerate(objs):
+        if report is not None and m % 100 == 0:
+            report("Pc (Cd debiasing: orbits)", m, len(objs))
         ep, pos = backward_orbit(
             o.state,
             Spacecraft(1.0, o.craft.drag_parameter),
@@ -179,9 +193,20 @@ def debiased_drag(objs: list[Any], models: dict[str, Any], ref: str) -> dict[str
     who = np.concatenate(owner)
     lla = frames.geodetic(frames.inertial_to_fixed(ep_all, pos_all))
     where = (ep_all, lla[:, 0], lla[:, 1], lla[:, 2])
-    rho_ref = np.asarray(models[ref].mean_std(*where)[0], dtype=float)
+    names = [ref, *others]
+    blocks = range(0, len(ep_all), DEBIAS_BLOCK)
+    rho: dict[str, np.ndarray] = {name: np.empty(len(ep_all)) for name in names}
+    done, total = 0, len(names) * len(blocks)
+    for name in names:
+        for lo in blocks:
+            part = tuple(w[lo : lo + DEBIAS_BLOCK] for w in where)
+            rho[name][lo : lo + DEBIAS_BLOCK] = np.asarray(models[name].mean_std(*part)[0])
+            done += 1
+            if report is not None:
+                report("Pc (Cd debiasing: densities)", done, total)
+    rho_ref = rho[ref]
     for k in others:
-        ratio = rho_ref / np.asarray(models[k].mean_std(*where)[0], dtype=float)
+        ratio = rho_ref / rho[k]
         mean_ratio = np.bincount(who, ratio, len(objs)) / np.bincount(who, None, len(objs))
         out[k] = base * mean_ratio
     return out
@@ -294,7 +319,7 @@ def event_probabilities(
     local = {g: m for m, g in enumerate(involved)}
     sub = [objs[g] for g in involved]
     t0 = time.perf_counter()
-    drag = debiased_drag(sub, models, ref)
+    drag = debiased_drag(sub, models, ref, report)
     timings["pc_drag"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     # Where each object is needed: (event, side) at each TCA.
