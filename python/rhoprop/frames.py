@@ -207,19 +207,13 @@ def teme_to_gcrf(epoch: EpochLike, states: npt.ArrayLike) -> np.ndarray:
     """States [x, y, z, vx, vy, vz] (6,) or (n, 6), m and m/s, in TEME of the UTC
     ``epoch`` -> GCRF (:func:`teme_to_gcrf_matrix`; the frame's own rotation, 1e-11 rad/s
     from precession and nutation, is left out of the velocities: under 0.1 mm/s)."""
-    x, single = _rows("states", states, 6)
-    m = teme_to_gcrf_matrix(epoch)
-    out = np.concatenate([x[:, :3] @ m.T, x[:, 3:] @ m.T], axis=1)
-    return out[0] if single else out
+    return convert(epoch, states, "TEME", "GCRF")
 
 
 def gcrf_to_teme(epoch: EpochLike, states: npt.ArrayLike) -> np.ndarray:
     """The inverse of :func:`teme_to_gcrf`: GCRF states (6,) or (n, 6) -> TEME of the UTC
     ``epoch``."""
-    x, single = _rows("states", states, 6)
-    m = teme_to_gcrf_matrix(epoch)
-    out = np.concatenate([x[:, :3] @ m, x[:, 3:] @ m], axis=1)
-    return out[0] if single else out
+    return convert(epoch, states, "GCRF", "TEME")
 
 
 #: Inertial frames a state may be given in: GCRF, EME2000 and ICRF (one set of axes here:
