@@ -185,3 +185,57 @@ def test_sigma_grows_with_dtc_and_field_samples(indices: rp.density.Jb2008Indice
     assert sq / mq == pytest.approx(0.12) and ss / ms == pytest.approx(0.27)
     field = quiet.field("2003-10-29T00:00", "2003-10-29T06:00", altitude_range=(380e3, 420e3))
     assert np.isfinite(field.ln_mean).all()
+
+
+def test_indices_as_of_an_epoch_read_nothing_after_it(indices, tmp_path: Path) -> None:
+    # The forecast rules of SpaceWeather.as_of, applied to JB2008's own indices: rows of
+    # the days before the epoch's day as observed, then the last observed day's F10, S10,
+    # M10 and Y10 held, the centred 81-day means that reach past the epoch replaced by the
+    # mean of the last 81 observed days, dTc relaxing from the epoch's hour to the last 27
+    # days' mean (e-folding 2 days). Checked from the raw files' numbers, and by
+    # scrambling every value after the epoch, which must change nothing.
+    epoch = np.datetime64("2009-05-18T07:19")
+    ahead = indices.as_of(epoch)
+    times = epoch + np.arange(-24, 24 * 10, 6) * np.timedelta64(1, "h")
+    seen = ahead.at(times)
+    before = times < np.datetime64("2009-05-18")  # lagged F10 rows: observed days only
+    observed = indices.at(times)
+    np.testing.assert_array_equal(seen[before, 0], observed[before, 0])
+    # The raw file's row of 2009-05-17 (year, day of year 137) and the 80 before it.
+    rows = {
+        (int(f[0]), int(f[1])): [float(v) for v in f[3:11]]
+        for f in (ln.split() for ln in indices.solfsmy.read_text().splitlines())
+        if f and f[0].isdigit()
+    }
+    last = rows[(2009, 137)]
+    window = np.array([rows[(2009, 137 - k)] for k in range(81)])
+    later = times >= np.datetime64("2009-05-20")  # F10 lag 1, Y10 lag 5 within the forecast
+    np.testing.assert_allclose(seen[later, 0], last[0])  # F10 held
+    np.testing.assert_allclose(seen[later, 2], last[2])  # S10 held
+    np.testing.assert_allclose(seen[later, 1], window[:, 0].mean())  # F10B: trailing mean
+    np.testing.assert_allclose(seen[later, 3], window[:, 2].mean())  # S10B likewise
+    # F10B of a day whose centred window reached past the epoch: no longer the file's.
+    assert abs(seen[before, 1][-1] - observed[before, 1][-1]) > 0.01
+    # dTc: the epoch's hour observed, then the relaxation.
+    hour = np.datetime64("2009-05-18T07")
+    dtc = indices.at(np.array([hour]))[0, 8]
+    assert ahead.at(np.array([hour]))[0, 8] == dtc
+    row_before = int((np.datetime64("2009-05-17") - indices._sol_first).astype(int))
+    scrambled = rp.density.Jb2008Indices._from_arrays(
+        indices,
+        indices._sol_first,
+        np.where(np.arange(len(indices._sol))[:, None] > row_before, 999.0, indices._sol),
+        indices._dtc_first,
+        np.where(
+            np.arange(len(indices._dtc)) > int((hour - indices._dtc_first).astype(int)),
+            777.0,
+            indices._dtc,
+        ),
+        "scrambled",
+    )
+    np.testing.assert_array_equal(scrambled.as_of(epoch).at(times), seen)
+    assert "as of 2009-05-18T07:19:00" in repr(ahead)
+    with pytest.raises(rp.OutsideRecordError, match="81 observed days"):
+        indices.as_of(indices._sol_first.astype("datetime64[ns]") + np.timedelta64(30, "D"))
+    with pytest.raises(ValueError, match="days must be"):
+        indices.as_of(epoch, days=0.0)

@@ -194,8 +194,10 @@ def propagate(
     rtol: float | None,
     floor_altitude: float,
     zonal_degree: int = 2,
+    gravity: tuple[int | None, bool | None] = (None, None),
 ) -> _Propagated:
-    """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations)."""
+    """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations);
+    gravity: (tesseral degree, third bodies), None each: automatic by regime."""
 
 def ccsp(
     atmosphere: _Atmosphere,
@@ -214,6 +216,7 @@ def ccsp(
     coordinates: str = "equinoctial",
     kappa_scale: float = 1.0,
     slow: tuple[float, float] | None = None,
+    gravity: tuple[int | None, bool | None] = (None, None),
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
@@ -276,6 +279,7 @@ def monte_carlo(
     progress: Callable[[int], object] | None,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
+    gravity: tuple[int | None, bool | None] = (None, None),
 ) -> _MonteCarloOutput:
     """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
     (n,), decay_times (n,), step (s), drag_factors (n,) (factor on Cd*A/m per member,

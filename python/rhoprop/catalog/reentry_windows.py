@@ -33,7 +33,7 @@ from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import ModelLike
 from ..parallel import map_in_threads, worker_count
 from ..propagation import Spacecraft, monte_carlo
-from ..propagation.dynamics import Dynamics, resolve
+from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.kappa import Constant, KappaProcess
 from ..propagation.montecarlo import drag_sigma_argument
 from ..time import DurationLike, add_seconds
@@ -234,7 +234,7 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
-    dyn = resolve("reentry", dynamics, Dynamics(), floor_altitude=floor_altitude)
+    dyn = resolve_automatic("reentry", dynamics, Dynamics(), floor_altitude=floor_altitude)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
     if isinstance(groups, bool) or not isinstance(groups, (int, np.integer)) or groups < 1:

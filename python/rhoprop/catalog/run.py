@@ -20,7 +20,7 @@ from ..density import DensityModel, SampledModel
 from ..options import Errors, UncertaintyMethod
 from ..progress import ProgressBar
 from ..propagation import OrbitState
-from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve_automatic, zonal_degree_argument
 from ..propagation.interpolate import DEFAULT_TOLERANCE
 from ..propagation.kappa import KappaProcess, TwoScale
 from ..propagation.results import (
@@ -414,7 +414,7 @@ def propagate_catalog(
         for i, o in enumerate(objs)
         if (reason := beyond_max_span(seconds_between(o.state.epoch, end64), "end", limit))
     }
-    dyn = resolve(
+    dyn = resolve_automatic(
         "propagate_catalog",
         dynamics,
         Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),

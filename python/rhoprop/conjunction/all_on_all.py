@@ -27,7 +27,7 @@ from ..density.model import ModelLike
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
-from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve_automatic, zonal_degree_argument
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
@@ -475,7 +475,7 @@ def _settings(
             f"grid_step = {step:g} s is too coarse: at most 300 s (1/18 of a low orbit) keeps "
             "the cubic Hermite interpolant of the relative motion meaningful"
         )
-    dyn = resolve(
+    dyn = resolve_automatic(
         "screen_all",
         dynamics,
         Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),

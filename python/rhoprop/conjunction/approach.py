@@ -175,6 +175,9 @@ class _Dynamics:
     fine_step: float
     #: The frame of the tracks' states (a screen's are TEME).
     frame: str = "TEME"
+    #: The field degree and third bodies (:attr:`Dynamics.gravity`) of closest_approach's
+    #: trajectories; screens run the automatic terms.
+    gravity: tuple[int | None, bool | None] = (None, None)
 
     def run(
         self, track: _Track, t0: float, state: np.ndarray, span: float, step: float | None
@@ -197,15 +200,14 @@ class _Dynamics:
     ) -> Trajectory:
         """``propagate`` of ``state`` over ``span`` s with this screening's floor and zonal
         degree (outputs every ``step`` s, or the end only)."""
-        return propagate(
-            state,
-            craft,
-            model,
-            span,
-            output_step=step,
-            floor_altitude=self.floor,
+        field, bodies = self.gravity
+        dynamics = Dynamics(
             zonal_degree=self.degree,
+            floor_altitude=self.floor,
+            field_degree=field,
+            third_bodies=bodies,
         )
+        return propagate(state, craft, model, span, output_step=step, dynamics=dynamics)
 
     def state_at(self, track: _Track, t: float) -> np.ndarray | None:
         """The exact state of ``track`` at ``t``: a sample, or propagated from the last
@@ -410,7 +412,9 @@ def closest_approach(
         fine_step: output step of the re-propagation, s (default 1 s).
         floor_altitude, zonal_degree: as the trajectories were propagated with.
         dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
-            ``zonal_degree`` at once (then leave those keywords at their defaults).
+            ``zonal_degree`` at once (then leave those keywords at their defaults), and
+            the ``field_degree`` and ``third_bodies`` the trajectories were propagated
+            with (e.g. :meth:`~rhoprop.Dynamics.precise`), which the refinement uses.
 
     Returns:
         The :class:`CloseApproach` events sorted by TCA (object 1 = ``traj1``), states at
@@ -489,7 +493,7 @@ def closest_approach(
         # From the earlier start: re-propagation starts at an output at or before a bracket.
         window = (add_seconds(ref, min(t1[0], t2[0])), add_seconds(ref, last, round_up=True))
         own1.model, own2.model = _models_for(model, states, *window, floor)
-    dyn = _Dynamics(ref, model is not None, floor, degree, step, traj1.frame)
+    dyn = _Dynamics(ref, model is not None, floor, degree, step, traj1.frame, settings.gravity)
     found: list[tuple[float, np.ndarray, np.ndarray]] = []
     for lo, hi in _merge(brackets):
         if model is None:

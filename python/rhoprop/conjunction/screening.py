@@ -25,7 +25,7 @@ from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft
-from ..propagation.dynamics import Dynamics, resolve, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve_automatic, zonal_degree_argument
 from ..propagation.propagate import (
     MAX_STEP_FRACTION,
     check_model,
@@ -427,7 +427,7 @@ def screen(
     wall0 = time.perf_counter()
     prim, objs, itself = _objects(primary, secondaries)
     check_model(model)
-    settings = resolve(
+    settings = resolve_automatic(
         "screen", dynamics, Dynamics(), floor_altitude=floor_altitude, zonal_degree=zonal_degree
     )
     w = _window(

@@ -38,7 +38,8 @@ import numpy as np
 from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
-from ..time import EpochsLike
+from ..spaceweather.record import AS_OF_AP_RELAX_DAYS, AS_OF_DAYS
+from ..time import EpochLike, EpochsLike, to_datetime64
 from . import calibrated as cal
 from .calibrated import Preset
 from .correction import MeanCorrection
@@ -153,10 +154,14 @@ class Jb2008Indices:
         self.dtcfile = Path(dtcfile)
         self._sol_first, self._sol = _read_solfsmy(self.solfsmy)
         self._dtc_first, self._dtc = _read_dtcfile(self.dtcfile)
+        self._note = ""
 
     def __repr__(self) -> str:
         first, last = self.span
-        return f"Jb2008Indices({str(self.solfsmy)!r}, {str(self.dtcfile)!r}; {first} to {last})"
+        note = f", {self._note}" if self._note else ""
+        return (
+            f"Jb2008Indices({str(self.solfsmy)!r}, {str(self.dtcfile)!r}; {first} to {last}{note})"
+        )
 
     # -- where the files come from ------------------------------------------------------
 
@@ -228,6 +233,69 @@ class Jb2008Indices:
             for part in parts:
                 part.unlink(missing_ok=True)
         return cls(target / FILES[0], target / FILES[1])
+
+    @classmethod
+    def _from_arrays(
+        cls,
+        source: Jb2008Indices,
+        sol_first: np.datetime64,
+        sol: np.ndarray,
+        dtc_first: np.datetime64,
+        dtc: np.ndarray,
+        note: str,
+    ) -> Jb2008Indices:
+        """Indices holding the given arrays, named after ``source``'s files and ``note``."""
+        out = cls.__new__(cls)
+        out.solfsmy, out.dtcfile = source.solfsmy, source.dtcfile
+        out._sol_first, out._sol = sol_first, sol
+        out._dtc_first, out._dtc = dtc_first, dtc
+        out._note = note
+        return out
+
+    def as_of(self, epoch: EpochLike, days: float = AS_OF_DAYS) -> Jb2008Indices:
+        """The indices as a forecaster had them at ``epoch`` (UTC), by the rules of
+        :meth:`rhoprop.SpaceWeather.as_of` (one forecast rule for every model): the
+        solar rows of the days before the epoch's day as observed, then ``days`` days
+        (default 60) of persistence of the last observed day's F10, S10, M10 and Y10; the
+        81-day centred means whose window reaches past the epoch replaced by each
+        index's mean over the last 81 observed days; dTc observed to the epoch's hour,
+        then relaxing from it to the last 27 days' mean with an e-folding time of
+        :data:`~rhoprop.spaceweather.record.AS_OF_AP_RELAX_DAYS` (2 days). Nothing after
+        the epoch is read. Raises :class:`~rhoprop.OutsideRecordError` when the files do
+        not hold the 81 days before the epoch."""
+        t = to_datetime64(epoch, "epoch")
+        if not np.isfinite(days) or not 0 < days <= 366:
+            raise ValueError(f"days must be a number of days in (0, 366], got {days!r}")
+        day = t.astype("datetime64[D]")
+        observed = int((day - self._sol_first).astype(int))  # rows before the epoch's day
+        hour = t.astype("datetime64[h]")
+        seen = int((hour - self._dtc_first).astype(int)) + 1  # dTc hours up to the epoch's
+        if observed < 81 or observed > len(self._sol) or seen < 27 * 24 or seen > len(self._dtc):
+            raise OutsideRecordError(
+                f"epoch {np.datetime_as_string(t, unit='s')}: the JB2008 index files need "
+                f"the 81 observed days before it ({self.solfsmy.name} "
+                f"{self._sol_first} + {len(self._sol)} days, {self.dtcfile.name})"
+            )
+        n_new = int(np.ceil(days)) + 1
+        sol = np.empty((observed + n_new, self._sol.shape[1]))
+        sol[:observed] = self._sol[:observed]
+        past = self._sol[:observed]
+        daily, means = (0, 2, 4, 6), (1, 3, 5, 7)
+        for d, m in zip(daily, means, strict=True):
+            sol[observed:, d] = past[-1, d]
+            # Centred 81-day means whose window reaches past the epoch are not known yet.
+            sol[observed - 40 :, m] = past[-81:, d].mean()
+        dtc_hours = seen + int(24 * n_new)
+        dtc = np.empty(dtc_hours)
+        dtc[:seen] = self._dtc[:seen]
+        last, month = self._dtc[seen - 1], self._dtc[seen - 27 * 24 : seen].mean()
+        lead_h = np.arange(1, dtc_hours - seen + 1, dtype=float)
+        relax = 24.0 * AS_OF_AP_RELAX_DAYS
+        dtc[seen:] = month + (last - month) * np.exp(-lead_h / relax)
+        stamp = np.datetime_as_string(t, unit="s")
+        return Jb2008Indices._from_arrays(
+            self, self._sol_first, sol, self._dtc_first, dtc, f"as of {stamp}"
+        )
 
     # -- queries ---------------------------------------------------------------------------
 

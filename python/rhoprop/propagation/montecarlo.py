@@ -246,6 +246,7 @@ def monte_carlo(
                 callback,
                 degree,
                 drag_sigma,
+                dyn.gravity,
             )
         finally:
             if bar is not None:
@@ -260,6 +261,7 @@ def monte_carlo(
             step=float(out["step"]),
             floor_altitude=floor,
             zonal_degree=degree,
+            gravity=dyn.gravity,
         )
         return out, trajectory_from_core(state.epoch, mean, state.frame)
 

@@ -9,9 +9,9 @@ use crate::density::{Atmosphere, LaneMemory};
 use crate::ephemeris::ThirdBodies;
 use crate::error::CoreError;
 use crate::frames::{EarthRotation, RotationCache};
-use crate::geopotential::{tesseral_lanes, DEEP_SPACE_TESSERAL_DEGREE};
+use crate::geopotential::{field_lanes, DEEP_SPACE_TESSERAL_DEGREE};
 use crate::kappa::KappaLanes;
-use crate::problem::Problem;
+use crate::problem::{Gravity, Problem};
 
 /// Batch state: `[x, y, z, vx, vy, vz][lane]`, m and m/s, inertial.
 pub type State<const W: usize> = [[f64; W]; 6];
@@ -100,10 +100,16 @@ pub struct Dynamics<'a, A: Atmosphere + ?Sized, const W: usize> {
     /// Highest zonal harmonic in the gravity field: 2 (J2 only, the paper's model and the
     /// default) up to [`MAX_ZONAL_DEGREE`]; validated in [`crate::problem::Problem`].
     pub zonal_degree: u8,
-    /// Whether the Sun's and the Moon's pull ([`crate::ephemeris`]) and the tesseral field
-    /// ([`crate::geopotential`]) are included: on for
-    /// deep-space orbits ([`deep_space`]), as SGP4 switches to SDP4.
+    /// Whether the Sun's and the Moon's pull ([`crate::ephemeris`]) is included: on for
+    /// deep-space orbits ([`deep_space`]), as SGP4 switches to SDP4, or on request
+    /// ([`crate::problem::Gravity`]).
     pub third_body: bool,
+    /// Highest degree of the EGM2008 field of order >= 1 ([`crate::geopotential`]; 0:
+    /// none): degree 8 for deep-space orbits, or as requested.
+    pub field_degree: usize,
+    /// Whether the field also carries the zonals above `zonal_degree` (when requested:
+    /// the whole field to `field_degree`), not only the orders m >= 1.
+    pub field_zonals: bool,
     pub perturbation: Perturbation,
     /// Number of batch RHS evaluations.
     pub evaluations: u64,
@@ -132,6 +138,8 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
             epoch,
             zonal_degree: 2,
             third_body: false,
+            field_degree: 0,
+            field_zonals: false,
             drag,
             kappa: KappaLanes::zero(),
             perturbation: Perturbation::Additive,
@@ -151,8 +159,20 @@ impl<'a, A: Atmosphere + ?Sized, const W: usize> Dynamics<'a, A, W> {
         let mut dynamics = Self::new(atmosphere, problem.epoch, drag);
         dynamics.floor_altitude = problem.floor_altitude;
         dynamics.zonal_degree = problem.zonal_degree;
-        dynamics.third_body = deep_space(&problem.y0);
+        dynamics.set_gravity(problem.gravity, &problem.y0);
         dynamics
+    }
+
+    /// Switches the third bodies and the tesseral field on as `gravity` asks, and where
+    /// it leaves them automatic, as the regime of the orbit `y0` calls for.
+    pub fn set_gravity(&mut self, gravity: Gravity, y0: &[f64; 6]) {
+        let deep = deep_space(y0);
+        self.third_body = gravity.third_bodies.unwrap_or(deep);
+        (self.field_degree, self.field_zonals) = match gravity.field_degree {
+            Some(d) => (usize::from(d), true),
+            None if deep => (DEEP_SPACE_TESSERAL_DEGREE, false),
+            None => (0, false),
+        };
     }
 }
 
@@ -262,7 +282,7 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
         let ut1 = self.epoch + t;
         // One Earth-rotation angle per stage, shared by all lanes (skipped when neither the
         // atmosphere nor the deep-space tesseral field needs it).
-        let rot = if self.atmosphere.uses_earth_rotation() || self.third_body {
+        let rot = if self.atmosphere.uses_earth_rotation() || self.field_degree > 0 {
             self.rotation.at(ut1)
         } else {
             EarthRotation::IDENTITY
@@ -339,19 +359,30 @@ impl<A: Atmosphere + ?Sized, const W: usize> BatchRhs<W> for Dynamics<'_, A, W> 
             dy[4][l] += f * vr[1];
             dy[5][l] += f * vr[2];
         }
-        // Deep-space orbits: the Sun's and the Moon's pull (both bodies once per
-        // evaluation) and the Earth's tesseral field to degree 8 (crate::geopotential),
-        // whose longitude-dependent pull drifts a geostationary orbit along-track by tens
-        // of km a week and resonates with 12-hour orbits (SDP4's resonance terms).
-        if self.third_body {
-            let bodies = ThirdBodies::at(ut1);
-            let (mut fx, mut fy) = ([0.0; W], [0.0; W]);
-            for l in 0..W {
-                [fx[l], fy[l], _] = rot.to_fixed([y[0][l], y[1][l], y[2][l]]);
+        // Deep-space orbits (and others on request): the Sun's and the Moon's pull (both
+        // bodies once per evaluation) and the Earth's tesseral field to degree 8
+        // (crate::geopotential), whose longitude-dependent pull drifts a geostationary
+        // orbit along-track by tens of km a week and resonates with 12-hour orbits
+        // (SDP4's resonance terms).
+        if self.third_body || self.field_degree > 0 {
+            let mut t = [[0.0; W]; 3];
+            if self.field_degree > 0 {
+                let (mut fx, mut fy) = ([0.0; W], [0.0; W]);
+                for l in 0..W {
+                    [fx[l], fy[l], _] = rot.to_fixed([y[0][l], y[1][l], y[2][l]]);
+                }
+                let first_zonal = if self.field_zonals {
+                    usize::from(self.zonal_degree) + 1
+                } else {
+                    usize::MAX
+                };
+                t = field_lanes(&fx, &fy, &y[2], self.field_degree, first_zonal);
             }
-            let t = tesseral_lanes(&fx, &fy, &y[2], DEEP_SPACE_TESSERAL_DEGREE);
+            let bodies = self.third_body.then(|| ThirdBodies::at(ut1));
             for l in 0..W {
-                let a = bodies.acceleration([y[0][l], y[1][l], y[2][l]]);
+                let a = bodies
+                    .as_ref()
+                    .map_or([0.0; 3], |b| b.acceleration([y[0][l], y[1][l], y[2][l]]));
                 let s = rot.to_inertial([t[0][l], t[1][l], t[2][l]]);
                 for c in 0..3 {
                     dy[3 + c][l] += a[c] + s[c];
@@ -522,6 +553,71 @@ mod tests {
             for c in 0..6 {
                 assert_eq!(d1[c][0], dy[c][lane]);
             }
+        }
+    }
+
+    #[test]
+    fn the_field_and_the_third_bodies_act_as_requested_in_any_regime() {
+        // A near-Earth orbit gets neither by default; asked for, each adds exactly its own
+        // pull (the tesseral field of crate::geopotential rotated from the Earth-fixed
+        // axes of the stage, the Sun's and the Moon's tidal pull), and a deep-space orbit
+        // gets both automatically.
+        let atm = Exponential::new(1e-12, 400e3, 60e3, 0.0).unwrap();
+        let (epoch, t) = (7.5e8, 1234.0);
+        let accel = |gravity: Gravity, s: [f64; 6]| {
+            let mut d = Dynamics::new(&atm, epoch, [0.0]);
+            d.set_gravity(gravity, &s);
+            let mut dy = [[0.0]; 6];
+            d.eval(t, &one(s), &mut dy).unwrap();
+            [dy[3][0], dy[4][0], dy[5][0]]
+        };
+        let leo = crate::constants::PAPER_STATE;
+        let p = [leo[0], leo[1], leo[2]];
+        let base = accel(Gravity::AUTO, leo);
+        let rot = RotationCache::default().at(epoch + t);
+        // Dynamics::new has zonal degree 2: the field brings J3..J8 too.
+        let field = rot.to_inertial(crate::geopotential::field(rot.to_fixed(p), 8, 3));
+        let with_field = Gravity {
+            field_degree: Some(8),
+            third_bodies: None,
+        };
+        let moved = accel(with_field, leo);
+        let sun_moon = ThirdBodies::at(epoch + t).acceleration(p);
+        let with_bodies = Gravity {
+            field_degree: None,
+            third_bodies: Some(true),
+        };
+        let pulled = accel(with_bodies, leo);
+        for c in 0..3 {
+            assert!(
+                (moved[c] - base[c] - field[c]).abs() < 1e-12,
+                "field, axis {c}"
+            );
+            assert!(
+                (pulled[c] - base[c] - sun_moon[c]).abs() < 1e-12,
+                "bodies, axis {c}"
+            );
+        }
+        // At 460 km the field is ~1e-4 m/s^2 and the Sun and Moon ~1e-6 m/s^2: both on.
+        let size = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        assert!((1e-5..1e-3).contains(&size(field)), "{}", size(field));
+        assert!((1e-7..1e-5).contains(&size(sun_moon)), "{}", size(sun_moon));
+        // Deep space: automatically the Sun, the Moon and the orders m >= 1 to degree 8.
+        let geo = [42_164e3, 0.0, 0.0, 0.0, 3_074.7, 0.0];
+        let none = Gravity {
+            field_degree: Some(0),
+            third_bodies: Some(false),
+        };
+        let g = [geo[0], geo[1], geo[2]];
+        let tess = rot.to_inertial(crate::geopotential::tesseral(rot.to_fixed(g), 8));
+        let bodies = ThirdBodies::at(epoch + t).acceleration(g);
+        let (auto, bare) = (accel(Gravity::AUTO, geo), accel(none, geo));
+        for c in 0..3 {
+            let want = tess[c] + bodies[c];
+            assert!(
+                (auto[c] - bare[c] - want).abs() < 1e-15,
+                "deep space, axis {c}"
+            );
         }
     }
 }

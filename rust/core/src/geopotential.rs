@@ -1,8 +1,11 @@
-//! The Earth's tesseral and sectoral harmonics (order m >= 1) up to degree
-//! [`MAX_TESSERAL_DEGREE`], for deep-space orbits: the resonances that SDP4 carries (the
-//! one-day ones of geostationary orbits, J22, J31, J33; the half-day ones of GPS and
-//! Molniya orbits, J22, J32, J44, J52, J54) and the rest of the field to degree 8. The
-//! zonals stay in [`crate::dynamics`] (J2 always, J3..J6 on request).
+//! The Earth's gravity field beyond the zonals of [`crate::dynamics`], from EGM2008
+//! ([`crate::egm2008`]): for deep-space orbits the tesseral and sectoral harmonics (order
+//! m >= 1) to degree 8, the resonances that SDP4 carries (the one-day ones of
+//! geostationary orbits, J22, J31, J33; the half-day ones of GPS and Molniya orbits, J22,
+//! J32, J44, J52, J54) and the rest of the field to degree 8; on request the whole field
+//! to degree and order [`MAX_TESSERAL_DEGREE`], zonals above J6 included, which a
+//! near-Earth orbit needs to follow a precise orbit (GRACE at 455 km over a day: 4-5 km
+//! off without it, a few hundred metres with it).
 //!
 //! Cunningham's recursion of the solid harmonics V_nm, W_nm and their gradient
 //! (Montenbruck & Gill, Satellite Orbits, 2000, eqs. 3.29-3.33), with the unnormalised
@@ -12,77 +15,47 @@
 use std::sync::LazyLock;
 
 use crate::constants::{MU, R_EARTH};
+use crate::egm2008::EGM2008;
 
-/// Highest degree of the tesseral field.
-pub const MAX_TESSERAL_DEGREE: usize = 8;
+/// Highest degree (and order) of the field.
+pub const MAX_TESSERAL_DEGREE: usize = 40;
 
-/// Degree used by the dynamics of deep-space orbits: the whole table. Its cost is about
-/// that of a density lookup per lane and stage, and degree 8 is (Re / r)^6 ~ 2e-4 of the
-/// degree-2 pull at GPS radius.
-pub const DEEP_SPACE_TESSERAL_DEGREE: usize = MAX_TESSERAL_DEGREE;
+/// Degree of the tesseral field of deep-space orbits. Its cost is about that of a density
+/// lookup per lane and stage, and degree 8 is (Re / r)^6 ~ 2e-4 of the degree-2 pull at
+/// GPS radius.
+pub const DEEP_SPACE_TESSERAL_DEGREE: usize = 8;
 
+/// Entries of V and W up to degree and order `top`.
+const fn entries(top: usize) -> usize {
+    (top + 1) * (top + 2) / 2
+}
 /// V and W up to degree and order MAX + 1 (the gradient of degree n needs n + 1).
-const TOP: usize = MAX_TESSERAL_DEGREE + 1;
-const ENTRIES: usize = (TOP + 1) * (TOP + 2) / 2;
+const ENTRIES: usize = entries(MAX_TESSERAL_DEGREE + 1);
+/// The same for the deep-space degree, whose smaller arrays keep that path as fast as it
+/// was before the table grew.
+const DEEP_ENTRIES: usize = entries(DEEP_SPACE_TESSERAL_DEGREE + 1);
 
 #[inline(always)]
 const fn idx(n: usize, m: usize) -> usize {
     n * (n + 1) / 2 + m
 }
 
-/// Fully normalised EGM2008 coefficients (n, m, C, S), 2 <= n <= 8, 1 <= m <= n, as in
-/// the ICGEM file EGM2008.gfc (Pavlis et al. 2012, tide-free).
-#[rustfmt::skip]
-const EGM2008: [(usize, usize, f64, f64); 35] = [
-    (2, 1, -0.206615509074176e-09, 0.138441389137979e-08),
-    (2, 2, 0.243938357328313e-05, -0.140027370385934e-05),
-    (3, 1, 0.203046201047864e-05, 0.248200415856872e-06),
-    (3, 2, 0.904787894809528e-06, -0.619005475177618e-06),
-    (3, 3, 0.721321757121568e-06, 0.141434926192941e-05),
-    (4, 1, -0.536157389388867e-06, -0.473567346518086e-06),
-    (4, 2, 0.350501623962649e-06, 0.662480026275829e-06),
-    (4, 3, 0.990856766672321e-06, -0.200956723567452e-06),
-    (4, 4, -0.188519633023033e-06, 0.308803882149194e-06),
-    (5, 1, -0.629211923042529e-07, -0.943698073395769e-07),
-    (5, 2, 0.652078043176164e-06, -0.323353192540522e-06),
-    (5, 3, -0.451847152328843e-06, -0.214955408306046e-06),
-    (5, 4, -0.295328761175629e-06, 0.498070550102351e-07),
-    (5, 5, 0.174811795496002e-06, -0.669379935180165e-06),
-    (6, 1, -0.759210081892527e-07, 0.265122593213647e-07),
-    (6, 2, 0.486488924604690e-07, -0.373789324523752e-06),
-    (6, 3, 0.572451611175653e-07, 0.895201130010730e-08),
-    (6, 4, -0.860237937191611e-07, -0.471425573429095e-06),
-    (6, 5, -0.267166423703038e-06, -0.536493151500206e-06),
-    (6, 6, 0.947068749756882e-08, -0.237382353351005e-06),
-    (7, 1, 0.280887555776673e-06, 0.951259362869275e-07),
-    (7, 2, 0.330407993702235e-06, 0.929969290624092e-07),
-    (7, 3, 0.250458409225729e-06, -0.217118287729610e-06),
-    (7, 4, -0.274993935591631e-06, -0.124058403514343e-06),
-    (7, 5, 0.164773255934658e-08, 0.179281782751438e-07),
-    (7, 6, -0.358798423464889e-06, 0.151798257443669e-06),
-    (7, 7, 0.150746472872675e-08, 0.241068767286303e-07),
-    (8, 1, 0.231607991248329e-07, 0.588974540927606e-07),
-    (8, 2, 0.800143604736599e-07, 0.652805043667369e-07),
-    (8, 3, -0.193745381715290e-07, -0.859639339125694e-07),
-    (8, 4, -0.244360480007096e-06, 0.698072508472777e-07),
-    (8, 5, -0.257011477267991e-07, 0.892034891745881e-07),
-    (8, 6, -0.659648680031408e-07, 0.308946730783065e-06),
-    (8, 7, 0.672569751771483e-07, 0.748686063738231e-07),
-    (8, 8, -0.124022771917136e-06, 0.120551889384997e-06),
-];
-
-/// Normalisation factor of degree n, order m >= 1: sqrt(2 (2n + 1) (n - m)! / (n + m)!).
+/// Normalisation factor of degree n, order m: sqrt((2 - delta_m0) (2n + 1) (n - m)! /
+/// (n + m)!).
 pub fn normalisation(n: usize, m: usize) -> f64 {
     let ratio: f64 = ((n - m + 1)..=(n + m)).map(|k| 1.0 / k as f64).product();
-    (2.0 * (2 * n + 1) as f64 * ratio).sqrt()
+    let two = if m == 0 { 1.0 } else { 2.0 };
+    (two * (2 * n + 1) as f64 * ratio).sqrt()
 }
 
-/// Unnormalised (C, S) by [`idx`] (zero for m = 0 and n < 2).
-static UNNORMALISED: LazyLock<[[f64; 2]; ENTRIES]> = LazyLock::new(|| {
-    let mut cs = [[0.0; 2]; ENTRIES];
+/// Unnormalised (C, S) by [`idx`] (zero for n < 2).
+static UNNORMALISED: LazyLock<Vec<[f64; 2]>> = LazyLock::new(|| {
+    let mut cs = vec![[0.0; 2]; ENTRIES];
     for &(n, m, c, s) in &EGM2008 {
-        let k = normalisation(n, m);
-        cs[idx(n, m)] = [c * k, s * k];
+        if n <= MAX_TESSERAL_DEGREE {
+            let k = normalisation(n, m);
+            cs[idx(n, m)] = [c * k, s * k];
+        }
     }
     cs
 });
@@ -96,11 +69,49 @@ pub fn tesseral_lanes<const W: usize>(
     z: &[f64; W],
     degree: usize,
 ) -> [[f64; W]; 3] {
+    field_lanes(x, y, z, degree, usize::MAX)
+}
+
+/// Acceleration (m/s^2, Earth-fixed) of every harmonic of degree 2..=`degree` (at most
+/// [`MAX_TESSERAL_DEGREE`]) of order m >= 1, and of the zonals (m = 0) of degree
+/// `first_zonal`..=`degree`, at the Earth-fixed positions (m) of the lanes.
+#[inline(always)]
+pub fn field_lanes<const W: usize>(
+    x: &[f64; W],
+    y: &[f64; W],
+    z: &[f64; W],
+    degree: usize,
+    first_zonal: usize,
+) -> [[f64; W]; 3] {
     let degree = degree.min(MAX_TESSERAL_DEGREE);
+    if degree <= DEEP_SPACE_TESSERAL_DEGREE {
+        // The deep-space path: V and W on the stack, as small as degree 8 needs.
+        let mut v = [[0.0; W]; DEEP_ENTRIES];
+        let mut w = [[0.0; W]; DEEP_ENTRIES];
+        field_into(x, y, z, degree, first_zonal, &mut v, &mut w)
+    } else {
+        // Up to 903 entries a lane: on the heap, sized to the degree asked for (a stack
+        // array of the largest size overflowed the 2 MB test threads with 32 lanes).
+        let n = entries(degree + 1);
+        let (mut v, mut w) = (vec![[0.0; W]; n], vec![[0.0; W]; n]);
+        field_into(x, y, z, degree, first_zonal, &mut v, &mut w)
+    }
+}
+
+/// [`field_lanes`] with V and W in the given scratch (at least the entries of degree + 1).
+#[inline(always)]
+fn field_into<const W: usize>(
+    x: &[f64; W],
+    y: &[f64; W],
+    z: &[f64; W],
+    degree: usize,
+    first_zonal: usize,
+    v: &mut [[f64; W]],
+    w: &mut [[f64; W]],
+) -> [[f64; W]; 3] {
     let top = degree + 1;
+    debug_assert!(entries(top) <= v.len() && entries(top) <= w.len());
     let cs = &*UNNORMALISED;
-    let mut v = [[0.0; W]; ENTRIES];
-    let mut w = [[0.0; W]; ENTRIES];
     let (mut xr, mut yr, mut zr, mut rr) = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
     for l in 0..W {
         let r2 = x[l] * x[l] + y[l] * y[l] + z[l] * z[l];
@@ -135,6 +146,17 @@ pub fn tesseral_lanes<const W: usize>(
     }
     let mut acc = [[0.0; W]; 3];
     for n in 2..=degree {
+        if n >= first_zonal {
+            // Order 0 (M&G eq. 3.33): only C_n0.
+            let c = cs[idx(n, 0)][0];
+            let (p, o) = (idx(n + 1, 1), idx(n + 1, 0));
+            let g = (n + 1) as f64;
+            for l in 0..W {
+                acc[0][l] -= c * v[p][l];
+                acc[1][l] -= c * w[p][l];
+                acc[2][l] -= g * c * v[o][l];
+            }
+        }
         for m in 1..=n {
             let [c, s] = cs[idx(n, m)];
             let (p, q, o) = (idx(n + 1, m + 1), idx(n + 1, m - 1), idx(n + 1, m));
@@ -163,21 +185,28 @@ pub fn tesseral(p: [f64; 3], degree: usize) -> [f64; 3] {
     [a[0][0], a[1][0], a[2][0]]
 }
 
+/// [`field_lanes`] at one Earth-fixed position `p` (m).
+pub fn field(p: [f64; 3], degree: usize, first_zonal: usize) -> [f64; 3] {
+    let a = field_lanes::<1>(&[p[0]], &[p[1]], &[p[2]], degree, first_zonal);
+    [a[0][0], a[1][0], a[2][0]]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The potential of the orders >= 1 in spherical coordinates, from the fully
+    /// The potential of the orders >= 1 (and the zonals from `first_zonal`) in spherical
+    /// coordinates, from the fully
     /// normalised coefficients and Legendre functions by the angular recursion (not the
     /// Cartesian solid harmonics of the code under test).
-    fn potential(p: [f64; 3], degree: usize) -> f64 {
+    fn potential(p: [f64; 3], degree: usize, first_zonal: usize) -> f64 {
         let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
         let t = p[2] / r;
         let u = (1.0 - t * t).sqrt();
         let lon = p[1].atan2(p[0]);
         let mut sum = 0.0;
         for &(n, m, c, s) in &EGM2008 {
-            if n > degree {
+            if n > degree || (m == 0 && n < first_zonal) {
                 continue;
             }
             // Unnormalised P_nm(t) without the Condon-Shortley phase.
@@ -215,15 +244,24 @@ mod tests {
             [4.0e6, -5.0e6, 2.5e6],
             [2.0e5, 1.0e5, 7.5e6],
         ] {
-            for degree in [2, 4, MAX_TESSERAL_DEGREE] {
-                let a = tesseral(p, degree);
+            for (degree, first_zonal) in [
+                (2, usize::MAX),
+                (4, usize::MAX),
+                (DEEP_SPACE_TESSERAL_DEGREE, usize::MAX),
+                (MAX_TESSERAL_DEGREE, usize::MAX),
+                (MAX_TESSERAL_DEGREE, 7),
+                (20, 3),
+            ] {
+                let a = field(p, degree, first_zonal);
                 let size = a.iter().map(|v| v.abs()).fold(0.0, f64::max);
                 for i in 0..3 {
                     let h = 10.0;
                     let (mut qp, mut qm) = (p, p);
                     qp[i] += h;
                     qm[i] -= h;
-                    let g = (potential(qp, degree) - potential(qm, degree)) / (2.0 * h);
+                    let g = (potential(qp, degree, first_zonal)
+                        - potential(qm, degree, first_zonal))
+                        / (2.0 * h);
                     assert!(
                         (a[i] - g).abs() < 1e-6 * size,
                         "{p:?} {degree} {i}: {} vs {g}",
@@ -231,6 +269,17 @@ mod tests {
                     );
                 }
             }
+        }
+        // The zonals of the table are rhoprop's J3..J6 (dynamics::zonal_acceleration) to
+        // their digits: J_n = -sqrt(2n + 1) C_n0.
+        for (n, j) in [
+            (3, crate::constants::J3),
+            (4, crate::constants::J4),
+            (6, crate::constants::J6),
+        ] {
+            let c = EGM2008.iter().find(|e| e.0 == n && e.1 == 0).unwrap().2;
+            let jn = -c * ((2 * n + 1) as f64).sqrt();
+            assert!((jn - j).abs() < 1e-3 * j.abs(), "J{n}: {jn} vs {j}");
         }
     }
 
@@ -293,7 +342,7 @@ mod tests {
         let (mut worst_full, mut worst_two) = (0.0f64, 0.0f64);
         for (k, want) in soop.iter().enumerate() {
             let lon = (15.0 * k as f64).to_radians();
-            worst_full = worst_full.max((east(MAX_TESSERAL_DEGREE, lon) * 1e9 - want).abs());
+            worst_full = worst_full.max((east(DEEP_SPACE_TESSERAL_DEGREE, lon) * 1e9 - want).abs());
             worst_two = worst_two.max((east(2, lon) * 1e9 - want).abs());
         }
         assert!(worst_full < 1.5, "degree 8: worst {worst_full} e-9 m/s^2");

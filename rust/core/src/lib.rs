@@ -33,6 +33,7 @@ pub mod constants;
 pub mod decay;
 pub mod density;
 pub mod dynamics;
+pub mod egm2008;
 pub mod encounter;
 pub mod ephemeris;
 pub mod equinoctial;

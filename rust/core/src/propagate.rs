@@ -219,6 +219,7 @@ mod tests {
             drag,
             floor_altitude,
             zonal_degree: 2,
+            gravity: crate::problem::Gravity::AUTO,
         };
         propagate(atm, &problem, times, method, &Progress::default())
     }
@@ -477,6 +478,7 @@ mod tests {
             drag: DRAG,
             floor_altitude: DEFAULT_FLOOR_ALTITUDE,
             zonal_degree: 2,
+            gravity: crate::problem::Gravity::AUTO,
         };
         let p = Progress::default();
         p.cancel.store(true, Ordering::Relaxed);

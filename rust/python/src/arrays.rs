@@ -85,6 +85,7 @@ pub fn problem(
     drag: f64,
     floor_altitude: f64,
     zonal_degree: u8,
+    gravity: (Option<u8>, Option<bool>),
 ) -> PyResult<Problem> {
     Ok(Problem {
         epoch,
@@ -92,5 +93,9 @@ pub fn problem(
         drag,
         floor_altitude,
         zonal_degree,
+        gravity: rhoprop_core::problem::Gravity {
+            field_degree: gravity.0,
+            third_bodies: gravity.1,
+        },
     })
 }

@@ -20,7 +20,7 @@ type PropagateOut<'py> = (
 /// Propagates one state; see `rhoprop.propagate` for the documented Python API.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, output_times, method, step, rtol, floor_altitude,
-    zonal_degree = 2))]
+    zonal_degree = 2, gravity = (None, None)))]
 #[allow(clippy::too_many_arguments)]
 pub fn propagate<'py>(
     py: Python<'py>,
@@ -34,9 +34,11 @@ pub fn propagate<'py>(
     rtol: Option<f64>,
     floor_altitude: f64,
     zonal_degree: u8,
+    gravity: (Option<u8>, Option<bool>),
 ) -> PyResult<PropagateOut<'py>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
-    let problem = crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree)?;
+    let problem =
+        crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree, gravity)?;
     let outputs = vector("output_times", &output_times)?.to_vec();
     let method = Method::from_name(method, step, rtol).map_err(to_py)?;
     let tr: Trajectory = long_call(py, None, |progress| {
