@@ -194,10 +194,11 @@ def propagate(
     rtol: float | None,
     floor_altitude: float,
     zonal_degree: int = 2,
-    gravity: tuple[int | None, bool | None] = (None, None),
+    forces: tuple[int | None, bool | None, float] = ...,
 ) -> _Propagated:
     """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations);
-    gravity: (tesseral degree, third bodies), None each: automatic by regime."""
+    forces: (field degree, third bodies, Cr*A/m m^2/kg), default (None, None, 0.0), the
+    same in ccsp and monte_carlo: None automatic by regime, radiation 0 none."""
 
 def ccsp(
     atmosphere: _Atmosphere,
@@ -216,7 +217,7 @@ def ccsp(
     coordinates: str = "equinoctial",
     kappa_scale: float = 1.0,
     slow: tuple[float, float] | None = None,
-    gravity: tuple[int | None, bool | None] = (None, None),
+    forces: tuple[int | None, bool | None, float] = ...,
 ) -> _CcspOutput:
     """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
     (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
@@ -279,7 +280,7 @@ def monte_carlo(
     progress: Callable[[int], object] | None,
     zonal_degree: int = 2,
     drag_sigma: float = 0.0,
-    gravity: tuple[int | None, bool | None] = (None, None),
+    forces: tuple[int | None, bool | None, float] = ...,
 ) -> _MonteCarloOutput:
     """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
     (n,), decay_times (n,), step (s), drag_factors (n,) (factor on Cd*A/m per member,

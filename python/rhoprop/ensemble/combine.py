@@ -346,7 +346,7 @@ def ensemble(
     results: dict[str, MonteCarloResult | CcspResult] = {}
     run = monte_carlo if method == "monte_carlo" else ccsp
     for name in names:
-        craft = Spacecraft(cd[name], spacecraft.area_to_mass)
+        craft = Spacecraft(cd[name], spacecraft.area_to_mass, spacecraft.cr)
         results[name] = run(state, craft, models[name], duration, **method_options)
     # A CCSP that stopped at decay has fewer outputs: every component is laid on the
     # longest output grid, NaN where its model has no statistics.

@@ -222,7 +222,7 @@ def ccsp(
             args.coordinates,
             args.kappa_scale,
             args.slow,
-            dyn.gravity,
+            dyn.forces(spacecraft.radiation_parameter),
         )
 
     out = run_in_field(model, state, span, args.floor, run)

@@ -137,6 +137,12 @@ class Dynamics:
             None if self.third_bodies is None else bool(self.third_bodies),
         )
 
+    def forces(self, radiation_parameter: float = 0.0) -> tuple[int | None, bool | None, float]:
+        """(field_degree, third_bodies, Cr*A/m in m^2/kg) as the core takes them: the
+        gravity of these dynamics and the object's radiation pressure
+        (:attr:`Spacecraft.radiation_parameter`, 0: none)."""
+        return (*self.gravity, float(radiation_parameter))
+
     def require_automatic_gravity(self, function: str) -> None:
         """ValueError if ``function`` (a catalog, reentry, screening or close-approach run)
         is given ``field_degree`` or ``third_bodies``, which it does not honour."""

@@ -246,7 +246,7 @@ def monte_carlo(
                 callback,
                 degree,
                 drag_sigma,
-                dyn.gravity,
+                dyn.forces(spacecraft.radiation_parameter),
             )
         finally:
             if bar is not None:
@@ -261,7 +261,7 @@ def monte_carlo(
             step=float(out["step"]),
             floor_altitude=floor,
             zonal_degree=degree,
-            gravity=dyn.gravity,
+            forces=dyn.forces(spacecraft.radiation_parameter),
         )
         return out, trajectory_from_core(state.epoch, mean, state.frame)
 

@@ -213,13 +213,13 @@ def core_propagate(
     floor_altitude: float,
     zonal_degree: int,
     rtol: float | None = None,
-    gravity: tuple[int | None, bool | None] = (None, None),
+    forces: tuple[int | None, bool | None, float] = (None, None, 0.0),
 ) -> tuple[np.ndarray, np.ndarray, float | None, int, int]:
     """The one call of ``_core.propagate``: ``state`` through ``atmosphere`` to ``times``
     (s from its epoch, increasing from 0, or decreasing for a backward run) with Cd*A/m
     ``drag_parameter`` (m^2/kg); returns (times, states, decayed_at, RHS evaluations,
-    clipped evaluations), the states in ``state.frame`` (:mod:`.run_frame`). ``gravity``:
-    :attr:`Dynamics.gravity`."""
+    clipped evaluations), the states in ``state.frame`` (:mod:`.run_frame`). ``forces``:
+    :meth:`Dynamics.forces`."""
     inside, _cov, rot = run_frame.into_run(state)
     t, states, decayed_at, evaluations, clipped = _core.propagate(
         atmosphere,
@@ -232,7 +232,7 @@ def core_propagate(
         rtol,
         floor_altitude,
         zonal_degree,
-        gravity,
+        forces,
     )
     states = run_frame.vectors(rot, states)
     if rot is not None and len(t) and t[0] == 0.0:
@@ -395,7 +395,7 @@ def propagate(
             rtol=tol,
             floor_altitude=floor,
             zonal_degree=degree,
-            gravity=dyn.gravity,
+            forces=dyn.forces(spacecraft.radiation_parameter),
         )
 
     out = run_in_field(model, state, span, floor, run)

@@ -15,6 +15,9 @@ from ..time import EpochLike, to_datetime64
 
 #: Largest accepted distance from the Earth's centre, in equatorial radii.
 MAX_RADII = 10.0
+#: Largest accepted radiation pressure coefficient: fitted Cr of real objects reach 2-3
+#: (a mirror is 2); above 5 a value is a units or parameter mistake.
+MAX_CR = 5.0
 #: Accepted speeds, as fractions of the circular speed sqrt(mu / |r|) at the position:
 #: below 0.3 the perigee radius is at most 5 % of |r| (2a - |r| with a = |r| / 1.91),
 #: deep inside the Earth; 1.5 is beyond the escape speed (sqrt 2 = 1.41), so every bound
@@ -106,15 +109,22 @@ class OrbitState:
 
 @dataclass(frozen=True)
 class Spacecraft:
-    """Drag properties of the object.
+    """Drag and radiation-pressure properties of the object.
 
     Args:
         cd: drag coefficient (dimensionless, > 0).
         area_to_mass: cross-section area over mass, m^2/kg (> 0).
+        cr: radiation pressure coefficient (dimensionless, 0 to 5; 1: a black body, 2: a
+            mirror facing the Sun; fitted values of real objects range wider). None (the
+            default): no solar radiation pressure, as SGP4. The Sun's light then pushes
+            the cannonball of ``cr * area_to_mass`` away from the Sun, dimmed in the
+            Earth's conical shadow (``docs/conventions.md``); the same area as drag's,
+            so for a different mean area in sunlight scale ``cr`` by their ratio.
     """
 
     cd: float
     area_to_mass: float
+    cr: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "cd", _validate.positive("cd", self.cd))
@@ -127,11 +137,24 @@ class Spacecraft:
                 f"cd * area_to_mass = {self.cd:g} * {self.area_to_mass:g} m^2/kg is "
                 f"{product:g}: out of the float range"
             )
+        if self.cr is not None:
+            cr = _validate.real("cr", self.cr)
+            if not 0.0 <= cr <= MAX_CR:
+                raise ValueError(
+                    f"cr = {cr:g} is out of range: the radiation pressure coefficient must "
+                    f"be 0 to {MAX_CR:g} (None: no radiation pressure)"
+                )
+            object.__setattr__(self, "cr", cr)
 
     @property
     def drag_parameter(self) -> float:
         """Cd * A / m, m^2/kg."""
         return self.cd * self.area_to_mass
+
+    @property
+    def radiation_parameter(self) -> float:
+        """Cr * A / m, m^2/kg; 0 without ``cr`` (no radiation pressure)."""
+        return 0.0 if self.cr is None else self.cr * self.area_to_mass
 
 
 def radii_beyond_reach(r: npt.ArrayLike) -> float | None:

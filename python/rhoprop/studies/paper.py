@@ -266,7 +266,7 @@ def ccsp_vs_monte_carlo(
     along, cmean, cstd, cds, seconds = {}, {}, {}, {}, {}
     ref_orbit = None
     for label, model, cd in configs:
-        craft = Spacecraft(cd, spacecraft.area_to_mass)
+        craft = Spacecraft(cd, spacecraft.area_to_mass, spacecraft.cr)
         t0 = time.perf_counter()
         mc = monte_carlo(
             state,

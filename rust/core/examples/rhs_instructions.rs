@@ -33,7 +33,7 @@ fn main() {
             drag: 3.0912 * 0.0015,
             floor_altitude: 120e3,
             zonal_degree: 2,
-            gravity: rhoprop_core::problem::Gravity::AUTO,
+            forces: rhoprop_core::problem::Forces::AUTO,
         },
         initial_factor: None,
         kappa: KappaProcess::Constant,

@@ -1025,7 +1025,7 @@ mod tests {
             drag: 3.0912 * 0.0015,
             floor_altitude: 120e3,
             zonal_degree: 2,
-            gravity: crate::problem::Gravity::AUTO,
+            forces: crate::problem::Forces::AUTO,
         };
         let mut p0 = [[0.0; 6]; 6];
         for i in 0..6 {
@@ -1250,7 +1250,7 @@ mod tests {
                 drag: 3.0912 * 0.0015,
                 floor_altitude: 120e3,
                 zonal_degree: 2,
-                gravity: crate::problem::Gravity::AUTO,
+                forces: crate::problem::Forces::AUTO,
             },
             p0,
             update_times,

@@ -82,6 +82,12 @@ pub fn sun(ut1: f64) -> [f64; 3] {
     equatorial(lon, 0.0, r)
 }
 
+/// Geocentric position of the Sun, m, in the mean equator and equinox of the date `ut1`
+/// (s since J2000): [`ThirdBodies::sun`] without the Moon's series.
+pub fn sun_of_date(ut1: f64) -> [f64; 3] {
+    rotate(&precession(centuries(ut1)), sun(ut1))
+}
+
 /// Geocentric position of the Moon, m, EME2000, at `ut1` s since J2000.
 pub fn moon(ut1: f64) -> [f64; 3] {
     let t = centuries(ut1);

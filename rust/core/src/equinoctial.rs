@@ -437,7 +437,7 @@ mod tests {
             drag: 1e-12, // m^2/kg: no drag to speak of (it must be > 0)
             floor_altitude: 100e3,
             zonal_degree: 2,
-            gravity: crate::problem::Gravity::AUTO,
+            forces: crate::problem::Forces::AUTO,
         };
         let atm = Exponential::new(3.725e-12, 400e3, 58.515e3, 0.0).unwrap();
         let times: Vec<f64> = (1..=288).map(|i| i as f64 * 300.0).collect();

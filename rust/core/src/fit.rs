@@ -11,7 +11,7 @@ use crate::density::Atmosphere;
 use crate::dynamics::{Dynamics, State};
 use crate::error::{finite, positive, CoreError};
 use crate::integrators::{drive, Control, FixedMethod, StepHooks, StepPlan};
-use crate::problem::{check_state, Gravity, Problem};
+use crate::problem::{check_state, Forces, Problem};
 use crate::progress::Progress;
 use crate::simd::{dispatch, Aligned, Kernel};
 use nalgebra::{DMatrix, DVector};
@@ -161,7 +161,7 @@ fn fit_one<A: Atmosphere + ?Sized>(
         drag: p[6],
         floor_altitude: s.floor_altitude,
         zonal_degree: s.zonal_degree,
-        gravity: crate::problem::Gravity::AUTO,
+        forces: crate::problem::Forces::AUTO,
     }
     .validate()?;
     let mut grid = trial(atmosphere, job, s, &p, progress).map_err(|e| match e {
@@ -344,7 +344,7 @@ fn trial<A: Atmosphere + ?Sized>(
         let mut dynamics =
             Dynamics::<A, LANES>::new(atmosphere, job.epoch, std::array::from_fn(|l| lanes[l][6]));
         dynamics.zonal_degree = s.zonal_degree;
-        dynamics.set_gravity(Gravity::AUTO, &std::array::from_fn(|i| job.p0[i]));
+        dynamics.set_forces(Forces::AUTO, &std::array::from_fn(|i| job.p0[i]));
         // As every propagator (`Dynamics::for_problem`): stage points far below the floor
         // see no drag, so a trial step across it ends on a position, not on a NaN, and the
         // trial is rejected as decayed.
@@ -499,7 +499,7 @@ mod tests {
             drag: p[6],
             floor_altitude: 120e3,
             zonal_degree: 4,
-            gravity: crate::problem::Gravity::AUTO,
+            forces: crate::problem::Forces::AUTO,
         };
         let run = |sign: f64, n: usize| {
             let times: Vec<f64> = (0..=n).map(|g| sign * spacing * g as f64).collect();

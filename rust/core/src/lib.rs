@@ -47,6 +47,7 @@ pub mod montecarlo;
 pub mod problem;
 pub mod progress;
 pub mod propagate;
+pub mod radiation;
 pub mod rng;
 pub mod sieve;
 pub mod simd;

@@ -551,7 +551,7 @@ mod tests {
                 drag: 3.0912 * 0.0015,
                 floor_altitude: 120e3,
                 zonal_degree: 2,
-                gravity: crate::problem::Gravity::AUTO,
+                forces: crate::problem::Forces::AUTO,
             },
             initial_factor: None,
             kappa,

@@ -24,34 +24,49 @@ pub struct Problem {
     /// Highest zonal harmonic of the gravity field: 2 (J2 only, the paper's model) up to
     /// [`MAX_ZONAL_DEGREE`] (J2..J6).
     pub zonal_degree: u8,
-    /// What acts beside the zonals and drag: the tesseral field and the Sun and the Moon.
-    pub gravity: Gravity,
+    /// What acts beside the zonals and drag: the field, the Sun and the Moon, the Sun's
+    /// light.
+    pub forces: Forces,
 }
 
-/// The terms of the dynamics beyond the zonals and drag. `None` is automatic: both on for
-/// deep-space orbits ([`crate::dynamics::deep_space`]), both off near the Earth, as SGP4
-/// switches to SDP4 (the tesseral field to degree 8); a precise near-Earth prediction
-/// asks for them (over a day a 455-km orbit without the field is 4-5 km off its precise
-/// orbit).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Gravity {
+/// The terms of the dynamics beyond the zonals and drag. For the field and the third
+/// bodies `None` is automatic: both on for deep-space orbits
+/// ([`crate::dynamics::deep_space`]), both off near the Earth, as SGP4 switches to SDP4
+/// (the tesseral field to degree 8); a precise near-Earth prediction asks for them (over
+/// a day a 455-km orbit without the field is 4-5 km off its precise orbit). Radiation
+/// pressure acts where the object has a radiation parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Forces {
     /// Degree and order of the EGM2008 field beyond the run's zonals: every harmonic of
     /// order m >= 1 and the zonals above the zonal degree, up to this degree; 0 (none)
     /// or 2 to [`MAX_TESSERAL_DEGREE`].
     pub field_degree: Option<u8>,
     /// Whether the Sun's and the Moon's pull act.
     pub third_bodies: Option<bool>,
+    /// Radiation parameter Cr A / m, m^2/kg, of solar radiation pressure
+    /// ([`crate::radiation`]); 0: none.
+    pub radiation: f64,
 }
 
-impl Gravity {
-    /// Automatic: what the orbit's regime calls for.
-    pub const AUTO: Gravity = Gravity {
+impl Forces {
+    /// Automatic: what the orbit's regime calls for, and no radiation pressure.
+    pub const AUTO: Forces = Forces {
         field_degree: None,
         third_bodies: None,
+        radiation: 0.0,
     };
 
-    /// Checks the tesseral degree: 0 or 2..=[`MAX_TESSERAL_DEGREE`].
+    /// Checks the field degree (0 or 2..=[`MAX_TESSERAL_DEGREE`]) and the radiation
+    /// parameter (finite, >= 0).
     pub fn validate(&self) -> Result<(), CoreError> {
+        finite("radiation parameter Cr*A/m", self.radiation)?;
+        if self.radiation < 0.0 {
+            return Err(CoreError::invalid(
+                "radiation parameter Cr*A/m",
+                self.radiation,
+                "it must be >= 0 (0: no radiation pressure)",
+            ));
+        }
         match self.field_degree {
             Some(d) if d == 1 || usize::from(d) > MAX_TESSERAL_DEGREE => Err(CoreError::invalid(
                 "field_degree",
@@ -78,7 +93,7 @@ impl Problem {
                 format!("it must be 2 (J2 only) to {MAX_ZONAL_DEGREE} (J2..J{MAX_ZONAL_DEGREE})"),
             ));
         }
-        self.gravity.validate()?;
+        self.forces.validate()?;
         check_state(self.epoch, &self.y0, self.floor_altitude)
     }
 }
@@ -158,7 +173,7 @@ mod tests {
         drag: 3.0912 * 0.0015,
         floor_altitude: DEFAULT_FLOOR_ALTITUDE,
         zonal_degree: 2,
-        gravity: Gravity::AUTO,
+        forces: Forces::AUTO,
     };
 
     #[test]
@@ -179,9 +194,12 @@ mod tests {
         assert!(bad(|p| p.floor_altitude = 450e3).contains("decay floor altitude of 450000 m"));
         assert!(bad(|p| p.zonal_degree = 7).starts_with("zonal_degree = 7 is invalid"));
         assert!(bad(|p| p.zonal_degree = 1).contains("2 (J2 only) to 6"));
-        assert!(bad(|p| p.gravity.field_degree = Some(41))
+        assert!(bad(|p| p.forces.field_degree = Some(41))
             .starts_with("field_degree = 41 is invalid: it must be 0 (none) or 2 to 40"));
-        assert!(bad(|p| p.gravity.field_degree = Some(1)).starts_with("field_degree = 1"));
+        assert!(bad(|p| p.forces.field_degree = Some(1)).starts_with("field_degree = 1"));
+        assert!(bad(|p| p.forces.radiation = -0.01)
+            .starts_with("radiation parameter Cr*A/m = -0.01 is invalid: it must be >= 0"));
+        assert!(bad(|p| p.forces.radiation = f64::NAN).contains("must be finite"));
         assert_eq!(check_drag_sigma(0.0), Ok(0.0));
         assert_eq!(check_drag_sigma(0.15), Ok(0.15));
         assert!(check_drag_sigma(-0.1)

@@ -219,7 +219,7 @@ mod tests {
             drag,
             floor_altitude,
             zonal_degree: 2,
-            gravity: crate::problem::Gravity::AUTO,
+            forces: crate::problem::Forces::AUTO,
         };
         propagate(atm, &problem, times, method, &Progress::default())
     }
@@ -478,7 +478,7 @@ mod tests {
             drag: DRAG,
             floor_altitude: DEFAULT_FLOOR_ALTITUDE,
             zonal_degree: 2,
-            gravity: crate::problem::Gravity::AUTO,
+            forces: crate::problem::Forces::AUTO,
         };
         let p = Progress::default();
         p.cancel.store(true, Ordering::Relaxed);

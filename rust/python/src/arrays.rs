@@ -85,7 +85,7 @@ pub fn problem(
     drag: f64,
     floor_altitude: f64,
     zonal_degree: u8,
-    gravity: (Option<u8>, Option<bool>),
+    forces: (Option<u8>, Option<bool>, f64),
 ) -> PyResult<Problem> {
     Ok(Problem {
         epoch,
@@ -93,9 +93,10 @@ pub fn problem(
         drag,
         floor_altitude,
         zonal_degree,
-        gravity: rhoprop_core::problem::Gravity {
-            field_degree: gravity.0,
-            third_bodies: gravity.1,
+        forces: rhoprop_core::problem::Forces {
+            field_degree: forces.0,
+            third_bodies: forces.1,
+            radiation: forces.2,
         },
     })
 }

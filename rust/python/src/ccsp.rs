@@ -20,7 +20,7 @@ use rhoprop_core::integrators::FixedMethod;
 #[pyo3(signature = (atmosphere, epoch, state, drag, initial_covariance, update_times,
     scaling, perturbation, step, floor_altitude, zonal_degree = 2, drag_sigma = 0.0,
     output_times = None, coordinates = "equinoctial", kappa_scale = 1.0, slow = None,
-    gravity = (None, None)))]
+    forces = (None, None, 0.0)))]
 #[allow(clippy::too_many_arguments)]
 pub fn ccsp<'py>(
     py: Python<'py>,
@@ -40,21 +40,14 @@ pub fn ccsp<'py>(
     coordinates: &str,
     kappa_scale: f64,
     slow: Option<(f64, f64)>,
-    gravity: (Option<u8>, Option<bool>),
+    forces: (Option<u8>, Option<bool>, f64),
 ) -> PyResult<Bound<'py, PyDict>> {
     let coordinates = coordinates_arg(coordinates)?;
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
     let p0 = crate::arrays::matrix6("initial_covariance", &initial_covariance)?;
     let cfg = CcspConfig {
-        problem: crate::arrays::problem(
-            epoch,
-            &state,
-            drag,
-            floor_altitude,
-            zonal_degree,
-            gravity,
-        )?,
+        problem: crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree, forces)?,
         p0,
         update_times: crate::arrays::vector("update_times", &update_times)?.to_vec(),
         output_times: match &output_times {
@@ -136,7 +129,7 @@ pub fn ccsp_many<'py>(
                         *drag,
                         floor_altitude,
                         zonal_degree,
-                        (None, None),
+                        (None, None, 0.0),
                     )?,
                     p0: crate::arrays::matrix6("initial_covariance", p0)?,
                     update_times: crate::arrays::vector("update_times", times)?.to_vec(),

@@ -23,7 +23,7 @@ const MAX_THREADS: usize = 1024;
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, output_times, kappa, perturbation, method,
     step, members, seed, initial_covariance, floor_altitude, record_density, threads, progress,
-    zonal_degree = 2, drag_sigma = 0.0, gravity = (None, None)))]
+    zonal_degree = 2, drag_sigma = 0.0, forces = (None, None, 0.0)))]
 #[allow(clippy::too_many_arguments)]
 pub fn monte_carlo<'py>(
     py: Python<'py>,
@@ -45,7 +45,7 @@ pub fn monte_carlo<'py>(
     progress: Option<Py<PyAny>>,
     zonal_degree: u8,
     drag_sigma: f64,
-    gravity: (Option<u8>, Option<bool>),
+    forces: (Option<u8>, Option<bool>, f64),
 ) -> PyResult<Bound<'py, PyDict>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let perturbation = crate::arrays::perturbation(perturbation)?;
@@ -57,14 +57,7 @@ pub fn monte_carlo<'py>(
         ),
     };
     let cfg = MonteCarloConfig {
-        problem: crate::arrays::problem(
-            epoch,
-            &state,
-            drag,
-            floor_altitude,
-            zonal_degree,
-            gravity,
-        )?,
+        problem: crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree, forces)?,
         initial_factor,
         kappa: KappaProcess::from_spec(&kappa.0, &kappa.1).map_err(to_py)?,
         perturbation,

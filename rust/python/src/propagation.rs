@@ -20,7 +20,7 @@ type PropagateOut<'py> = (
 /// Propagates one state; see `rhoprop.propagate` for the documented Python API.
 #[pyfunction]
 #[pyo3(signature = (atmosphere, epoch, state, drag, output_times, method, step, rtol, floor_altitude,
-    zonal_degree = 2, gravity = (None, None)))]
+    zonal_degree = 2, forces = (None, None, 0.0)))]
 #[allow(clippy::too_many_arguments)]
 pub fn propagate<'py>(
     py: Python<'py>,
@@ -34,11 +34,11 @@ pub fn propagate<'py>(
     rtol: Option<f64>,
     floor_altitude: f64,
     zonal_degree: u8,
-    gravity: (Option<u8>, Option<bool>),
+    forces: (Option<u8>, Option<bool>, f64),
 ) -> PyResult<PropagateOut<'py>> {
     let atm = AtmosphereRef::extract(atmosphere)?;
     let problem =
-        crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree, gravity)?;
+        crate::arrays::problem(epoch, &state, drag, floor_altitude, zonal_degree, forces)?;
     let outputs = vector("output_times", &output_times)?.to_vec();
     let method = Method::from_name(method, step, rtol).map_err(to_py)?;
     let tr: Trajectory = long_call(py, None, |progress| {

@@ -18,7 +18,7 @@ pub fn paper_problem() -> Problem {
         drag: 3.0912 * 0.0015,
         floor_altitude: 120e3,
         zonal_degree: 2,
-        gravity: rhoprop_core::problem::Gravity::AUTO,
+        forces: rhoprop_core::problem::Forces::AUTO,
     }
 }
 

@@ -315,7 +315,7 @@ mod tests {
                 drag: 1e-6,
                 floor_altitude: 120e3,
                 zonal_degree: 2,
-                gravity: crate::problem::Gravity::AUTO,
+                forces: crate::problem::Forces::AUTO,
             },
             initial_factor: None,
             kappa: KappaProcess::GaussMarkov {

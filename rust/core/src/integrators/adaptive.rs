@@ -113,6 +113,7 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
     let mut h = initial_step(rhs, t, &y, &k[0], opts.rtol, &mut tmp)?.min(opts.max_step);
     let mut last_rejected = false;
     let mut attempts = 0usize;
+    let watch = rhs.switch_step().is_finite();
 
     while t < t_end {
         attempts += 1;
@@ -134,13 +135,23 @@ pub fn integrate_adaptive<const W: usize, R: BatchRhs<W>, H: StepHooks<W, R>>(
             return Err(CoreError::StepUnderflow { t, h });
         }
         // Stages 1..11 (k[0] holds f(t, y) already).
+        let side = if watch { rhs.sides(t, &y) } else { 0 };
+        let mut switched = false;
         for s in 1..12 {
             combine(&mut tmp, &y, h, &tab::A[s][..s], &k[..s]);
             rhs.eval(t + tab::C[s] * h, &tmp, &mut k[s])?;
+            switched |= watch && rhs.sides(t + tab::C[s] * h, &tmp) != side;
         }
         // 8th-order solution.
         let mut y_new = y;
         combine(&mut y_new, &y, h, &tab::B, &k[..12]);
+        switched |= watch && rhs.sides(t + h, &y_new) != side;
+        if switched && h > rhs.switch_step() {
+            // A switch inside the step: retake it shorter, down to the switch step.
+            h = (0.25 * h).max(rhs.switch_step());
+            last_rejected = true;
+            continue;
+        }
         // Error estimate (Hairer's combination of the 5th and 3rd order estimators).
         let sc = scales(opts.rtol, &y, &y_new);
         let (mut e5, mut e3) = (zero::<W>(), zero::<W>());
