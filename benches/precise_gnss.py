@@ -22,7 +22,6 @@ Run:  python benches/precise_gnss.py
 
 from __future__ import annotations
 
-import gzip
 import os
 import re
 import tempfile
@@ -51,23 +50,17 @@ GEO = {"C01", "C02", "C03", "C04", "C05", "C59", "C60", "C62"}
 
 
 def read_sp3(paths: list[Path]) -> dict[str, dict[np.datetime64, np.ndarray]]:
-    """{PRN: {GPS epoch: Earth-fixed position m}} of BeiDou satellites in SP3-d files."""
+    """{PRN: {GPS epoch: Earth-fixed position m}} of BeiDou satellites in SP3-d files
+    (read by ``rp.io.read_sp3``, whose epochs are UTC: GPS = UTC + 18 s in 2024)."""
     out: dict[str, dict[np.datetime64, np.ndarray]] = {}
     for path in paths:
-        epoch = None
-        with gzip.open(path, "rt") as text:
-            for line in text:
-                if line.startswith("*  "):
-                    f = line[3:].split()
-                    epoch = np.datetime64(
-                        f"{int(f[0]):04d}-{int(f[1]):02d}-{int(f[2]):02d}T{int(f[3]):02d}:"
-                        f"{int(f[4]):02d}:{int(float(f[5])):02d}",
-                        "ns",
-                    )
-                elif line.startswith("PC") and epoch is not None:
-                    xyz = [float(x) for x in line[4:46].split()]
-                    if all(abs(v) < 9e5 for v in xyz):  # 0.000000 marks a missing value
-                        out.setdefault(line[1:4], {})[epoch] = np.array(xyz) * 1e3
+        sp3 = rp.io.read_sp3(path)
+        for prn, pos in sp3.positions.items():
+            if prn.startswith("C"):
+                track = out.setdefault(prn, {})
+                for epoch, r in zip(sp3.epochs + GPS_MINUS_UTC, pos, strict=True):
+                    if np.isfinite(r).all():
+                        track[epoch] = r
     return out
 
 
