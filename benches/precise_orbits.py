@@ -25,7 +25,6 @@ Run:  python benches/precise_orbits.py
 
 from __future__ import annotations
 
-import gzip
 import os
 import tempfile
 import warnings
@@ -47,39 +46,18 @@ SATELLITES = {
 HORIZONS = (1, 2, 3, 4, 5)
 
 
-def read_sp3(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(TAI epochs datetime64[ns], positions m, velocities m/s) of an SP3-c file of one
-    satellite (P and V records; velocities in dm/s in the file)."""
-    epochs, pos, vel = [], [], []
-    with gzip.open(path, "rt") as text:
-        for line in text:
-            if line.startswith("*  "):
-                y, mo, d, h, mi = (int(x) for x in line[3:31].split()[:5])
-                sec = float(line[3:31].split()[5])
-                epochs.append(
-                    np.datetime64(f"{y:04d}-{mo:02d}-{d:02d}T{h:02d}:{mi:02d}", "ns")
-                    + np.timedelta64(round(sec * 1e9), "ns")
-                )
-            elif line.startswith("P"):
-                pos.append([float(x) * 1e3 for x in line[4:46].split()])
-            elif line.startswith("V"):
-                vel.append([float(x) * 0.1 for x in line[4:46].split()])
-    return np.array(epochs), np.array(pos), np.array(vel)
-
-
-def truth_gcrs(sp3: tuple, utc: np.datetime64) -> np.ndarray:
-    """The precise position (m, GCRS) at the UTC instant ``utc``."""
+def truth_gcrs(sp3: rp.io.Sp3, utc: np.datetime64) -> np.ndarray:
+    """The precise position (m, GCRS) at the UTC instant ``utc`` (``rp.io.read_sp3`` puts
+    the file's TAI epochs on the UTC scale)."""
     from astropy import units as u
     from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
     from astropy.time import Time
 
-    epochs, pos, _ = sp3
-    tai = Time(str(utc), scale="utc").tai
-    tai64 = np.datetime64(tai.isot, "ns")
+    epochs, pos = sp3.epochs, next(iter(sp3.positions.values()))
     # Lagrange through the 10 samples around it (60 s apart: sub-millimetre in LEO). The
-    # velocities are not used: TOPEX's file gives them in m/s where SP3 says dm/s.
-    k = int(np.clip(np.searchsorted(epochs, tai64) - 5, 0, len(epochs) - 10))
-    x = (epochs[k : k + 10] - tai64) / np.timedelta64(60, "s")
+    # velocities are not read: TOPEX's file gives them in m/s where SP3 says dm/s.
+    k = int(np.clip(np.searchsorted(epochs, utc) - 5, 0, len(epochs) - 10))
+    x = (epochs[k : k + 10] - utc) / np.timedelta64(60, "s")
     weights = np.array(
         [np.prod([-x[m] / (x[j] - x[m]) for m in range(10) if m != j]) for j in range(10)]
     )
@@ -142,10 +120,9 @@ def main() -> None:
     )
     print("| --- | ---: | ---: | --- | --- | ---: | --- | ---: |")
     for name, (norad, file) in SATELLITES.items():
-        sp3 = read_sp3(data / file)
+        sp3 = rp.io.read_sp3(data / file)
         sets = sets_of(data / "tles_jason1_topex.txt", norad)
-        first_utc = sp3[0][0] - np.timedelta64(40, "s")
-        last_utc = sp3[0][-1] - np.timedelta64(40, "s")
+        first_utc, last_utc = sp3.epochs[0], sp3.epochs[-1]
         errors: dict[int, list[tuple[float, float, float]]] = {h: [] for h in HORIZONS}
         day = first_utc.astype("datetime64[D]") + np.timedelta64(1, "D")
         while day + np.timedelta64(1, "D") <= last_utc:

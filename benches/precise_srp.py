@@ -2,7 +2,7 @@
 
 For every BeiDou satellite in GFZ's multi-GNSS rapid orbits (``$RHOPROP_TEST_DATA/
 precise_orbits/gnss``, SP3-d, 5 min, GPS time, Earth-fixed; rotated to GCRS with astropy,
-bundled IERS-B), a state is fitted by least squares (scipy) to the first day's precise
+bundled IERS-B), a state is fitted by ``rp.fit_positions`` to the first day's precise
 positions (every 15 min), then propagated two more days and compared with the precise
 orbit. Fitted twice, with the same dynamics (``rp.Dynamics.precise()``: J2..J6, EGM2008
 to degree 40, Sun and Moon; DOP853):
@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 from precise_gnss import GEO, GNSS, GPS_MINUS_UTC, SP3, read_sp3, to_gcrs
-from scipy.optimize import least_squares
 
 import rhoprop as rp
 from machine import describe
@@ -47,54 +46,26 @@ def truth_gcrs(track: dict[np.datetime64, np.ndarray]) -> tuple[np.ndarray, np.n
     return t, to_gcrs([g - GPS_MINUS_UTC for g in have], np.array([track[g] for g in have]))
 
 
-def first_state(track: dict[np.datetime64, np.ndarray]) -> np.ndarray:
-    """GCRS position and velocity at the start: the velocity from a 4th-order central
-    difference of the 5-min positions around it (a guess the fit refines)."""
-    h = np.timedelta64(300, "s")
-    at = [START_GPS + k * h for k in (-2, -1, 0, 1, 2)]
-    if not all(a in track for a in at):
-        at = [START_GPS + k * h for k in (0, 1, 2, 3, 4)]
-    r = to_gcrs([a - GPS_MINUS_UTC for a in at], np.array([track[a] for a in at]))
-    if at[0] == START_GPS:  # one-sided: a quartic through five points, slope at the first
-        v = (-25 * r[0] + 48 * r[1] - 36 * r[2] + 16 * r[3] - 3 * r[4]) / (12 * 300.0)
-        return np.concatenate([r[0], v])
-    v = (r[0] - 8 * r[1] + 8 * r[3] - r[4]) / (12 * 300.0)
-    return np.concatenate([r[2], v])
-
-
-def run(x: np.ndarray, t: np.ndarray, radiation: bool) -> np.ndarray:
-    """Positions (len(t), 3) m at ``t`` s from the start for parameters ``x``: position
-    offsets (m), velocity offsets (mm/s) and, with radiation, Cr."""
-    state = rp.OrbitState(
-        START_GPS - GPS_MINUS_UTC, x[6:9] + x[:3], x[9:12] + x[3:6] * 1e-3, frame="GCRF"
+def predict(t: np.ndarray, r: np.ndarray, fit_cr: bool) -> tuple[np.ndarray, float, float]:
+    """Fits the positions ``r`` (m) of the first FIT_HOURS at ``t`` s from the start with
+    ``rp.fit_positions`` and predicts all of ``t``: (positions (len(t), 3) m, fit RMS m,
+    fitted Cr*A/m m^2/kg)."""
+    epochs = START_GPS - GPS_MINUS_UTC + (t * 1e9).astype("timedelta64[ns]")
+    inside = t <= FIT_HOURS * 3600.0
+    model = rp.scenarios.benchmark_exponential(0.0)  # no drag above 20,000 km
+    fit = rp.fit_positions(
+        epochs[inside], r[inside], rp.Spacecraft(1.0, AREA), model, fit_cr=fit_cr
     )
-    craft = rp.Spacecraft(1.0, AREA, cr=float(x[12]) if radiation else None)
-    out = rp.propagate(
-        state,
-        craft,
-        rp.scenarios.benchmark_exponential(0.0),  # no drag above 20,000 km
-        float(t[-1]),
+    run = rp.propagate(
+        fit.state,
+        fit.spacecraft,
+        model,
+        float(t[-1] - t[0]),
         dynamics=rp.Dynamics.precise(),
         output_step=STEP,
     )
-    index = np.searchsorted(np.round(out.times), t)
-    return out.positions[index]
-
-
-def fit(t: np.ndarray, r: np.ndarray, guess: np.ndarray, radiation: bool) -> np.ndarray:
-    """Least-squares parameters (see :func:`run`) fitted to positions ``r`` at ``t``."""
-    inside = t <= FIT_HOURS * 3600.0
-
-    def residual(p: np.ndarray) -> np.ndarray:
-        x = np.concatenate([p[:6], guess, p[6:]])
-        return ((run(x, t[inside], radiation) - r[inside]) / 1e3).ravel()
-
-    p0 = np.zeros(7 if radiation else 6)
-    lower, upper = np.full(p0.size, -np.inf), np.full(p0.size, np.inf)
-    if radiation:
-        p0[6], lower[6], upper[6] = 1.5, 0.0, 5.0
-    sol = least_squares(residual, p0, bounds=(lower, upper), x_scale=1.0, diff_step=1e-6)
-    return np.concatenate([sol.x[:6], guess, sol.x[6:]])
+    index = np.searchsorted(np.round(run.times), t - t[0])
+    return run.positions[index], fit.rms, fit.spacecraft.radiation_parameter
 
 
 def main() -> None:
@@ -116,22 +87,21 @@ def main() -> None:
         t, r = truth_gcrs(track)
         if len(t) < 0.9 * (SPAN / STEP) or t[-1] < SPAN or t[0] > 0:
             continue
-        guess = first_state(track)
-        rn, vn = np.linalg.norm(guess[:3]), np.linalg.norm(guess[3:])
+        rn = np.linalg.norm(r[0])
+        vn = np.linalg.norm(r[1] - r[0]) / (t[1] - t[0])
         inverse_a = 2 / rn - vn**2 / rp.constants.MU  # 1 / semi-major axis, 1/m
         period = 2 * np.pi / np.sqrt(rp.constants.MU * inverse_a**3)
-        incl = np.degrees(np.arccos(np.cross(guess[:3], guess[3:])[2] / (rn * vn)))
+        normal = np.cross(r[0], r[1] - r[0])
+        incl = np.degrees(np.arccos(normal[2] / np.linalg.norm(normal)))
         kind = "GEO" if prn in GEO else ("IGSO" if period > 80_000 else "MEO")
         errs, rms = [], []
         for radiation in (False, True):
-            x = fit(t, r, guess, radiation)
-            pos = run(x, t, radiation)
+            pos, fit_rms, cram = predict(t, r, radiation)
             miss = np.linalg.norm(pos - r, axis=1)
-            inside = t <= FIT_HOURS * 3600.0
-            rms.append(float(np.sqrt(np.mean(miss[inside] ** 2))))
-            at = [int(np.argmin(abs(t - (FIT_HOURS + h) * 3600.0))) for h in (24, 47.75)]
+            rms.append(fit_rms)
+            after = (24, 47.75)
+            at = [int(np.argmin(abs(t - (FIT_HOURS + hours) * 3600.0))) for hours in after]
             errs.append([miss[i] for i in at])
-            cram = x[12] * AREA if radiation else 0.0
         row = (errs[0][0], errs[1][0], errs[0][1], errs[1][1])
         rows.setdefault(kind, []).append(row)
         print(

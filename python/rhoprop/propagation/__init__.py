@@ -1,12 +1,14 @@
 """Propagation: plain state types (``state``), result types sharing one moments API
 (``results``), deterministic propagation (``propagate``), the kappa processes
-(``kappa``), the correlated-density Monte Carlo (``montecarlo``) and the CCSP filter
-(``ccsp``). Everything here runs in the Rust core with the GIL released."""
+(``kappa``), the correlated-density Monte Carlo (``montecarlo``), the CCSP filter
+(``ccsp``) and fits of an orbit to measured positions (``orbit_fit``). Everything here
+runs in the Rust core with the GIL released."""
 
 from . import kappa
 from .ccsp import DEFAULT_INITIAL_COVARIANCE, ccsp
 from .dynamics import Dynamics
 from .montecarlo import monte_carlo
+from .orbit_fit import OrbitFit, fit_positions
 from .propagate import (
     DEFAULT_MAX_MEMORY,
     DEFAULT_RTOL,
@@ -34,12 +36,14 @@ __all__ = [
     "CcspResult",
     "Dynamics",
     "MonteCarloResult",
+    "OrbitFit",
     "OrbitState",
     "RtnStats",
     "Spacecraft",
     "StateMoments",
     "Trajectory",
     "ccsp",
+    "fit_positions",
     "kappa",
     "monte_carlo",
     "output_grid",

@@ -108,7 +108,8 @@ def ccsp(
     outputs end at the last update completed before it and ``decayed_at`` gives the time.
 
     Args:
-        state, spacecraft: initial mean state and drag properties.
+        state, spacecraft: initial mean state and drag (and, with ``cr``, radiation
+            pressure) properties.
         model: density model with uncertainty (sampled into a field once).
         duration: span, s, or a ``timedelta``; may be left out when ``update_times`` is
             given, and must then equal the last update time if given too.

@@ -98,7 +98,7 @@ def monte_carlo(
 
     Args:
         state: initial :class:`~rhoprop.OrbitState` (the mean, if ``initial_covariance``).
-        spacecraft: :class:`~rhoprop.Spacecraft`.
+        spacecraft: :class:`~rhoprop.Spacecraft` (with ``cr``: radiation pressure too).
         model: a density model with uncertainty (e.g. ``rp.density.Msis()``); its mean and
             sigma are sampled into a field once and interpolated by the core.
         duration: span, s (> 0) or a ``timedelta``; may be left out when ``output_times``

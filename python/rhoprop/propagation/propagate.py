@@ -304,7 +304,8 @@ def propagate(
 
     Args:
         state: initial :class:`OrbitState`.
-        spacecraft: :class:`Spacecraft` (Cd and A/m, m^2/kg).
+        spacecraft: :class:`Spacecraft` (Cd and A/m, m^2/kg; with ``cr`` the Sun's
+            radiation pressure acts too).
         model: a density model, e.g. :class:`rhoprop.density.Exponential` (the same name
             as in :func:`monte_carlo` and :func:`ccsp`; ``density=`` is a deprecated alias).
         duration: propagation span, s (> 0), or a ``timedelta``.
