@@ -72,3 +72,18 @@ def test_bad_input_is_refused():
         rp.fit_positions(epochs, r, 2.2, MODEL)
     with pytest.raises(TypeError, match=r"dynamics must be a rhoprop\.Dynamics"):
         rp.fit_positions(epochs, r, craft, MODEL, dynamics="precise")
+
+
+def test_cr_the_positions_do_not_support_ends_on_its_bound_with_a_warning():
+    # Positions without radiation pressure, 2 m of noise: Cr goes to 0, where it is held
+    # (the state's step taken with it there), the fit as good as the one without Cr
+    # (measured 3.1366069 m both), and a warning says so.
+    truth = rp.OrbitState(EPOCH, [26_560e3, 0.0, 0.0], [0.0, 1_937.0, 3_354.0])
+    craft = rp.Spacecraft(1.0, 0.02)
+    epochs, r = _positions(truth, craft, 24, 900.0, rp.Dynamics.precise())
+    r = r + np.random.default_rng(1).normal(0.0, 2.0, r.shape)
+    with pytest.warns(RuntimeWarning, match="Cr ended at its bound 0"):
+        fit = rp.fit_positions(epochs, r, craft, MODEL, fit_cr=True)
+    assert fit.spacecraft.cr == 0.0
+    bare = rp.fit_positions(epochs, r, craft, MODEL)
+    assert fit.rms <= bare.rms * (1 + 1e-6), (fit.rms, bare.rms)

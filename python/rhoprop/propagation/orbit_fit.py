@@ -216,7 +216,15 @@ def _gauss_newton(
     for it in range(1, max_iterations + 1):
         trial: np.ndarray | None = None
         jac = _jacobian(p, times, model, positions_of)
-        dp = np.linalg.lstsq(jac, (observed - model).ravel(), rcond=None)[0]
+        res = (observed - model).ravel()
+        dp = np.linalg.lstsq(jac, res, rcond=None)[0]
+        if fit_cr and not 0.0 <= p[6] + dp[6] <= MAX_CR:
+            # Cr would leave 0..5: take it to the bound and the state's best step given
+            # that (an active set), not the unconstrained step cut off, which can raise
+            # the cost while a step that lowers it exists.
+            to_bound = min(max(p[6] + dp[6], 0.0), MAX_CR) - p[6]
+            state_step = np.linalg.lstsq(jac[:, :6], res - jac[:, 6] * to_bound, rcond=None)[0]
+            dp = np.append(state_step, to_bound)
         for _ in range(8):
             q = p + dp
             if fit_cr:
