@@ -150,6 +150,8 @@ def test_scenario_file_runs(tmp_path):
         (lambda s: s.replace("rho0 = 4e-12", "rho0 = -4e-12"), r"models\[1\]: rho0 must be > 0"),
         (lambda s: s + "\n[extra]\n", "unknown key"),
         (lambda s: s.replace("[spacecraft]", "[spacecraft"), "not valid TOML"),
+        (lambda s: s.replace("[spacecraft]", "[spacecraft]\ncr = 7.0"), r"\[spacecraft\]: cr = 7"),
+        (lambda s: s.replace("[spacecraft]", '[spacecraft]\ncr = "high"'), "cr must be a float"),
     ],
 )
 def test_scenario_errors_name_the_key(tmp_path, edit, match):
@@ -165,6 +167,14 @@ def test_example_scenario_is_valid():
 
     sc = load_scenario(Path(__file__).parents[1] / "examples" / "scenario.toml")
     assert sc["reference"] == "NRLMSIS 2.1" and sc["options"]["n"] == 500
+
+
+def test_a_scenario_may_give_the_radiation_pressure_coefficient(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(GOOD.replace("[spacecraft]", "[spacecraft]\ncr = 1.3"))
+    assert load_scenario(path)["spacecraft"].cr == 1.3
+    path.write_text(GOOD)
+    assert load_scenario(path)["spacecraft"].cr is None
 
 
 def test_example_scenario_switches_method_with_one_word(tmp_path):

@@ -190,7 +190,11 @@ def _settings(members: int, duration: float, record: SpaceWeather, seed: int) ->
         },
         "seed": seed,
         "space_weather": record.source,
-        "spacecraft": {"cd_ref": craft.cd, "area_to_mass_m2_kg": craft.area_to_mass},
+        "spacecraft": {
+            "cd_ref": craft.cd,
+            "area_to_mass_m2_kg": craft.area_to_mass,
+            "cr": craft.cr,
+        },
         "initial_state_case_i": {
             "epoch": str(state.epoch) + "Z",
             "position_m": [float(x) for x in state.position],

@@ -126,7 +126,7 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
     st = _table(doc, "state")
     _unknown(st, "state", {"position", "velocity", "frame"})
     cr = _table(doc, "spacecraft")
-    _unknown(cr, "spacecraft", {"cd", "area_to_mass"})
+    _unknown(cr, "spacecraft", {"cd", "area_to_mass", "cr"})
     try:
         state = OrbitState(
             _get(sc, "scenario", "epoch", str),
@@ -138,7 +138,9 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
         raise ScenarioError(f"[state] / scenario.epoch: {err}") from err
     try:
         craft = Spacecraft(
-            _get(cr, "spacecraft", "cd", float), _get(cr, "spacecraft", "area_to_mass", float)
+            _get(cr, "spacecraft", "cd", float),
+            _get(cr, "spacecraft", "area_to_mass", float),
+            _get(cr, "spacecraft", "cr", float, None),
         )
     except ValueError as err:
         raise ScenarioError(f"[spacecraft]: {err}") from err
