@@ -22,8 +22,12 @@ from .dynamics import Dynamics
 from .propagate import DEFAULT_RTOL, DEFAULT_STEP, core_propagate, fixed_step, run_in_field
 from .state import MAX_CR, OrbitState, Spacecraft
 
-#: Forward-difference steps of the parameters: position m, velocity m/s, Cr.
-_STEPS = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3, 1e-3, 1e-2])
+#: Forward-difference steps of the state's parameters: position m, velocity m/s; Cr's and
+#: Cd's is 0.01.
+_STEPS = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3, 1e-3])
+_COEFFICIENT_STEP = 1e-2
+#: Bounds of a fitted Cd: positive, and a value beyond 20 is a fit that has run away.
+_CD_BOUNDS = (1e-3, 20.0)
 #: Model positions (k, 3), m, of parameters ``p`` at ``times`` s from the first epoch.
 Positions = Callable[[np.ndarray, np.ndarray], np.ndarray]
 #: Gauss-Newton stops when an update moves the position by less than this, m.
@@ -39,8 +43,9 @@ class OrbitFit:
         spacecraft: the spacecraft given, with the fitted ``cr`` when Cr was fitted.
         residuals: observed minus fitted positions (n, 3), m.
         rms: root mean square of the residuals' norms, m.
-        covariance: of the fitted parameters (6, 6), or (7, 7) with Cr last: position m,
-            velocity m/s, from the residuals' own scatter (sigma = rms / sqrt(3)).
+        covariance: of the fitted parameters (6, 6), or larger with Cr and then Cd
+            after the state: position m, velocity m/s, from the residuals' own scatter
+            (sigma = rms / sqrt(3)).
         iterations: Gauss-Newton iterations over all stages.
     """
 
@@ -80,9 +85,10 @@ def fit_positions(
     frame: str = "GCRF",
     dynamics: Dynamics | None = None,
     fit_cr: bool = False,
+    fit_cd: bool = False,
     max_iterations: int = 20,
 ) -> OrbitFit:
-    """Fits an orbit's state (and Cr) to measured positions.
+    """Fits an orbit's state (and Cr, Cd) to measured positions.
 
     Args:
         epochs: UTC epochs of the positions (n >= 5, increasing).
@@ -91,25 +97,28 @@ def fit_positions(
             1.5 when None) is where the fit starts and ``area_to_mass`` the area it
             scales.
         model: the density model the prediction uses (drag acts with the spacecraft's
-            Cd*A/m, not fitted).
+            Cd*A/m, or the fitted Cd's).
         frame: frame of the positions and of the fitted state: ``"GCRF"`` (default),
             ``"TEME"`` or another inertial frame :class:`OrbitState` takes.
         dynamics: the dynamics (default :meth:`Dynamics.precise`: a precise orbit is
             fitted with the precise field; DOP853).
         fit_cr: also fit the radiation pressure coefficient Cr (0 to 5).
+        fit_cd: also fit the drag coefficient Cd (0.001 to 20), from the spacecraft's:
+            the drag this model needs to fly the observed orbit, a measured ballistic
+            coefficient.
         max_iterations: largest number of Gauss-Newton iterations per stage.
 
     Returns:
-        :class:`OrbitFit`. Predict with ``propagate(fit.state, fit.spacecraft, model, ...,
-        dynamics=dynamics)``.
+        :class:`OrbitFit` (its covariance has Cr, then Cd, after the state). Predict
+        with ``propagate(fit.state, fit.spacecraft, model, ..., dynamics=dynamics)``.
 
     Raises:
         ValueError: fewer than 5 positions, epochs not increasing, positions not (n, 3)
             finite numbers, or a fit that does not converge.
 
     Warns:
-        RuntimeWarning: the fitted Cr lies at 0 or 5, the data do not support a value
-            inside (the parameter is then held there).
+        RuntimeWarning: a fitted Cr or Cd lies on a bound: the data do not support a
+            value inside (the parameter is then held there).
     """
     t = to_seconds(to_datetime64_array(epochs, "epochs"), to_datetime64_array(epochs)[0])
     r = _validate.real_array("positions", positions)
@@ -126,13 +135,16 @@ def fit_positions(
     max_iterations = _validate.count("max_iterations", max_iterations, minimum=1)
     dyn = Dynamics.precise() if dynamics is None else dynamics
     epoch = to_datetime64_array(epochs)[0]
-    n = 7 if fit_cr else 6
-    start_cr = 1.5 if spacecraft.cr is None else spacecraft.cr
-    p = np.concatenate([r[0], _first_velocity(t, r), [start_cr]])[:n]
+    # The coefficients fitted beside the state: (name, start, bounds).
+    extra = [("Cr", 1.5 if spacecraft.cr is None else spacecraft.cr, (0.0, MAX_CR))] * fit_cr
+    extra += [("Cd", spacecraft.cd, _CD_BOUNDS)] * fit_cd
+    p = np.concatenate([r[0], _first_velocity(t, r), [start for _, start, _ in extra]])
+    bounds = np.array([(-np.inf, np.inf)] * 6 + [b for _, _, b in extra])
 
     def craft(q: np.ndarray) -> Spacecraft:
         cr = float(q[6]) if fit_cr else spacecraft.cr
-        return Spacecraft(spacecraft.cd, spacecraft.area_to_mass, cr=cr)
+        cd = float(q[-1]) if fit_cd else spacecraft.cd
+        return Spacecraft(cd, spacecraft.area_to_mass, cr=cr)
 
     state0 = OrbitState(epoch, p[:3], p[3:6], frame=frame)
     atmosphere = run_in_field(model, state0, float(t[-1]), dyn.floor_altitude, lambda a: a)
@@ -164,21 +176,22 @@ def fit_positions(
         if use.sum() < 5:
             continue
         times, observed = t[use], r[use]
-        p, its = _gauss_newton(p, times, observed, positions_of, max_iterations, fit_cr)
+        p, its = _gauss_newton(p, times, observed, positions_of, max_iterations, bounds)
         iterations += its
     residuals = r - positions_of(p, t)
     rms = float(np.sqrt(np.mean(np.sum(residuals**2, axis=1))))
-    jac = _jacobian(p, t, positions_of(p, t), positions_of)
+    jac = _jacobian(p, t, positions_of(p, t), positions_of, bounds)
     sigma2 = rms**2 / 3.0
     covariance = sigma2 * np.linalg.pinv(jac.T @ jac)
-    if fit_cr and p[6] in (0.0, MAX_CR):
-        warnings.warn(
-            f"fit_positions: Cr ended at its bound {p[6]:g}: the positions do not support "
-            f"radiation pressure inside 0..{MAX_CR:g} at area_to_mass "
-            f"{spacecraft.area_to_mass:g} m^2/kg",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+    for k, (name, _, (low, high)) in enumerate(extra, start=6):
+        if p[k] in (low, high):
+            warnings.warn(
+                f"fit_positions: {name} ended at its bound {p[k]:g}: the positions do not "
+                f"support a value inside {low:g}..{high:g} at area_to_mass "
+                f"{spacecraft.area_to_mass:g} m^2/kg",
+                RuntimeWarning,
+                stacklevel=2,
+            )
     return OrbitFit(
         OrbitState(epoch, p[:3], p[3:6], frame=frame),
         craft(p),
@@ -190,13 +203,20 @@ def fit_positions(
 
 
 def _jacobian(
-    p: np.ndarray, times: np.ndarray, base: np.ndarray, positions_of: Positions
+    p: np.ndarray,
+    times: np.ndarray,
+    base: np.ndarray,
+    positions_of: Positions,
+    bounds: np.ndarray,
 ) -> np.ndarray:
-    """d(model positions)/d(parameters) by forward differences, (3 len(times), n)."""
+    """d(model positions)/d(parameters) by forward differences (backward at an upper
+    bound), (3 len(times), n)."""
     columns = []
     for i in range(p.size):
         q = p.copy()
-        h = _STEPS[i] if i < 6 or q[i] + _STEPS[i] <= MAX_CR else -_STEPS[i]
+        h = _STEPS[i] if i < 6 else _COEFFICIENT_STEP
+        if q[i] + h > bounds[i, 1]:
+            h = -h
         q[i] += h
         columns.append(((positions_of(q, times) - base) / h).ravel())
     return np.array(columns).T
@@ -208,27 +228,27 @@ def _gauss_newton(
     observed: np.ndarray,
     positions_of: Positions,
     max_iterations: int,
-    fit_cr: bool,
+    bounds: np.ndarray,
 ) -> tuple[np.ndarray, int]:
     """Gauss-Newton with step halving on one stage: (parameters, iterations)."""
     model = positions_of(p, times)
     cost = float(np.sum((observed - model) ** 2))
     for it in range(1, max_iterations + 1):
         trial: np.ndarray | None = None
-        jac = _jacobian(p, times, model, positions_of)
+        jac = _jacobian(p, times, model, positions_of, bounds)
         res = (observed - model).ravel()
         dp = np.linalg.lstsq(jac, res, rcond=None)[0]
-        if fit_cr and not 0.0 <= p[6] + dp[6] <= MAX_CR:
-            # Cr would leave 0..5: take it to the bound and the state's best step given
-            # that (an active set), not the unconstrained step cut off, which can raise
-            # the cost while a step that lowers it exists.
-            to_bound = min(max(p[6] + dp[6], 0.0), MAX_CR) - p[6]
-            state_step = np.linalg.lstsq(jac[:, :6], res - jac[:, 6] * to_bound, rcond=None)[0]
-            dp = np.append(state_step, to_bound)
+        out = (p + dp < bounds[:, 0]) | (p + dp > bounds[:, 1])
+        if out.any():
+            # A coefficient would leave its bounds: take it to the bound and the other
+            # parameters' best step given that (an active set), not the unconstrained
+            # step cut off, which can raise the cost while a step that lowers it exists.
+            dp[out] = np.clip(p + dp, bounds[:, 0], bounds[:, 1])[out] - p[out]
+            free = ~out
+            rest = res - jac[:, out] @ dp[out]
+            dp[free] = np.linalg.lstsq(jac[:, free], rest, rcond=None)[0]
         for _ in range(8):
-            q = p + dp
-            if fit_cr:
-                q[6] = min(max(q[6], 0.0), MAX_CR)
+            q = np.clip(p + dp, bounds[:, 0], bounds[:, 1])
             try:
                 trial = positions_of(q, times)
             except ValueError:
