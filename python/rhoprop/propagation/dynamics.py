@@ -120,8 +120,8 @@ class Dynamics:
         orbit, not an element set): J2..J6, the EGM2008 field to degree and order 40 and
         the Sun and the Moon. GRACE-A from its precise orbit: 120 m off after 24 h
         (NRLMSIS 2.1, observed drivers), against 3.3 km with J2..J6 and 9.1 km with J2
-        alone (``benches/precise_grace.py``). Each force evaluation costs about 80 times
-        J2's (7.6 against 0.09 microseconds per state, one lane)."""
+        alone (``benches/precise_grace.py``). Each force evaluation costs about 60 times
+        J2's (5.7 against 0.09 microseconds per state, one lane, the same bench)."""
         return cls(
             zonal_degree=MAX_ZONAL_DEGREE,
             floor_altitude=floor_altitude,

@@ -120,7 +120,8 @@ def fit_positions(
         RuntimeWarning: a fitted Cr or Cd lies on a bound: the data do not support a
             value inside (the parameter is then held there).
     """
-    t = to_seconds(to_datetime64_array(epochs, "epochs"), to_datetime64_array(epochs)[0])
+    when = to_datetime64_array(epochs, "epochs")
+    t = to_seconds(when, when[0])
     r = _validate.real_array("positions", positions)
     if r.ndim != 2 or r.shape[1] != 3 or r.shape[0] != t.size:
         raise ValueError(f"positions must be ({t.size}, 3) to match epochs, got {r.shape}")
@@ -134,7 +135,7 @@ def fit_positions(
         raise TypeError(f"dynamics must be a rhoprop.Dynamics, got {type(dynamics).__name__}")
     max_iterations = _validate.count("max_iterations", max_iterations, minimum=1)
     dyn = Dynamics.precise() if dynamics is None else dynamics
-    epoch = to_datetime64_array(epochs)[0]
+    epoch = when[0]
     # The coefficients fitted beside the state: (name, start, bounds).
     extra = [("Cr", 1.5 if spacecraft.cr is None else spacecraft.cr, (0.0, MAX_CR))] * fit_cr
     extra += [("Cd", spacecraft.cd, _CD_BOUNDS)] * fit_cd
