@@ -21,6 +21,12 @@ and writes ``benches/results/screening_all.json``:
       RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py --all
       [--days 3] [--distance 5000] [--limit N] [--no-pc]
 
+``--catalog`` screens another file instead (absolute, or under the data directory),
+e.g. the whole Space-Track catalog of 2022-01-25 (23,939 objects) over 1 day:
+
+      RHOPROP_TEST_DATA=/work/shared/data python benches/screening.py --all --days 1 \
+      --catalog catalogs/full/spacetrack_full_3le_20220125.txt.gz
+
 ``--dask 1,2,4`` runs the same all-on-all screen (``--limit`` objects, default 1,500)
 locally and then with every stage on a ``distributed.LocalCluster`` of 1, 2 and 4
 single-threaded worker processes, checks that each gives the local run's events, and
@@ -52,6 +58,8 @@ from rhoprop import catalog
 from rhoprop.conjunction import screen
 from rhoprop.conjunction.screening import STAGES
 
+#: The snapshot ``--all`` screens unless ``--catalog`` names another file.
+SNAPSHOT = "catalogs/celestrak_active_20231113.txt.gz"
 #: The stage each count feeds, and the timing that measures it.
 RATES = (
     ("radial", "secondaries", "radial"),
@@ -78,6 +86,11 @@ def main() -> None:
     parser.add_argument("--all", action="store_true", help="all-on-all (screen_all)")
     parser.add_argument("--limit", type=int, default=None, help="--all: first N objects only")
     parser.add_argument("--no-pc", action="store_true", help="--all: skip the Pc stage")
+    parser.add_argument(
+        "--catalog",
+        default=SNAPSHOT,
+        help=f"--all: catalog file, absolute or under --data (default {SNAPSHOT})",
+    )
     parser.add_argument("--dask", default=None, help="worker counts, e.g. 1,2,4 (see docs)")
     args = parser.parse_args()
     if args.dask:
@@ -168,7 +181,7 @@ def all_on_all(args: argparse.Namespace) -> None:
     from rhoprop.conjunction import screen_all
     from rhoprop.conjunction.all_on_all import ALL_ON_ALL_STAGES
 
-    snapshot = Path(args.data) / "catalogs" / "celestrak_active_20231113.txt.gz"
+    snapshot = Path(args.data) / args.catalog
     t0 = time.perf_counter()
     cat = catalog.load(snapshot, errors="record", nonpositive_bstar="prior")
     load = time.perf_counter() - t0
@@ -218,10 +231,12 @@ def all_on_all(args: argparse.Namespace) -> None:
             f"  {e.tca} {e.name1[:20]:<20} {e.name2[:20]:<20} miss {e.miss_distance:7.0f} m "
             f"Pc {pc:.2g} ({per})"
         )
-    out = Path(__file__).parent / "results" / "screening_all.json"
+    name = "screening_all" + ("" if args.catalog == SNAPSHOT else f"_{Path(args.catalog).name}")
+    out = Path(__file__).parent / "results" / f"{name.removesuffix('.gz')}.json"
     out.parent.mkdir(exist_ok=True)
     record = {
         "machine": info(),
+        "catalog": args.catalog,
         "objects": len(objs),
         "days": args.days,
         "distance": args.distance,

@@ -14,6 +14,7 @@ from sgp4.api import Satrec
 
 import rhoprop as rp
 from rhoprop import catalog, io
+from rhoprop.catalog.run import propagate_to_own_epochs
 from rhoprop.cli import main
 
 SAMPLE = Path(__file__).parent / "data" / "sample.tle"
@@ -154,6 +155,29 @@ def test_common_epochs_and_decay(local_result):
     assert d.status[k] == "decayed"
     assert str(d.decay_epoch[k].astype("datetime64[ms]")) in d.reason[k]
     np.testing.assert_array_equal(d.status == "decayed", ~np.isnat(d.decay_epoch))
+
+
+def test_each_object_to_its_own_epochs_is_the_catalog_run_at_those_epochs(local_result):
+    # A screen's Pc needs each object at its own TCAs only. Run to its own epochs, an
+    # object's CCSP is the catalog run's wherever the epochs (so the updates) agree: the
+    # whole grid, or a prefix of it (a CCSP is the same up to where it stops); a shorter
+    # row ends in NaN, not valid.
+    r = local_result
+    objs = catalog.load(SAMPLE).objects
+    own = [r.epochs if i % 2 else r.epochs[:3] for i in range(len(objs))]
+    mine = propagate_to_own_epochs(objs, rp.scenarios.benchmark_exponential(0.2), own)
+    assert list(mine.status) == ["propagated"] * len(objs)
+    for i, epochs in enumerate(own):
+        k = len(epochs)
+        np.testing.assert_array_equal(mine.mean[i, :k], r.mean[i, :k])
+        np.testing.assert_array_equal(mine.covariance[i, :k], r.covariance[i, :k])
+        assert mine.valid[i, :k].all() and not mine.valid[i, k:].any()
+        assert np.isnan(mine.mean[i, k:]).all()
+    early = [objs[0].state.epoch - np.timedelta64(1, "s")]
+    with pytest.raises(ValueError, match="is before its own"):
+        propagate_to_own_epochs(objs[:1], rp.scenarios.benchmark_exponential(0.2), [early])
+    with pytest.raises(ValueError, match="one array per object"):
+        propagate_to_own_epochs(objs, rp.scenarios.benchmark_exponential(0.2), own[:1])
 
 
 def test_element_sets_older_than_max_span_end_stale_and_leave_the_rest_unchanged(
@@ -386,9 +410,16 @@ def test_dask_cluster_equals_local(local_result):
             chunk_size=2,
             progress=False,
         )
+        objs = catalog.load(SAMPLE).objects
+        own = [local_result.epochs[: 2 + i] for i in range(len(objs))]
+        model = rp.scenarios.benchmark_exponential(0.2)
+        there = propagate_to_own_epochs(objs, model, own, client=client)
     np.testing.assert_array_equal(remote.mean, local_result.mean)
     np.testing.assert_array_equal(remote.covariance, local_result.covariance)
     np.testing.assert_array_equal(remote.status, local_result.status)
+    here = propagate_to_own_epochs(objs, model, own)
+    np.testing.assert_array_equal(there.covariance, here.covariance)
+    np.testing.assert_array_equal(there.valid, here.valid)
 
 
 def test_dask_raises_the_workers_own_exception():

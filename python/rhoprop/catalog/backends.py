@@ -25,7 +25,8 @@ class Outcomes:
     catalog's result, (objects, epochs, 6) means, (objects, epochs, 6, 6) covariances and
     (objects, epochs) validity; the outcome itself is dropped. A whole catalog's results
     are then held once (about 0.5 GB for 8,800 objects over 7 days hourly), not once per
-    outcome and again when stacked."""
+    outcome and again when stacked. An object with its own, fewer, epochs fills the first
+    of its row (the rest stay NaN, not valid)."""
 
     def __init__(self, objects: int, epochs: int) -> None:
         self.mean = np.full((objects, epochs, 6), np.nan)
@@ -35,9 +36,11 @@ class Outcomes:
         self.rest: dict[int, ObjectOutcome] = {}
 
     def __setitem__(self, i: int, outcome: ObjectOutcome) -> None:
-        self.mean[i], self.cov[i], self.valid[i] = outcome.mean, outcome.cov, outcome.valid
+        k = len(outcome.valid)
+        self.mean[i, :k], self.cov[i, :k] = outcome.mean, outcome.cov
+        self.valid[i, :k] = outcome.valid
         if outcome.gaussian is not None:
-            self.gaussian[i] = outcome.gaussian
+            self.gaussian[i, :k] = outcome.gaussian
         # The small fields only: the arrays live in the result's arrays.
         self.rest[i] = dataclasses.replace(
             outcome,

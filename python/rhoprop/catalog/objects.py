@@ -244,7 +244,9 @@ class ObjectPlan:
     index in the catalog, the object, its initial covariance (None: the propagators'
     default) and what that covariance includes, its Cd*A/m relative sigma and its RK8
     step (s, :func:`catalog_step`). A user's ``initial_covariance`` callable is called
-    here, once per object."""
+    here, once per object. ``epochs``: the object's own output epochs (increasing,
+    datetime64[ns] UTC) where a run gives each object its own instead of common ones
+    (:func:`~rhoprop.catalog.run.propagate_to_own_epochs`)."""
 
     index: int
     obj: CatalogObject
@@ -252,6 +254,11 @@ class ObjectPlan:
     initial_note: str
     drag_sigma: float
     step: float = DEFAULT_STEP["rk8"]
+    epochs: np.ndarray | None = None
+
+    def output_epochs(self, common: np.ndarray) -> np.ndarray:
+        """The epochs this object's outputs are at: its own, else the run's ``common``."""
+        return common if self.epochs is None else self.epochs
 
 
 def _plans(
@@ -469,6 +476,7 @@ def _run_object(
     are not valid: rhoprop propagates forward only."""
     if stop is not None and stop.is_set():
         raise KeyboardInterrupt("catalog run interrupted")
+    epochs = plan.output_epochs(epochs)
     try:
         lead = leading_epochs(epochs, plan.obj)
         out = _propagate_object(plan, model, epochs[lead:], cfg, stop, done or {})
@@ -658,8 +666,9 @@ def _ccsp_chunk(
             raise KeyboardInterrupt("catalog run interrupted")
         i, obj = plan.index, plan.obj
         craft = Spacecraft(1.0, obj.drag_parameter)
-        offsets = to_seconds(epochs, obj.state.epoch)
-        offsets = offsets[leading_epochs(epochs, obj) :]
+        own = plan.output_epochs(epochs)
+        offsets = to_seconds(own, obj.state.epoch)
+        offsets = offsets[leading_epochs(own, obj) :]
         if offsets[-1] <= 0:
             continue
         updates, outputs = update_schedule(obj.state, offsets, cfg.update_interval)

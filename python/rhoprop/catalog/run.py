@@ -8,6 +8,7 @@ the :class:`CatalogResult`; one object's plan, run and outcome are
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -464,6 +465,86 @@ def propagate_catalog(
         if shown is not None:
             shown.close()
     return _result(objs, epochs, method, results, plans, notes)
+
+
+@dataclass(frozen=True)
+class OwnEpochsResult:
+    """Per object, CCSP means (objects, k, 6) and covariances (objects, k, 6, 6) at its
+    own epochs (``epochs[i]``; row i holds its first ``len(epochs[i])`` entries, NaN
+    after), which are ``valid``, where the Cartesian Gaussian holds the spread
+    (``gaussian``), and each object's status and reason, as :class:`CatalogResult`'s."""
+
+    objects: list[CatalogObject]
+    epochs: list[np.ndarray]
+    mean: np.ndarray
+    covariance: np.ndarray
+    valid: np.ndarray
+    gaussian: np.ndarray
+    status: np.ndarray
+    reason: np.ndarray
+
+
+def propagate_to_own_epochs(
+    objects: list[CatalogObject],
+    model: DensityModel,
+    epochs: list[np.ndarray],
+    *,
+    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
+    zonal_degree: int = CATALOG_ZONAL_DEGREE,
+    client: object = None,  # a distributed.Client
+    errors: Errors = "record",
+) -> OwnEpochsResult:
+    """The CCSP of every object to its own output epochs (``epochs[i]``: increasing,
+    from the object's epoch on, UTC), with :func:`propagate_catalog`'s defaults (no fit,
+    each object's own covariance, ``drag_sigma="auto"``, hourly updates and one at each
+    output; objects in chunks on threads or on Dask). Why: a run needing each object
+    at a few epochs of its own (a screen's Pc at each event's TCA) would otherwise
+    update every object's CCSP at the union of them all (a 300-s grid cost 3.5x an
+    hourly run: benches/README.md, "All-on-all")."""
+    objs = list(objects)
+    if len(epochs) != len(objs):
+        raise ValueError(f"epochs must give one array per object ({len(objs)}), got {len(epochs)}")
+    own = [np.asarray(e, dtype="datetime64[ns]") for e in epochs]
+    for o, e in zip(objs, own, strict=True):
+        if e.ndim != 1 or not len(e) or (np.diff(e) <= np.timedelta64(0)).any():
+            raise ValueError(f"object {o.norad_id}: its epochs must be 1-D, increasing, not empty")
+        if e[0] < o.state.epoch:
+            raise ValueError(f"object {o.norad_id}: epoch {e[0]} is before its own")
+    errors = _validate.errors_and_client("propagate_to_own_epochs", errors, client)
+    cfg = RunSettings(
+        method="ccsp",
+        n=2,
+        kappa=TwoScale(),
+        seed=0,
+        update_interval=3600.0,
+        floor_altitude=float(floor_altitude),
+        errors=errors,
+        zonal_degree=zonal_degree_argument(zonal_degree),
+    )
+    plans = [
+        dataclasses.replace(p, epochs=e)
+        for p, e in zip(_plans(objs, "object", "auto", model), own, strict=True)
+    ]
+    shipped = _shipped_model(model)
+    results = Outcomes(len(objs), max(len(e) for e in own))
+    none = np.empty(0, dtype="datetime64[ns]")  # every plan has its own
+    if client is None:
+        _run_local(plans, shipped, none, cfg, None, results)
+    else:
+        indexed = by_epoch(plans)
+        chunks = [indexed[i : i + 50] for i in range(0, len(indexed), 50)]
+        _run_on_dask(client, shipped, chunks, none, cfg, None, results)
+    order = [results[i] for i in range(len(objs))]
+    return OwnEpochsResult(
+        objects=[p.obj for p in plans],
+        epochs=own,
+        mean=results.mean,
+        covariance=results.cov,
+        valid=results.valid,
+        gaussian=results.gaussian,
+        status=np.array([r.status.value for r in order], dtype=object),
+        reason=np.array([r.reason for r in order], dtype=object),
+    )
 
 
 def _start(start: EpochLike | None, end: np.datetime64) -> np.datetime64 | None:

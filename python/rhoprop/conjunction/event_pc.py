@@ -7,10 +7,11 @@ Cd*A/m uncertainty) with their Cd debiased against the reference model (the mean
 ratio over the 8 h before the epoch along the reference orbit, as
 :func:`rhoprop.debias_drag_coefficient`, sampled every :data:`DEBIAS_CADENCE` s). At an
 event's TCA each object's model-k Gaussian is centred on its screened state plus the
-model's mean offset from the reference model's mean, with the model's covariance: offset
-and covariance are taken in the RTN frame of the mean at the CCSP outputs
-(:data:`PC_OUTPUT_STEP` apart), interpolated linearly to TCA and turned into inertial
-axes with the RTN frame of the screened state. Both objects fly through the same
+model's mean offset from the reference model's mean, with the model's covariance: each
+object's CCSP gives its outputs at its own TCAs (and updates there, besides hourly:
+:func:`~rhoprop.catalog.run.propagate_to_own_epochs`), where offset and covariance are
+taken in the RTN frame of the reference model's mean and turned into inertial axes with
+the RTN frame of the screened state. Both objects fly through the same
 atmosphere, so the mixture's Pc is ``sum_k w_k Pc_k`` (as
 :func:`~rhoprop.conjunction.density_pc`). An event before an object's epoch uses the
 object's covariance at its epoch and no offset.
@@ -31,17 +32,17 @@ import numpy as np
 from .. import frames
 from ..catalog.covariance import tle_covariance
 from ..catalog.elements import CatalogObject
-from ..catalog.run import propagate_catalog
+from ..catalog.run import OwnEpochsResult, propagate_to_own_epochs
 from ..ensemble.debias import backward_orbit
 from ..propagation import Spacecraft
 from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
-from ..time import seconds_between, to_seconds
+from ..time import seconds_between
 from .approach import CloseApproach
 from .encounter import encounter_check, pc_interval
 from .probability import PcResult, pc_2d
 from .screening import _Window
 
-__all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "PC_OUTPUT_STEP", "RADII", "object_radius"]
+__all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "RADII", "object_radius"]
 
 #: Radius of an object's circumscribing sphere by kind, m, when no table gives it: the
 #: hard-body radius of an event is the sum of both. Payloads 5 m (a Starlink with its
@@ -49,13 +50,11 @@ __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "PC_OUTPUT_STEP", "RADII", "object
 #: debris 1 m (most tracked fragments are 10 cm to 1 m). Kind from the catalog name:
 #: "R/B" a rocket body, "DEB" debris, else a payload.
 RADII = {"payload": 5.0, "rocket body": 5.0, "debris": 1.0}
-#: Spacing of the CCSP outputs the Pc interpolates between, s.
-PC_OUTPUT_STEP = 300.0
 #: Cd debiasing: window before each epoch and sample spacing along the reference orbit, s.
 DEBIAS_WINDOW = 8 * 3600.0
 DEBIAS_CADENCE = 600.0
-#: Objects whose epochs lie within this of each other share one CCSP run (its common
-#: output epochs start at the newest epoch), s.
+#: Objects whose epochs lie within this of each other share one catalog run (their
+#: atmosphere's day tiles), s.
 BATCH_EPOCH_SPREAD = 2 * 86400.0
 BATCH_SIZE = 100
 
@@ -244,25 +243,6 @@ def _batches(cats: list[CatalogObject]) -> list[list[int]]:
     return groups
 
 
-def _batch_end(
-    batch: list[int],
-    cats: list[CatalogObject],
-    events: list[CloseApproach],
-    needs: dict[int, list[tuple[int, int]]],
-    end: np.datetime64,
-) -> np.datetime64:
-    """Where a batch's CCSP can stop: the first output epoch after its objects' latest
-    TCA (and epoch), on the grid of ``end`` (outputs every :data:`PC_OUTPUT_STEP` s
-    counted back from it, as ``propagate_catalog`` places them), so every TCA keeps the
-    outputs around it that a run to ``end`` gives (a CCSP run is the same up to where it
-    stops)."""
-    last = max([events[e].tca for m in batch for e, _ in needs[m]])
-    last = max(last, *(cats[m].state.epoch for m in batch))
-    back = seconds_between(last, end)
-    steps = max(int(np.ceil(back / PC_OUTPUT_STEP)) - 1, 0)
-    return np.datetime64(end - np.timedelta64(round(steps * PC_OUTPUT_STEP * 1e9), "ns"))
-
-
 def _rtn_moments(mean: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> tuple[Any, Any]:
     """Position offsets of ``mean`` from ``ref`` (nt, 3) and ``mean``'s state covariances
     (nt, 6, 6), in the RTN axes of ``ref`` (position and velocity blocks rotated alike,
@@ -371,58 +351,69 @@ def _model_moments(
     client: Any,
     report: Any,
 ) -> _Moments:
-    """CCSP per model (in epoch batches) and each needed (event, side)'s moments."""
+    """CCSP per model (in epoch batches, each object to its own TCAs) and each needed
+    (event, side)'s moments."""
     cats = [_catalog_object(o) for o in sub]
     out: _Moments = {}
     done = 0
     for batch in _batches(cats):
-        base: Any = None  # the reference model's run (models hold it first)
-        end = _batch_end(batch, cats, events, needs, cfg.end)
+        tcas = {m: _own_tcas(cats[m], events, needs[m]) for m in batch}
+        running = [m for m in batch if len(tcas[m])]
+        row = {m: b for b, m in enumerate(running)}
+        base: OwnEpochsResult | None = None  # the reference model's run (models hold it first)
         for name, model in models.items():
-            objs = [
-                dataclasses.replace(cats[m], drag_parameter=float(drag[name][m])) for m in batch
-            ]
-            res = propagate_catalog(
-                objs,
-                model,
-                end,
-                output_step=PC_OUTPUT_STEP,
-                floor_altitude=cfg.floor,
-                zonal_degree=cfg.degree,
-                errors="record",
-                progress=False,
-                client=client,
-                fit=False,  # each model's Cd*A/m is set above (debiased)
-                max_span=None,  # screen_all already set aside the stale element sets
-            )
+            res = None
+            if running:
+                res = propagate_to_own_epochs(
+                    [
+                        dataclasses.replace(cats[m], drag_parameter=float(drag[name][m]))
+                        for m in running
+                    ],
+                    model,
+                    [tcas[m] for m in running],
+                    floor_altitude=cfg.floor,
+                    zonal_degree=cfg.degree,
+                    client=client,
+                )
             base = res if name == ref else base
             # One model's run at a time is held (with the reference's): bounded memory.
-            for b, m in enumerate(batch):
-                _object_moments(events, cats[m], name, res, base, b, needs[m], out)
+            for m in batch:
+                runs = None if res is None or base is None else (res, base, row[m], tcas[m])
+                _object_moments(events, cats[m], name, runs, needs[m], out)
         done += len(batch)
         if report is not None:
             report("Pc (CCSP per model)", done, len(cats))
     return out
 
 
+def _own_tcas(
+    cat: CatalogObject, events: list[CloseApproach], needs: list[tuple[int, int]]
+) -> np.ndarray:
+    """The TCAs (datetime64[ns], increasing, unique) an object is needed at after its
+    epoch."""
+    tcas = np.unique(np.array([events[e].tca for e, _ in needs], dtype="datetime64[ns]"))
+    return tcas[tcas > cat.state.epoch]
+
+
 def _object_moments(
     events: list[CloseApproach],
     cat: CatalogObject,
     name: str,
-    res: Any,
-    base: Any,
-    b: int,
+    runs: tuple[OwnEpochsResult, OwnEpochsResult, int, np.ndarray] | None,
     needs: list[tuple[int, int]],
     out: _Moments,
 ) -> None:
-    """One object's moments under model ``name`` (run ``res``; ``base`` the reference
-    model's) at the TCAs it is needed at (in ``out``)."""
-    t = to_seconds(base.epochs, cat.state.epoch)
-    valid = res.valid[b] & base.valid[b]
-    off, cov = _rtn_moments(res.mean[b], res.covariance[b], base.mean[b])
+    """One object's moments under model ``name`` at the TCAs it is needed at (in
+    ``out``); ``runs``: that model's run and the reference model's, the object's row in
+    them and its TCAs (None when every TCA is before its epoch)."""
+    if runs is not None:
+        res, base, b, tcas = runs
+        k = len(tcas)
+        valid = res.valid[b, :k] & base.valid[b, :k]
+        off, cov = _rtn_moments(res.mean[b, :k], res.covariance[b, :k], base.mean[b, :k])
     for e, side in needs:
-        tca = seconds_between(cat.state.epoch, events[e].tca)
-        if tca < 0:
+        tca = events[e].tca
+        if runs is None or tca <= cat.state.epoch:
             c0 = cat.covariance if cat.covariance is not None else tle_covariance(cat.state)
             basis = frames.rtn_basis(cat.state.position, cat.state.velocity)
             b6 = np.zeros((6, 6))
@@ -430,22 +421,16 @@ def _object_moments(
             note = "an object's epoch is after TCA: its covariance at epoch"
             out[name, e, side] = (np.zeros(3), b6 @ c0 @ b6.T, note)
             continue
-        hi = int(np.searchsorted(t, tca))
-        lo = max(hi - 1, 0)
-        hi = min(hi, len(t) - 1)
-        if not valid[lo] and valid[hi]:  # TCA within one output after the epoch
-            lo = hi
-        if not (valid[lo] and valid[hi]):
+        j = int(np.searchsorted(tcas, tca))
+        if not valid[j]:
             out[name, e, side] = (np.full(3, np.nan), np.full((6, 6), np.nan), "")
             continue
-        f = 0.0 if hi == lo else (tca - t[lo]) / (t[hi] - t[lo])
-        curved = res.gaussian is not None and not (res.gaussian[b, lo] and res.gaussian[b, hi])
         out[name, e, side] = (
-            (1 - f) * off[lo] + f * off[hi],
-            (1 - f) * cov[lo] + f * cov[hi],
+            off[j],
+            cov[j],
             f"{name}: {cat.name}'s spread curves along its orbit at TCA (its Gaussian "
             "does not hold the shape): the 2-D Pc is approximate"
-            if curved
+            if not res.gaussian[b, j]
             else "",
         )
 

@@ -33,11 +33,20 @@ fn check_len(name: &str, got: usize, want: usize) -> PyResult<()> {
     }
 }
 
-/// Evaluates `f(i)` for i in 0..n in parallel; the first error (by index) wins.
+/// Evaluates `f(i)` for i in 0..n in parallel; the first error (by index) wins. Called
+/// on one of the core's worker threads (a density tile sampled for a propagation in
+/// flight, through a streamed field's source), it evaluates on that thread alone: a
+/// parallel loop there would let the thread take up other propagation work while it
+/// waits, which asks for the tile being made and waits on its own lock for ever.
 fn par_eval<F>(py: Python<'_>, n: usize, f: F) -> PyResult<Vec<Jb2008Output>>
 where
     F: Fn(usize) -> Result<Jb2008Output, CoreError> + Sync,
 {
+    if rayon::current_thread_index().is_some() {
+        return py
+            .detach(|| (0..n).map(&f).collect::<Result<Vec<_>, CoreError>>())
+            .map_err(to_py);
+    }
     let pool = crate::pool::current()?;
     py.detach(|| {
         pool.install(|| {
