@@ -220,6 +220,18 @@ def test_calibrated_sigmas_cover_storms_they_were_not_fitted_on(observed):
         assert inside[2] > 0.98, name
         # The corrected means: median observed / model within 0.9-1.1.
         assert 0.9 < np.exp(np.median(log_obs - means[k])) < 1.1, name
+    # JB2008 in the main phase (ap >= 48 at the orbit, 408 orbits in 22 windows), where
+    # dTc alone as its activity covered 59/87 % (its sigma now follows max(dTc, 5 K x ap)).
+    phase = cal.phases(orbits, rp.SpaceWeather())
+    main = cal.coverage(
+        cal.pit(
+            log_obs[phase == "main"],
+            [means[1][phase == "main"]],
+            [sigmas[1][phase == "main"]],
+            np.ones(1),
+        )
+    )
+    assert main[0] == pytest.approx(0.683, abs=0.06) and main[1] == pytest.approx(0.954, abs=0.04)
     # The paper's settings failed: NRLMSIS 2.1 at 0.865 of the observed at the median.
     raw = np.exp(np.median(log_obs - np.log(orbits.average(samples[0].mean))))
     assert raw == pytest.approx(0.865, abs=0.01)

@@ -187,6 +187,31 @@ def test_sigma_grows_with_dtc_and_field_samples(indices: rp.density.Jb2008Indice
     assert np.isfinite(field.ln_mean).all()
 
 
+def test_the_calibrated_sigma_follows_ap_where_dtc_lags_a_storm(indices) -> None:
+    # 2003-10-29 01:30 UTC, the first hours of the Halloween storm: the 3-hourly ap is 39
+    # (SW-All.txt's row, copied by hand: 39 27 400 207 179 179 300 300) while dTc is still
+    # 94 K. The calibrated sigma grows with max(dTc, 5 K x ap): 195 K here, not 94.
+    t = np.datetime64("2003-10-29T01:30")
+    model = rp.density.Jb2008(indices)
+    s = model.uncertainty
+    assert s.ap_weight == 5.0
+    assert indices.at(np.array([t], dtype="datetime64[ns]"))[0, 8] == 94.0
+    mean, std = model.mean_std(t, 0.0, 0.0, 400e3)
+    expected = s.quiet + (s.storm - s.quiet) * (5.0 * 39.0) / s.full_at
+    assert std / mean == pytest.approx(expected, rel=1e-12)
+    # Without the ap term the sigma is dTc's alone; the paper's preset reads no ap.
+    dtc_only = rp.density.Jb2008(
+        indices, rp.density.ActivitySigma(s.quiet, s.storm, s.full_at), correction=model.correction
+    )
+    m2, s2 = dtc_only.mean_std(t, 0.0, 0.0, 400e3)
+    assert m2 == mean and s2 / m2 == pytest.approx(s.quiet + (s.storm - s.quiet) * 94.0 / s.full_at)
+    assert rp.density.Jb2008(indices, preset="paper").space_weather is None
+    with pytest.raises(ValueError, match="ap_weight is JB2008's"):
+        rp.density.JacchiaRoberts(uncertainty=rp.density.ActivitySigma(0.1, 0.2, 5.0, 1.0))
+    with pytest.raises(ValueError, match="ap_weight must be >= 0"):
+        rp.density.ActivitySigma(0.1, 0.2, 150.0, -1.0)
+
+
 def test_indices_as_of_an_epoch_read_nothing_after_it(indices, tmp_path: Path) -> None:
     # The forecast rules of SpaceWeather.as_of, applied to JB2008's own indices: rows of
     # the days before the epoch's day as observed, then the last observed day's F10, S10,

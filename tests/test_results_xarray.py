@@ -297,5 +297,5 @@ def test_docs_analysis_examples_run(tmp_path, monkeypatch, capsys):
     for block in blocks:
         exec(compile(block, "docs/analysis.md", "exec"), {})
     out = capsys.readouterr().out
-    assert "two_scale 15800.0" in out and "2002-09-07T01:00:00.000000000" in out
+    assert "two_scale 16700.0" in out and "2002-09-07T01:00:00.000000000" in out
     assert (tmp_path / "monte_carlo.nc").is_file()

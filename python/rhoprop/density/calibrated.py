@@ -21,8 +21,10 @@ MSIS_AP_RELATIVE = 0.592
 MSIS_SCALE = 0.854
 MSIS_F107_EXPONENT = -0.184
 
-#: JB2008: ActivitySigma (quiet, storm, full_at in dTc K) and mean correction.
-JB2008_QUIET, JB2008_STORM, JB2008_FULL_AT = 0.196, 0.297, 376.0
+#: JB2008: ActivitySigma (quiet, storm, full_at in dTc K, ap_weight in K per ap unit)
+#: and mean correction.
+JB2008_QUIET, JB2008_STORM, JB2008_FULL_AT = 0.174, 0.293, 322.0
+JB2008_AP_WEIGHT = 5.0
 JB2008_SCALE = 0.892
 JB2008_F107_EXPONENT = -0.319
 
@@ -33,13 +35,13 @@ JR_F107_EXPONENT = -2.17
 
 #: Kappa: two Gauss-Markov terms (:class:`rhoprop.kappa.TwoScale`), half-lives in s and
 #: the slow term's share of the variance.
-KAPPA_HALF_LIFE = 15_800.0
-KAPPA_SLOW_HALF_LIFE = 356_000.0
-KAPPA_SLOW_FRACTION = 0.543
+KAPPA_HALF_LIFE = 16_700.0
+KAPPA_SLOW_HALF_LIFE = 378_000.0
+KAPPA_SLOW_FRACTION = 0.537
 
 #: Mixture weights of the three families by log score (:func:`rhoprop.ensemble`'s
 #: default when its models are these families).
-ENSEMBLE_WEIGHTS = {"NRLMSIS 2.1": 0.860, "JB2008": 0.140, "Jacchia-Roberts": 0.0}
+ENSEMBLE_WEIGHTS = {"NRLMSIS 2.1": 0.849, "JB2008": 0.151, "Jacchia-Roberts": 0.0}
 
 
 def preset_argument(preset: object) -> Preset:
@@ -58,6 +60,7 @@ NAMES = (
     "JB2008_QUIET",
     "JB2008_STORM",
     "JB2008_FULL_AT",
+    "JB2008_AP_WEIGHT",
     "JB2008_SCALE",
     "JB2008_F107_EXPONENT",
     "JR_QUIET",

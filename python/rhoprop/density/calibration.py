@@ -69,7 +69,8 @@ class FamilySamples:
         mean: (m,) the model's uncorrected mean density at the samples, kg/m^3.
         f107, f107a: (n,) the model's own daily F10.7 and 81-day mean at each orbit, sfu.
         terms: per-sample ingredients of the relative sigma: ``activity`` (the family's
-            activity driver) for an activity sigma; ``f107``, ``ap_scale`` and
+            activity driver) for an activity sigma, and for JB2008 ``ap`` (the 3-hourly
+            ap, for the activity max(dTc, ap_weight x ap)); ``f107``, ``ap_scale`` and
             ``ap_relative`` (relative density change for the F10.7 perturbation, for one
             Kp third of ap, and per unit of ``ap_relative``) for NRLMSIS.
         full_at: activity at which the family's default activity sigma reaches its storm
@@ -90,16 +91,27 @@ class FamilySamples:
 
     def relative_sigma(self, params: tuple[float, ...]) -> np.ndarray:
         """(m,) relative sigma at the samples: ``params`` are (model_floor, ap_relative) of
-        the driver uncertainty, or (quiet, storm, full_at) of an activity sigma."""
+        the driver uncertainty, or (quiet, storm, full_at[, ap_weight]) of an activity
+        sigma."""
         t = self.terms
         if self.driver_sigma:
             a, b = params
             ap = np.hypot(t["ap_scale"], b * t["ap_relative"])
             driver: np.ndarray = np.sqrt(t["f107"] ** 2 + ap**2 + a**2)
             return driver
-        a, b, full_at = params
-        w = np.clip(t["activity"] / full_at, 0.0, 1.0)
+        a, b, full_at = params[:3]
+        w = np.clip(self.with_ap_weight(params[3:]).terms["activity"] / full_at, 0.0, 1.0)
         return a + (b - a) * w
+
+    def with_ap_weight(self, weight: tuple[float, ...]) -> FamilySamples:
+        """These samples with the activity max(activity, weight x ap) (``weight`` empty or
+        0: unchanged)."""
+        if not weight or not weight[0]:
+            return self
+        act = np.maximum(self.terms["activity"], weight[0] * self.terms["ap"])
+        return FamilySamples(
+            self.name, self.mean, self.f107, self.f107a, {"activity": act}, self.full_at
+        )
 
     def sigma_start(self) -> tuple[list[float], list[tuple[float, float]]]:
         """Start and bounds of the sigma parameters' fit."""
@@ -155,12 +167,15 @@ def _point_samples(
     drivers = model.drivers(t)
     mean = model._evaluate(modified_julian_date(t), orbits.lat, orbits.lon, orbits.alt, drivers)
     o = model.drivers(orbits.time)
+    terms = {"activity": drivers[:, 8] if isinstance(model, Jb2008) else model._activity(drivers)}
+    if isinstance(model, Jb2008):
+        terms["ap"] = (model.space_weather or SpaceWeather()).drivers(t).ap[:, 1]
     return FamilySamples(
         name,
         np.asarray(mean),
         o[:, 0],
         o[:, 1],
-        {"activity": model._activity(drivers)},
+        terms,
         full_at=model.uncertainty.full_at,
     )
 
@@ -232,7 +247,8 @@ def phases(orbits: ObservedOrbits, space_weather: SpaceWeather) -> np.ndarray:
 @dataclass(frozen=True)
 class FamilyFit:
     """One family's calibration: the mean correction (scale, f107_exponent) and the sigma
-    parameters ((model_floor, ap_relative) for NRLMSIS, (quiet, storm, full_at) otherwise)."""
+    parameters ((model_floor, ap_relative) for NRLMSIS, (quiet, storm, full_at, ap_weight)
+    for JB2008, (quiet, storm, full_at) for Jacchia-Roberts)."""
 
     name: str
     scale: float
@@ -245,17 +261,44 @@ def _log_ratio(fs: FamilySamples, orbits: ObservedOrbits) -> np.ndarray:
     return out
 
 
+#: The ap weights (K per ap unit) JB2008's sigma is tried with; the one of largest
+#: likelihood is kept (0: dTc alone).
+AP_WEIGHTS = (0.0, 1.0, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0)
+
+
 def fit_family(
     fs: FamilySamples, orbits: ObservedOrbits, factors: np.ndarray, rows: np.ndarray | None = None
 ) -> FamilyFit:
     """Least squares of the log ratio on ln(F10.7 / F10.7a) for the mean correction, then
-    maximum likelihood of the sigma parameters (Gaussian log residuals), on ``rows``."""
+    maximum likelihood of the sigma parameters (Gaussian log residuals), on ``rows``;
+    with ap among the samples' terms (JB2008), for each of :data:`AP_WEIGHTS`, keeping the
+    likeliest."""
     rows = np.arange(len(orbits)) if rows is None else rows
     y = _log_ratio(fs, orbits)[rows]
     x = np.log(fs.f107 / fs.f107a)[rows]
     design = np.column_stack([np.ones_like(x), x])
     (c0, c1), *_ = np.linalg.lstsq(design, y, rcond=None)
     r = y - c0 - c1 * x
+    best: tuple[float, tuple[float, ...]] | None = None
+    for weight in AP_WEIGHTS if "ap" in fs.terms else (None,):
+        tried = fs if weight is None else fs.with_ap_weight((weight,))
+        nll, params = _sigma_fit(tried, orbits, factors, rows, r)
+        params = params if weight is None else (*params, weight)
+        if best is None or nll < best[0]:
+            best = (nll, params)
+    assert best is not None
+    return FamilyFit(fs.name, float(math.exp(c0)), float(c1), best[1])
+
+
+def _sigma_fit(
+    fs: FamilySamples,
+    orbits: ObservedOrbits,
+    factors: np.ndarray,
+    rows: np.ndarray,
+    r: np.ndarray,
+) -> tuple[float, tuple[float, ...]]:
+    """Maximum likelihood of the sigma parameters given the residuals ``r`` on ``rows``:
+    (negative log likelihood, parameters)."""
     orbit_rel = _orbit_relative_sigma(fs, orbits)
 
     def sigma(p: np.ndarray) -> np.ndarray:
@@ -268,7 +311,7 @@ def fit_family(
 
     start, bounds = fs.sigma_start()
     best = _scipy_optimize().minimize(nll, np.array(start), bounds=bounds, method="Nelder-Mead")
-    return FamilyFit(fs.name, float(math.exp(c0)), float(c1), tuple(float(x) for x in best.x))
+    return float(best.fun), tuple(float(x) for x in best.x)
 
 
 def _orbit_relative_sigma(
@@ -420,12 +463,13 @@ class Calibration:
             "MSIS_F107_EXPONENT": msis.f107_exponent,
         }
         for prefix, fit in (("JB2008", jb), ("JR", jr)):
-            quiet, storm, full_at = fit.sigma
+            quiet, storm, full_at = fit.sigma[:3]
             out.update(
                 {
                     f"{prefix}_QUIET": quiet,
                     f"{prefix}_STORM": storm,
                     f"{prefix}_FULL_AT": full_at,
+                    **({f"{prefix}_AP_WEIGHT": fit.sigma[3]} if len(fit.sigma) > 3 else {}),
                     f"{prefix}_SCALE": fit.scale,
                     f"{prefix}_F107_EXPONENT": fit.f107_exponent,
                 }

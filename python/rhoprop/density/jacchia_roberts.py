@@ -74,6 +74,11 @@ class JacchiaRoberts(PointModel):
     ) -> None:
         self.space_weather = space_weather_argument(space_weather)
         self._set_uncertainty(uncertainty, correction, preset, JR_SIGMA, JR_CALIBRATED)
+        if self.uncertainty.ap_weight:
+            raise ValueError(
+                "uncertainty.ap_weight is JB2008's (its dTc lags a storm); Jacchia-Roberts' "
+                "activity is Kp itself: leave it 0"
+            )
         self.resolution = resolution_arg(resolution)
 
     def __repr__(self) -> str:

@@ -38,6 +38,7 @@ import numpy as np
 from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
+from ..spaceweather import SpaceWeather, space_weather_argument
 from ..spaceweather.record import AS_OF_AP_RELAX_DAYS, AS_OF_DAYS
 from ..time import EpochLike, EpochsLike, to_datetime64
 from . import calibrated as cal
@@ -375,7 +376,12 @@ JB2008_SIGMA = ActivitySigma(quiet=0.12, storm=0.27, full_at=150.0)
 #: The calibrated default (``preset="calibrated"``): sigma and mean correction fitted on
 #: observed orbit-averaged densities (docs/density-calibration.md).
 JB2008_CALIBRATED = (
-    ActivitySigma(quiet=cal.JB2008_QUIET, storm=cal.JB2008_STORM, full_at=cal.JB2008_FULL_AT),
+    ActivitySigma(
+        quiet=cal.JB2008_QUIET,
+        storm=cal.JB2008_STORM,
+        full_at=cal.JB2008_FULL_AT,
+        ap_weight=cal.JB2008_AP_WEIGHT,
+    ),
     MeanCorrection(cal.JB2008_SCALE, cal.JB2008_F107_EXPONENT),
 )
 
@@ -387,13 +393,18 @@ class Jb2008(PointModel):
         indices: the index files (:class:`Jb2008Indices`); None looks in
             ``$RHOPROP_JB2008_DATA``, then the user cache (FileNotFoundError saying how to
             get them if neither has them).
-        uncertainty: :class:`ActivitySigma` in dTc (default: the preset's).
+        uncertainty: :class:`ActivitySigma` in dTc (default: the preset's; the calibrated
+            one grows with max(dTc, ``ap_weight`` x ap), 5 K per ap unit).
         correction: :class:`~rhoprop.density.MeanCorrection` (default: the preset's).
         preset: ``"calibrated"`` (default): sigma and mean correction calibrated on
             observed orbit-averaged densities (:data:`JB2008_CALIBRATED`: 0.892 x the model
             x (F10 / F10B) ** -0.319); ``"paper"``: :data:`JB2008_SIGMA` and no correction.
         dtc: None (observed dTc) or a constant dTc (K) used at every time, e.g. its
             long-term mean for the paper's cases III/IV.
+        space_weather: the record whose 3-hourly ap enters the sigma when
+            ``uncertainty.ap_weight`` > 0 (a :class:`~rhoprop.SpaceWeather`, a path to a
+            CelesTrak file, or None: the bundled record). In forecast mode give
+            ``SpaceWeather().as_of(epoch)`` beside ``indices.as_of(epoch)``.
         resolution: grid spacing of the sampled field (see :class:`FieldResolution`).
 
     Example:
@@ -415,11 +426,15 @@ class Jb2008(PointModel):
         preset: Preset = "calibrated",
         dtc: float | None = None,
         resolution: FieldResolution | None = None,
+        space_weather: SpaceWeather | str | os.PathLike[str] | None = None,
     ) -> None:
         self.indices = Jb2008Indices.default() if indices is None else indices
         if not isinstance(self.indices, Jb2008Indices):
             raise TypeError("indices must be a Jb2008Indices or None")
         self._set_uncertainty(uncertainty, correction, preset, JB2008_SIGMA, JB2008_CALIBRATED)
+        self.space_weather = (
+            space_weather_argument(space_weather) if self.uncertainty.ap_weight else None
+        )
         self.dtc = None if dtc is None else _validate.real("dtc", dtc)
         self.resolution = resolution_arg(resolution)
 
@@ -428,11 +443,15 @@ class Jb2008(PointModel):
         return f"Jb2008(uncertainty={self.uncertainty!r}, correction={self.correction!r}{extra})"
 
     def drivers(self, times: np.ndarray) -> np.ndarray:
-        """The (n, 9) inputs at ``times`` (with ``dtc`` substituted when set)."""
+        """The (n, 9) inputs at ``times`` (with ``dtc`` substituted when set), and with a
+        sigma in ap a tenth column: the 3-hourly ap."""
         ix = self.indices.at(times)
         if self.dtc is not None:
             ix[:, 8] = self.dtc
-        return ix
+        if self.space_weather is None:
+            return ix
+        ap = self.space_weather.drivers(np.asarray(times, dtype="datetime64[ns]").ravel()).ap
+        return np.column_stack([ix, ap[:, 1]])
 
     def _evaluate(
         self,
@@ -442,10 +461,14 @@ class Jb2008(PointModel):
         alt: np.ndarray,
         drivers: np.ndarray,
     ) -> np.ndarray:
-        return np.asarray(_core.jb2008_geodetic(mjd, lat, lon, alt, drivers)[2])
+        inputs = np.ascontiguousarray(drivers[:, :9])
+        return np.asarray(_core.jb2008_geodetic(mjd, lat, lon, alt, inputs)[2])
 
     def _activity(self, drivers: np.ndarray) -> np.ndarray:
-        return drivers[:, 8]  # dTc, K
+        if self.space_weather is None:
+            return drivers[:, 8]  # dTc, K
+        activity: np.ndarray = np.maximum(drivers[:, 8], self.uncertainty.ap_weight * drivers[:, 9])
+        return activity
 
     def _breaks(self, start: np.datetime64, end: np.datetime64) -> np.ndarray:
         days = np.arange(
@@ -468,7 +491,10 @@ class Jb2008(PointModel):
         return super()._grid_values(epochs + shift, left, alt, lat, lon)
 
     def _coverage(self) -> tuple[np.datetime64, np.datetime64] | None:
-        return self.indices.span
+        if self.space_weather is None:
+            return self.indices.span
+        (a, b), (c, d) = self.indices.span, self.space_weather.span
+        return max(a, c), min(b, d)
 
     def cache_key(self, start: np.datetime64, end: np.datetime64) -> Any:
         return {
@@ -478,4 +504,17 @@ class Jb2008(PointModel):
             "dtc": self.dtc,
             "indices": self.indices.digest(start, end),
             "lags": "midnight-same",
+            **({} if self.space_weather is None else {"ap": self._ap_digest(start, end)}),
         }
+
+    def _ap_digest(self, start: np.datetime64, end: np.datetime64) -> str:
+        """Digest of the 3-hourly ap from a day before ``start`` to a day after ``end``
+        (within the record): what the sigma reads of the record."""
+        assert self.space_weather is not None
+        first, last = self.space_weather.span
+        day = np.timedelta64(1, "D")
+        times = np.arange(
+            max(start - day, first), min(end + day, last), np.timedelta64(3, "h")
+        ).astype("datetime64[ns]")
+        ap = self.space_weather.drivers(times).ap[:, 1]
+        return hashlib.sha256(np.ascontiguousarray(ap).tobytes()).hexdigest()

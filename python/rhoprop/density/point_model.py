@@ -35,14 +35,18 @@ class ActivitySigma:
     """Relative 1-sigma density error growing with geomagnetic activity:
     sigma/mean = ``quiet`` + (``storm`` - ``quiet``) * clip(activity / ``full_at``, 0, 1),
     with activity the family's own geomagnetic driver (dTc in K for JB2008, Kp for
-    Jacchia-Roberts). Defaults and sources: docs/density-models.md."""
+    Jacchia-Roberts). ``ap_weight`` (JB2008 only, K per ap unit; 0: off): the activity is
+    max(dTc, ``ap_weight`` x the 3-hourly ap), since dTc lags a storm's onset while the
+    density (and the model's error) rises with ap (docs/density-calibration.md).
+    Defaults and sources: docs/density-models.md."""
 
     quiet: float
     storm: float
     full_at: float
+    ap_weight: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("quiet", "storm", "full_at"):
+        for name in ("quiet", "storm", "full_at", "ap_weight"):
             value = _validate.real(name, getattr(self, name))
             if value < 0:
                 raise ValueError(f"{name} must be >= 0, got {value}")

@@ -105,7 +105,7 @@ def monte_carlo(
             is given (then it must equal the last of them).
         n: number of members (>= 2).
         kappa: the kappa process (default :class:`~rhoprop.kappa.TwoScale`, calibrated on
-            observed densities: half-lives 4.4 h and 4.1 days, 54 % of the variance in
+            observed densities: half-lives 4.6 h and 4.4 days, 54 % of the variance in
             the slow term; the paper's was ``GaussMarkov(1080)``, 18 min).
         seed: seed of the members' random streams (same seed, same numbers, whatever the
             thread count).
