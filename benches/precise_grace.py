@@ -104,7 +104,7 @@ def models(start: np.datetime64) -> list[tuple[str, str, object]]:
         out += [
             ("NRLMSIS 2.1", drivers, Msis("2.1", space_weather=sw)),
             ("NRLMSISE-00", drivers, Msis("00", space_weather=sw)),
-            ("JB2008", drivers, Jb2008(jb)),
+            ("JB2008", drivers, Jb2008(jb, space_weather=sw)),
             ("Jacchia-Roberts", drivers, JacchiaRoberts(space_weather=sw)),
         ]
     return out

@@ -118,7 +118,7 @@ def default_models(
     for name in names[1:]:
         if name == "JB2008" and indices is not None:
             dtc = indices.mean_dtc(*MEAN_YEARS) if mean_dtc else None
-            models[name] = Jb2008(indices, dtc=dtc, preset=preset)
+            models[name] = Jb2008(indices, dtc=dtc, preset=preset, space_weather=sw)
         elif name == "Jacchia-Roberts 1971":
             models[name] = JacchiaRoberts(sw, preset=preset)
         elif name == "NRLMSISE-00":
