@@ -734,3 +734,26 @@ def test_events_days_from_the_epochs_say_when_the_gaussian_no_longer_holds():
         notes[days] = res.pc_notes
     assert not any("curves" in n for n in notes[1]), notes[1]
     assert all("A's spread curves" in n and "B's spread curves" in n for n in notes[9])
+
+
+def test_an_object_whose_epoch_is_after_all_its_events_gets_its_epoch_covariance():
+    # The Pc stage runs each object to its own TCAs after its epoch; one needed only
+    # before its epoch (a start before it) is not run and takes its covariance at epoch,
+    # while its partner runs (this raised KeyError when the Pc went to each own TCA).
+    a = rp.scenarios.paper_state()
+    craft = rp.scenarios.paper_spacecraft()
+    r, v = np.array(a.position), np.array(a.velocity)
+    b0 = rp.OrbitState(a.epoch, r * (1 + 500.0 / np.linalg.norm(r)), v)
+    later = rp.propagate(b0, craft, MODEL, 86400.0, output_step=86400.0)
+    b = rp.OrbitState(add_seconds(a.epoch, 86400.0), later.positions[-1], later.velocities[-1])
+    res = screen_all(
+        [(a, craft), (b, craft)],
+        MODEL,
+        start=a.epoch,
+        end=add_seconds(a.epoch, 6 * 3600.0),
+        distance=5e3,
+        progress=False,
+    )
+    assert len(res.events) == 1
+    assert "an object's epoch is after TCA: its covariance at epoch" in res.pc_notes[0]
+    assert np.isfinite(res.pc_models).all() and np.isfinite(res.covariance2[0]).all()

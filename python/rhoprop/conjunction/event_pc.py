@@ -378,7 +378,10 @@ def _model_moments(
             base = res if name == ref else base
             # One model's run at a time is held (with the reference's): bounded memory.
             for m in batch:
-                runs = None if res is None or base is None else (res, base, row[m], tcas[m])
+                # An object needed only before its epoch is not run (no row): None.
+                runs = None
+                if res is not None and base is not None and m in row:
+                    runs = (res, base, row[m], tcas[m])
                 _object_moments(events, cats[m], name, runs, needs[m], out)
         done += len(batch)
         if report is not None:
