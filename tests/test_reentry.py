@@ -58,6 +58,15 @@ def test_windows_are_ordered_and_count_every_member(atmosphere):
     for bad in (0.0, 1.0, float("nan")):
         with pytest.raises(ValueError, match="level"):
             r.window(bad)
+    # The same windows as a table (datetime64 columns, the rows' other values) and a
+    # DataFrame of one row per object.
+    table = r.table()
+    np.testing.assert_array_equal(table["epoch_q10"], lo80)
+    np.testing.assert_array_equal(table["epoch_median"], r.epoch_median)
+    assert set(table) == set(rows[0]) and all(len(c) == 2 for c in table.values())
+    frame = r.to_pandas()
+    assert list(frame.columns) == list(table) and list(frame["norad_id"]) == [1, 2]
+    assert frame["decayed_fraction"].tolist() == [row["decayed_fraction"] for row in rows]
 
 
 def test_drag_uncertainty_widens_the_window(atmosphere):

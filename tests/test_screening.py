@@ -184,6 +184,11 @@ def test_screen_finds_an_encounter_between_grid_samples():
     assert abs(event.miss_distance - ref_miss) < 1.0
     assert (event.name1, event.name2) == ("primary", "secondary")
     assert set(res.timings) >= {"radial", "propagation", "coarse_grid", "refinement"}
+    # The events as a table and a DataFrame (as the all-on-all screen gives them).
+    frame = res.to_pandas()
+    assert list(frame["name2"]) == ["secondary"] and frame["tca"][0] == event.tca
+    assert frame["miss_distance"][0] == event.miss_distance and frame["edge"][0] == ""
+    assert frame["id1"][0] == -1 and np.isnat(res.table()["within_start"][0])
 
 
 @pytest.mark.parametrize(

@@ -101,7 +101,11 @@ def _run_on_dask(
     pending = list(range(len(chunks)))
     last: BaseException | None = None
     for _ in range(3):
-        shared = client.scatter(model, broadcast=True)
+        # A fresh random key (hash=False), never the content's hash: the same model
+        # scattered by the run before may still be being released under its hashed key,
+        # and a broadcast that reused it once hung the test suite (the workers looped
+        # asking each other for data neither held). It also saves hashing a big field.
+        shared = client.scatter(model, broadcast=True, hash=False)
         futures = {
             c: client.submit(_run_chunk, shared, chunks[c], epochs, cfg, retries=2, pure=False)
             for c in pending

@@ -15,9 +15,11 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from .. import _validate
 from ..constants import MU, R_EARTH
 from ..density.model import ModelLike
 from ..errors import CovarianceError, RhopropError
+from ..options import Integrator
 from ..progress import ProgressBar
 from ..propagation import (
     OrbitState,
@@ -27,8 +29,10 @@ from ..propagation import (
     propagate,
 )
 from ..propagation.ccsp import ccsp_many, update_schedule
+from ..propagation.dynamics import Dynamics, zonal_degree_argument
 from ..propagation.gaussian_check import arc_sag_share, holds, member_coverage
-from ..propagation.kappa import KappaProcess
+from ..propagation.kappa import KappaProcess, TwoScale
+from ..propagation.montecarlo import METHODS as MONTE_CARLO_INTEGRATORS
 from ..propagation.montecarlo import drag_sigma_argument
 from ..propagation.propagate import (
     DEFAULT_STEP,
@@ -191,7 +195,9 @@ class RunSettings:
     """The settings every object of a catalog run shares (checked by
     :func:`propagate_catalog`): ``method`` ("ccsp" or "monte_carlo"), members ``n`` and
     ``kappa`` and base ``seed`` of a Monte Carlo, the CCSP's ``update_interval`` (s), the
-    ``floor_altitude`` (m), ``errors`` ("raise" or "record") and the ``zonal_degree``."""
+    ``floor_altitude`` (m), ``errors`` ("raise" or "record"), the ``zonal_degree``, and
+    the user's ``integrator`` and fixed ``step`` (s) of :class:`~rhoprop.Dynamics` (None:
+    the CCSP's RK8 at each object's :func:`catalog_step`, the Monte Carlo's RK8 at 180 s)."""
 
     method: str
     n: int
@@ -201,6 +207,45 @@ class RunSettings:
     floor_altitude: float
     errors: str
     zonal_degree: int
+    integrator: Integrator | None = None
+    step: float | None = None
+
+    @classmethod
+    def checked(
+        cls,
+        method: str,
+        n: object,
+        kappa: object,
+        seed: object,
+        update_interval: object,
+        dynamics: Dynamics,
+        errors: str,
+    ) -> RunSettings:
+        """The settings of a run, checked (ValueError or TypeError naming the argument):
+        ``kappa`` None is :class:`~rhoprop.kappa.TwoScale`; ``dynamics``' integrator must
+        be one the method integrates with (RK8 for the CCSP)."""
+        if method not in ("ccsp", "monte_carlo"):
+            raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
+            raise ValueError(f"n must be an integer >= 2, got {n!r}")
+        process = TwoScale() if kappa is None else kappa
+        if not isinstance(process, KappaProcess):
+            raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
+        integrators = ("rk8",) if method == "ccsp" else MONTE_CARLO_INTEGRATORS
+        dynamics.require_integrator("propagate_catalog", integrators)
+        return cls(
+            method=method,
+            n=int(n),
+            kappa=process,
+            # Object i runs with seed + i: room for any catalog below 2**64.
+            seed=_validate.seed(seed, limit=2**63),
+            update_interval=_validate.positive("update_interval", update_interval),
+            floor_altitude=dynamics.floor_altitude,
+            errors=errors,
+            zonal_degree=zonal_degree_argument(dynamics.zonal_degree),
+            integrator=dynamics.integrator,
+            step=dynamics.step,
+        )
 
 
 @dataclass(frozen=True)
@@ -262,11 +307,16 @@ class ObjectPlan:
 
 
 def _plans(
-    objs: list[CatalogObject], initial_covariance: Any, drag_sigma: Any, model: Any = None
+    objs: list[CatalogObject],
+    initial_covariance: Any,
+    drag_sigma: Any,
+    model: Any = None,
+    step: float | None = None,
 ) -> list[ObjectPlan]:
     """One :class:`ObjectPlan` per object, in catalog order; with ``model``, an object
     whose Cd*A/m is B*'s plain conversion runs with it scaled to the model
-    (:func:`scaled_bstar_drag`)."""
+    (:func:`scaled_bstar_drag`); each with the fixed ``step`` (s), or its own
+    :func:`catalog_step` when None."""
     plans = []
     for i, obj in enumerate(objs):
         scaled = scaled_bstar_drag(obj, model) if model is not None else obj
@@ -276,7 +326,8 @@ def _plans(
             if scaled is not obj and isinstance(drag_sigma, str) and drag_sigma == "auto"
             else _drag_sigma(scaled, drag_sigma)
         )
-        plans.append(ObjectPlan(i, scaled, initial, note, sigma, catalog_step(scaled.state)))
+        own = catalog_step(scaled.state) if step is None else step
+        plans.append(ObjectPlan(i, scaled, initial, note, sigma, own))
     return plans
 
 
@@ -570,6 +621,8 @@ def _propagate_object(
             progress=check,
             floor_altitude=cfg.floor_altitude,
             zonal_degree=cfg.zonal_degree,
+            integrator=cfg.integrator,
+            step=cfg.step,
         )
         decay = mc.mean_orbit.decayed_at
         m = mc.moments()

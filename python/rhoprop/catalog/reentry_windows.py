@@ -24,7 +24,7 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,10 +35,15 @@ from ..parallel import map_in_threads, worker_count
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.kappa import Constant, KappaProcess
+from ..propagation.montecarlo import METHODS as MONTE_CARLO_INTEGRATORS
 from ..propagation.montecarlo import drag_sigma_argument
+from ..propagation.results import optional_import
 from ..time import DurationLike, add_seconds
 from .elements import CatalogObject, fit_objects, raise_named
 from .objects import DEFAULT_DRAG_RELATIVE_SIGMA, scaled_bstar_drag
+
+if TYPE_CHECKING:
+    import pandas
 
 #: Default density perturbation of a reentry run: one N(0,1) draw per member held over
 #: the whole run (``Constant``), so each member's density is the model's mean + kappa x
@@ -143,6 +148,35 @@ class ReentryResult:
             for k, o in enumerate(self.objects)
         ]
 
+    def table(self) -> dict[str, np.ndarray]:
+        """One row per object as columns: ``norad_id``, ``name``, the 95 % window's ends
+        ``epoch_q025`` / ``epoch_q975``, the 80 % window's ``epoch_q10`` / ``epoch_q90``
+        and ``epoch_median`` (datetime64[ns] UTC, NaT beyond the horizon), then the
+        columns of :meth:`rows` (decayed fraction, Cd*A/m m^2/kg and its relative sigma,
+        fit, fit RMS m, fit note, element sets)."""
+        q10, q90 = self.window(0.8)
+        rows = self.rows()
+        cols: dict[str, np.ndarray] = {
+            "norad_id": np.array([o.norad_id for o in self.objects], dtype=np.int64),
+            "name": np.array([o.name for o in self.objects], dtype=object),
+            "epoch_q025": self.epoch_q025,
+            "epoch_q10": q10,
+            "epoch_median": self.epoch_median,
+            "epoch_q90": q90,
+            "epoch_q975": self.epoch_q975,
+        }
+        for key in [k for k in (rows[0] if rows else {}) if k not in cols]:
+            values = [r[key] for r in rows]
+            cols[key] = np.array(values, dtype=object if key == "fit_note" else None)
+        return cols
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """:meth:`table` as a ``pandas.DataFrame``, one row per object (needs pandas, e.g.
+        the ``[xarray]`` extra)."""
+        pd = optional_import("pandas", "ReentryResult.to_pandas()")
+        frame: pandas.DataFrame = pd.DataFrame(self.table())
+        return frame
+
 
 def _seconds(horizon: object) -> float:
     if isinstance(horizon, _dt.timedelta):
@@ -207,7 +241,9 @@ def reentry(
         floor_altitude: the decay altitude, m (default 120 km).
         threads: objects run at once (default: CPU count).
         dynamics: a :class:`~rhoprop.Dynamics` for every member's run (then leave
-            ``floor_altitude`` at its default).
+            ``floor_altitude`` at its default): its zonal degree, floor, integrator
+            (``"rk8"``, ``"rk4"`` or ``"abm"``) and step are the Monte Carlo's;
+            ``rtol``, ``field_degree`` and ``third_bodies`` are refused (ValueError).
         horizon: deprecated name of ``duration`` (a span after each object's own epoch is
             ``duration`` everywhere; an absolute end shared by all objects is ``end``).
         fit: fit each object's state and Cd*A/m to its element set with ``model`` first
@@ -234,11 +270,11 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
-    dyn = resolve_automatic("reentry", dynamics, Dynamics(), floor_altitude=floor_altitude)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    if isinstance(groups, bool) or not isinstance(groups, (int, np.integer)) or groups < 1:
-        raise ValueError(f"groups must be a positive integer, got {groups!r}")
+    dyn = resolve_automatic(
+        "reentry", dynamics, Dynamics(), MONTE_CARLO_INTEGRATORS, floor_altitude=floor_altitude
+    )
+    n = _validate.count("n", n, minimum=2)
+    groups = _validate.count("groups", groups, minimum=1)
     drag_sigma = None if drag_sigma is None else drag_sigma_argument(drag_sigma)
     per_group = max(int(np.ceil(n / groups)), 2)
     total = per_group * int(groups)

@@ -21,9 +21,9 @@ from ..density import DensityModel, SampledModel
 from ..options import Errors, UncertaintyMethod
 from ..progress import ProgressBar
 from ..propagation import OrbitState
-from ..propagation.dynamics import Dynamics, resolve_automatic, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.interpolate import DEFAULT_TOLERANCE
-from ..propagation.kappa import KappaProcess, TwoScale
+from ..propagation.kappa import KappaProcess
 from ..propagation.results import (
     StateMoments,
     dataset_attrs,
@@ -362,9 +362,13 @@ def propagate_catalog(
             density (:func:`~rhoprop.catalog.scaled_bstar_drag`; real-atmosphere models
             only), and ``objects`` of the result carry the value used.
         dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
-            ``zonal_degree`` at once (then leave those keywords at their defaults; its
-            integrator and step are not used: the CCSP integrates with RK8 at its default
-            step, the Monte Carlo with its defaults).
+            ``zonal_degree`` at once (then leave those keywords at their defaults). Its
+            ``step`` (s) is every object's fixed step (None: the CCSP's RK8 at each
+            object's :func:`~rhoprop.catalog.objects.catalog_step`, the Monte Carlo's
+            180 s); its ``integrator`` must be ``"rk8"`` for the CCSP and ``"rk8"``,
+            ``"rk4"`` or ``"abm"`` for the Monte Carlo; ``rtol``, ``field_degree`` and
+            ``third_bodies`` are refused (ValueError), never ignored. The fit before the
+            run (``fit``) keeps its own RK8 grid.
         fit: ``"auto"`` (default): with a model of the real atmosphere, the objects
             whose Cd*A/m comes from the element set (B*, or the guess for B* <= 0), at
             every altitude (until 2026-12-04 only perigees below 700 km), are first fitted
@@ -388,17 +392,10 @@ def propagate_catalog(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
-    if method not in ("ccsp", "monte_carlo"):
-        raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
     errors = _validate.errors_and_client("propagate_catalog", errors, client)
     bad = [o for o in objs if not isinstance(o, CatalogObject)]
     if bad:
         raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    process = kappa or TwoScale()
-    if not isinstance(process, KappaProcess):
-        raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     end64 = to_datetime64(end, "end")
@@ -422,25 +419,14 @@ def propagate_catalog(
         floor_altitude=floor_altitude,
         zonal_degree=zonal_degree,
     )
-    floor, zonal_degree = dyn.floor_altitude, dyn.zonal_degree
-    cfg = RunSettings(
-        method=method,
-        n=int(n),
-        kappa=process,
-        # Object i runs with seed + i: room for any catalog below 2**64.
-        seed=_validate.seed(seed, limit=2**63),
-        update_interval=_validate.positive("update_interval", update_interval),
-        floor_altitude=floor,
-        errors=errors,
-        zonal_degree=zonal_degree_argument(zonal_degree),
-    )
+    cfg = RunSettings.checked(method, n, kappa, seed, update_interval, dyn, errors)
     fresh = [i for i in range(len(objs)) if i not in stale]
     fitted = fit_catalog_objects(
         [objs[i] for i in fresh], model, fit, cfg.zonal_degree, progress=progress is True
     )
     for i, obj in zip(fresh, fitted, strict=True):
         objs[i] = obj
-    plans = _plans(objs, initial_covariance, drag_sigma, model)
+    plans = _plans(objs, initial_covariance, drag_sigma, model, cfg.step)
     notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step, _start(start, end64))
     shipped = _shipped_model(model)
@@ -491,6 +477,7 @@ def propagate_to_own_epochs(
     *,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = CATALOG_ZONAL_DEGREE,
+    step: float | None = None,
     client: object = None,  # a distributed.Client
     errors: Errors = "record",
 ) -> OwnEpochsResult:
@@ -500,7 +487,8 @@ def propagate_to_own_epochs(
     output; objects in chunks on threads or on Dask). Why: a run needing each object
     at a few epochs of its own (a screen's Pc at each event's TCA) would otherwise
     update every object's CCSP at the union of them all (a 300-s grid cost 3.5x an
-    hourly run: benches/README.md, "All-on-all")."""
+    hourly run: benches/README.md, "All-on-all"). ``step``: every object's RK8 step, s
+    (None: its :func:`~rhoprop.catalog.objects.catalog_step`)."""
     objs = list(objects)
     if len(epochs) != len(objs):
         raise ValueError(f"epochs must give one array per object ({len(objs)}), got {len(epochs)}")
@@ -511,19 +499,18 @@ def propagate_to_own_epochs(
         if e[0] < o.state.epoch:
             raise ValueError(f"object {o.norad_id}: epoch {e[0]} is before its own")
     errors = _validate.errors_and_client("propagate_to_own_epochs", errors, client)
-    cfg = RunSettings(
-        method="ccsp",
-        n=2,
-        kappa=TwoScale(),
-        seed=0,
-        update_interval=3600.0,
-        floor_altitude=float(floor_altitude),
-        errors=errors,
-        zonal_degree=zonal_degree_argument(zonal_degree),
+    cfg = RunSettings.checked(
+        "ccsp",
+        2,
+        None,
+        0,
+        3600.0,
+        Dynamics(zonal_degree=zonal_degree, floor_altitude=floor_altitude, step=step),
+        errors,
     )
     plans = [
         dataclasses.replace(p, epochs=e)
-        for p, e in zip(_plans(objs, "object", "auto", model), own, strict=True)
+        for p, e in zip(_plans(objs, "object", "auto", model, cfg.step), own, strict=True)
     ]
     shipped = _shipped_model(model)
     results = Outcomes(len(objs), max(len(e) for e in own))

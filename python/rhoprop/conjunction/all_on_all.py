@@ -27,11 +27,11 @@ from ..density.model import ModelLike
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
-from ..propagation.dynamics import Dynamics, resolve_automatic, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
-from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event
+from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event, event_columns
 from .approach import _models_for as models_for
 from .event_mc import event_monte_carlo
 from .event_pc import check_coverage, check_options, event_probabilities
@@ -178,22 +178,7 @@ class AllOnAllResult:
         ``dilution``, ``pc_method`` and the Pc note."""
         ev = self.events
         cols: dict[str, np.ndarray] = {
-            "name1": np.array([e.name1 for e in ev], dtype=object),
-            "id1": np.array([-1 if e.id1 is None else e.id1 for e in ev], dtype=np.int64),
-            "name2": np.array([e.name2 for e in ev], dtype=object),
-            "id2": np.array([-1 if e.id2 is None else e.id2 for e in ev], dtype=np.int64),
-            "tca": np.array([e.tca for e in ev], dtype="datetime64[ns]"),
-            "miss_distance": np.array([e.miss_distance for e in ev], dtype=float),
-            "relative_speed": np.array([e.relative_speed for e in ev], dtype=float),
-            "edge": np.array(["" if e.edge is None else e.edge for e in ev], dtype=object),
-            "within_start": np.array(
-                [np.datetime64("NaT") if e.within is None else e.within[0] for e in ev],
-                dtype="datetime64[ns]",
-            ),
-            "within_end": np.array(
-                [np.datetime64("NaT") if e.within is None else e.within[1] for e in ev],
-                dtype="datetime64[ns]",
-            ),
+            **event_columns(ev),
             "hard_body_radius": np.asarray(self.hard_body_radius, dtype=float),
             "pc": np.asarray(self.pc, dtype=float),
         }
@@ -306,7 +291,12 @@ def screen_all(
         pc: compute the Pc of every event (default True).
         grid_step, fine_step: coarse grid and refinement output steps, s.
         floor_altitude, zonal_degree, dynamics: as for ``rp.propagate`` (default J2..J4,
-            the catalog's).
+            the catalog's). The tracks follow the dynamics' ``integrator``, ``step`` and
+            ``rtol`` (default adaptive DOP853); the Pc stage runs its CCSP and Monte Carlo
+            with RK8 at that ``step`` (default each object's catalog step, 180 s in LEO),
+            so with ``pc`` the integrator must be None or ``"rk8"`` (ValueError
+            otherwise; ``rtol`` applies to the tracks); ``field_degree`` and
+            ``third_bodies`` are refused.
         max_memory: bytes the tracks of one time chunk may take (default 0.5 GB; the
             window is cut into time chunks that fit).
         threads: worker threads (default CPU count); errors: ``"raise"`` (default: the
@@ -338,7 +328,7 @@ def screen_all(
     wall0 = time.perf_counter()
     models, ref_name = _model_set(model, reference)
     cfg = _settings(
-        start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree, dynamics
+        start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree, dynamics, pc
     )
     errors = _validate.errors_and_client("screen_all", errors, client)
     workers = worker_count(threads)
@@ -453,6 +443,7 @@ def _monte_carlo(
         _validate.seed(seed, limit=2**63),
         cfg.degree,
         cfg.floor,
+        cfg.dynamics.step,
     )
     timings["pc_monte_carlo"] = time.perf_counter() - t0
     return out
@@ -467,6 +458,7 @@ def _settings(
     floor_altitude: float,
     zonal_degree: int,
     dynamics: Dynamics | None,
+    pc: bool,
 ) -> _Window:
     t_start, t_end, span = window_span(start, end)
     step = _validate.positive("grid_step", grid_step)
@@ -482,6 +474,11 @@ def _settings(
         floor_altitude=floor_altitude,
         zonal_degree=zonal_degree,
     )
+    if pc and dyn.integrator not in (None, "rk8"):
+        raise ValueError(
+            "screen_all()'s Pc stage integrates with rk8 (its CCSP and Monte Carlo), not "
+            f"dynamics.integrator = {dyn.integrator!r}: give None or 'rk8', or pc=False"
+        )
     return _Window(
         t_start,
         t_end,
@@ -489,8 +486,7 @@ def _settings(
         _validate.positive("distance", distance),
         step,
         _validate.positive("fine_step", fine_step),
-        dyn.floor_altitude,
-        zonal_degree_argument(dyn.zonal_degree),
+        dyn,
     )
 
 
@@ -625,7 +621,7 @@ class _Run:
         self.report = report
         self.dask = None if client is None else DaskStages(client)
         self.stop = threading.Event()
-        self.dyn = _Dynamics(cfg.start, True, cfg.floor, cfg.degree, cfg.fine)
+        self.dyn = _Dynamics(cfg.start, True, cfg.dynamics, cfg.fine)
         self.skipped: list[tuple[str, str]] = []
         self.notes: list[tuple[str, str]] = []
 

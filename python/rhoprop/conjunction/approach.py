@@ -165,19 +165,28 @@ class _Track:
 @dataclass
 class _Dynamics:
     """What re-propagation needs: the reference epoch, whether to re-propagate at all
-    (False: interpolation only), floor, zonal degree and the fine output step. Each track
-    carries its own spacecraft and density model (or field)."""
+    (False: interpolation only), the checked :class:`Dynamics` (every setting of it goes
+    to ``propagate``: zonal degree, floor, integrator, step, rtol and, for
+    closest_approach, the field and third bodies; screens run the automatic terms) and
+    the fine output step. Each track carries its own spacecraft and density model (or
+    field)."""
 
     ref: np.datetime64
     propagates: bool
-    floor: float
-    degree: int
+    settings: Dynamics
     fine_step: float
     #: The frame of the tracks' states (a screen's are TEME).
     frame: str = "TEME"
-    #: The field degree and third bodies (:attr:`Dynamics.gravity`) of closest_approach's
-    #: trajectories; screens run the automatic terms.
-    gravity: tuple[int | None, bool | None] = (None, None)
+
+    @property
+    def floor(self) -> float:
+        """The floor altitude, m."""
+        return self.settings.floor_altitude
+
+    @property
+    def degree(self) -> int:
+        """The zonal degree."""
+        return self.settings.zonal_degree
 
     def run(
         self, track: _Track, t0: float, state: np.ndarray, span: float, step: float | None
@@ -198,16 +207,9 @@ class _Dynamics:
         span: float,
         step: float | None,
     ) -> Trajectory:
-        """``propagate`` of ``state`` over ``span`` s with this screening's floor and zonal
-        degree (outputs every ``step`` s, or the end only)."""
-        field, bodies = self.gravity
-        dynamics = Dynamics(
-            zonal_degree=self.degree,
-            floor_altitude=self.floor,
-            field_degree=field,
-            third_bodies=bodies,
-        )
-        return propagate(state, craft, model, span, output_step=step, dynamics=dynamics)
+        """``propagate`` of ``state`` over ``span`` s with these dynamics (outputs every
+        ``step`` s, or the end only)."""
+        return propagate(state, craft, model, span, output_step=step, dynamics=self.settings)
 
     def state_at(self, track: _Track, t: float) -> np.ndarray | None:
         """The exact state of ``track`` at ``t``: a sample, or propagated from the last
@@ -372,6 +374,30 @@ def _models_for(
     return [model.atlas if isinstance(model, SampledModel) else model] * len(states)
 
 
+def event_columns(events: Sequence[CloseApproach]) -> dict[str, np.ndarray]:
+    """The events as columns, one row per event in order: ``name1``, ``id1``, ``name2``,
+    ``id2`` (-1 for no id), ``tca`` (datetime64[ns] UTC), ``miss_distance`` m,
+    ``relative_speed`` m/s, ``edge`` ("start" / "end" for a minimum at the window's
+    start / end, else "") and ``within_start`` / ``within_end`` (UTC, NaT without)."""
+    nat = np.datetime64("NaT")
+    return {
+        "name1": np.array([e.name1 for e in events], dtype=object),
+        "id1": np.array([-1 if e.id1 is None else e.id1 for e in events], dtype=np.int64),
+        "name2": np.array([e.name2 for e in events], dtype=object),
+        "id2": np.array([-1 if e.id2 is None else e.id2 for e in events], dtype=np.int64),
+        "tca": np.array([e.tca for e in events], dtype="datetime64[ns]"),
+        "miss_distance": np.array([e.miss_distance for e in events], dtype=float),
+        "relative_speed": np.array([e.relative_speed for e in events], dtype=float),
+        "edge": np.array(["" if e.edge is None else e.edge for e in events], dtype=object),
+        "within_start": np.array(
+            [nat if e.within is None else e.within[0] for e in events], dtype="datetime64[ns]"
+        ),
+        "within_end": np.array(
+            [nat if e.within is None else e.within[1] for e in events], dtype="datetime64[ns]"
+        ),
+    }
+
+
 def closest_approach(
     traj1: Trajectory,
     traj2: Trajectory,
@@ -414,7 +440,8 @@ def closest_approach(
         dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
             ``zonal_degree`` at once (then leave those keywords at their defaults), and
             the ``field_degree`` and ``third_bodies`` the trajectories were propagated
-            with (e.g. :meth:`~rhoprop.Dynamics.precise`), which the refinement uses.
+            with (e.g. :meth:`~rhoprop.Dynamics.precise`), which the refinement uses
+            with its ``integrator``, ``step`` and ``rtol`` (as ``propagate`` does).
 
     Returns:
         The :class:`CloseApproach` events sorted by TCA (object 1 = ``traj1``), states at
@@ -453,7 +480,7 @@ def closest_approach(
         floor_altitude=floor_altitude,
         zonal_degree=zonal_degree,
     )
-    floor, degree = settings.floor_altitude, settings.zonal_degree
+    floor = settings.floor_altitude
     ref = traj1.epoch
     t1 = to_seconds(traj1.epochs, ref)
     t2 = to_seconds(traj2.epochs, ref)
@@ -493,7 +520,7 @@ def closest_approach(
         # From the earlier start: re-propagation starts at an output at or before a bracket.
         window = (add_seconds(ref, min(t1[0], t2[0])), add_seconds(ref, last, round_up=True))
         own1.model, own2.model = _models_for(model, states, *window, floor)
-    dyn = _Dynamics(ref, model is not None, floor, degree, step, traj1.frame, settings.gravity)
+    dyn = _Dynamics(ref, model is not None, settings, step, traj1.frame)
     found: list[tuple[float, np.ndarray, np.ndarray]] = []
     for lo, hi in _merge(brackets):
         if model is None:

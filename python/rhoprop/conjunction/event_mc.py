@@ -40,6 +40,7 @@ def event_monte_carlo(
     seed: int,
     degree: int,
     floor: float,
+    step: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Monte Carlo Pc per model (events, models) and the mixture's (events,) for the
     events ``chosen`` (NaN elsewhere, and where an object's epoch is after TCA).
@@ -67,6 +68,7 @@ def event_monte_carlo(
                         drag_sigma=_drag_sigma(cat, "auto"),
                         zonal_degree=degree,
                         floor_altitude=floor,
+                        step=step,
                         progress=False,
                     )
                 )

@@ -373,6 +373,7 @@ def _model_moments(
                     [tcas[m] for m in running],
                     floor_altitude=cfg.floor,
                     zonal_degree=cfg.degree,
+                    step=cfg.dynamics.step,
                     client=client,
                 )
             base = res if name == ref else base

@@ -191,7 +191,8 @@ class DaskStages:
         for o in objs:
             unique.setdefault(id(o.model), o.model)
         self._field_of = {key: n for n, key in enumerate(unique)}
-        self._fields = self.client.scatter(list(unique.values()), broadcast=True)
+        # Random keys (hash=False), as rhoprop.catalog.backends scatters a model.
+        self._fields = self.client.scatter(list(unique.values()), broadcast=True, hash=False)
 
     def tracks(
         self,
@@ -299,7 +300,7 @@ class DaskStages:
     ) -> tuple[np.ndarray, ...]:
         """:func:`refine_slice` over slices of the candidates, the chunk scattered once;
         the results concatenated in the candidates' order."""
-        shared = self.client.scatter(chunk, broadcast=True)
+        shared = self.client.scatter(chunk, broadcast=True, hash=False)
         futures = [
             self.client.submit(refine_slice, shared, cand[lo:hi], degree, limit, span, pure=False)
             for lo, hi in _parts(len(cand), self.pieces)

@@ -12,7 +12,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -25,13 +25,14 @@ from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft
-from ..propagation.dynamics import Dynamics, resolve_automatic, zonal_degree_argument
+from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.propagate import (
     MAX_STEP_FRACTION,
     check_model,
     core_propagate,
     orbital_period,
 )
+from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between, to_datetime64, to_seconds
 from .approach import (
     DEFAULT_FINE_STEP,
@@ -44,7 +45,11 @@ from .approach import (
     _models_for,
     _refine,
     _Track,
+    event_columns,
 )
+
+if TYPE_CHECKING:
+    import pandas
 
 __all__ = ["DEFAULT_GRID_STEP", "STAGES", "ScreeningResult", "screen"]
 
@@ -148,6 +153,19 @@ class ScreeningResult:
     end: np.datetime64
     distance: float
     grid_step: float
+
+    def table(self) -> dict[str, np.ndarray]:
+        """The events as columns, one row per event in order
+        (:func:`~rhoprop.conjunction.approach.event_columns`: names, ids, TCA UTC, miss
+        distance m, relative speed m/s, edge, the stretch within the distance)."""
+        return event_columns(self.events)
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """:meth:`table` as a ``pandas.DataFrame``, one row per event (needs pandas, e.g.
+        the ``[xarray]`` extra), as ``AllOnAllResult.to_pandas()`` gives its events."""
+        pd = optional_import("pandas", "ScreeningResult.to_pandas()")
+        frame: pandas.DataFrame = pd.DataFrame(self.table())
+        return frame
 
 
 # ---------------------------------------------------------------------------------------
@@ -406,7 +424,11 @@ def screen(
         fine_step: output step of the refinement, s.
         floor_altitude, zonal_degree: as for ``rp.propagate``.
         dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
-            ``zonal_degree`` at once (then leave those keywords at their defaults).
+            ``zonal_degree`` at once (then leave those keywords at their defaults); the
+            tracks follow its ``integrator``, ``step`` and ``rtol`` as ``rp.propagate``
+            does (default adaptive DOP853; an object propagated back to ``start`` uses
+            RK8 at 30 s, the one backward integrator); ``field_degree`` and
+            ``third_bodies`` are refused (ValueError).
         threads: worker threads (default: CPU count); the core releases the GIL.
         errors: ``"raise"`` (default): a secondary that fails raises its error with the
             object named; ``"skip"``: it is listed in ``skipped`` and the screen goes on.
@@ -437,8 +459,7 @@ def screen(
         distance,
         grid_step,
         fine_step,
-        settings.floor_altitude,
-        settings.zonal_degree,
+        settings,
     )
     errors = _validate.errors_argument("screen", errors)
     workers = worker_count(threads)
@@ -504,7 +525,8 @@ def screen(
 @dataclass(frozen=True)
 class _Window:
     """The checked window and settings of a screen: UTC start and end, span (s), distance
-    (m), grid and fine steps (s), floor altitude (m) and zonal degree."""
+    (m), grid and fine steps (s) and the checked :class:`Dynamics` (floor altitude m,
+    zonal degree, the tracks' integrator, step and rtol)."""
 
     start: np.datetime64
     end: np.datetime64
@@ -512,8 +534,17 @@ class _Window:
     limit: float
     step: float
     fine: float
-    floor: float
-    degree: int
+    dynamics: Dynamics
+
+    @property
+    def floor(self) -> float:
+        """The floor altitude, m."""
+        return self.dynamics.floor_altitude
+
+    @property
+    def degree(self) -> int:
+        """The zonal degree."""
+        return self.dynamics.zonal_degree
 
 
 def _objects(primary: Any, secondaries: Any) -> tuple[_Object, list[_Object], list[_Object]]:
@@ -553,8 +584,7 @@ def _window(
     distance: float,
     grid_step: float,
     fine_step: float,
-    floor_altitude: float,
-    zonal_degree: int,
+    dynamics: Dynamics,
 ) -> _Window:
     """The screen's window and settings, checked (ValueError naming the argument)."""
     t_start, t_end, span = window_span(start, end)
@@ -575,8 +605,7 @@ def _window(
         limit,
         step,
         _validate.positive("fine_step", fine_step),
-        _validate.real("floor_altitude", floor_altitude),
-        zonal_degree_argument(zonal_degree),
+        dynamics,
     )
 
 
@@ -588,7 +617,7 @@ def _primary_track(
     (prim.model,) = _models_for(
         model, [prim.state], min(w.start, prim.state.epoch), max(w.end, prim.state.epoch), w.floor
     )
-    dyn = _Dynamics(w.start, True, w.floor, w.degree, w.fine)
+    dyn = _Dynamics(w.start, True, w.dynamics, w.fine)
     ptrack, pdecay = _coarse_track(prim, dyn, w.start, w.span, w.step)
     if len(ptrack.t) < 2 or pdecay is not None:
         at = add_seconds(w.start, pdecay) if pdecay is not None else w.start

@@ -186,6 +186,7 @@ def ccsp(
     )
     if dyn.integrator not in (None, "rk8"):
         raise ValueError(f"the CCSP integrates with RK8; dynamics.integrator = {dyn.integrator!r}")
+    dyn.require_integrator("ccsp", ("rk8",))
     step, floor_altitude, zonal_degree = dyn.step, dyn.floor_altitude, dyn.zonal_degree
     args, span = _arguments(
         state,

@@ -76,9 +76,11 @@ class Dynamics:
             automatic, as ``field_degree``.
 
     Only the single-object runs (``propagate``, ``monte_carlo``, ``ccsp`` and
-    ``ensemble``) take ``field_degree`` and ``third_bodies`` other than None; the
-    catalog, reentry, screening and close-approach functions do not take them yet and
-    give a ValueError for them rather than ignore them.
+    ``ensemble``) and ``closest_approach`` take ``field_degree`` and ``third_bodies``
+    other than None; the catalog, reentry and screening functions do not take them yet
+    and give a ValueError for them rather than ignore them. Every function honours the
+    ``integrator``, ``step`` and ``rtol`` it is given or refuses them with a ValueError
+    (:meth:`require_integrator`; docs/conventions.md, "Integrators and defaults").
 
     Example:
         >>> import rhoprop as rp
@@ -137,11 +139,31 @@ class Dynamics:
             None if self.third_bodies is None else bool(self.third_bodies),
         )
 
+    @property
+    def integration(self) -> tuple[Integrator | None, float | None, float | None]:
+        """(integrator, step s, rtol) as :func:`~rhoprop.propagate` takes them."""
+        return self.integrator, self.step, self.rtol
+
     def forces(self, radiation_parameter: float = 0.0) -> tuple[int | None, bool | None, float]:
         """(field_degree, third_bodies, Cr*A/m in m^2/kg) as the core takes them: the
         gravity of these dynamics and the object's radiation pressure
         (:attr:`Spacecraft.radiation_parameter`, 0: none)."""
         return (*self.gravity, float(radiation_parameter))
+
+    def require_integrator(self, function: str, integrators: tuple[str, ...]) -> None:
+        """ValueError if ``function``, which integrates with one of ``integrators`` only,
+        is given another :attr:`integrator`, or :attr:`rtol` without DOP853 among them: a
+        setting a function cannot use is refused, never ignored."""
+        if self.integrator is not None and self.integrator not in integrators:
+            raise ValueError(
+                f"{function}() integrates with {' or '.join(integrators)}, not "
+                f"dynamics.integrator = {self.integrator!r}"
+            )
+        if self.rtol is not None and "dop853" not in integrators:
+            raise ValueError(
+                f"{function}() integrates with a fixed step ({' or '.join(integrators)}); "
+                f"dynamics.rtol = {self.rtol:g} applies to 'dop853' only (leave it None)"
+            )
 
     def require_automatic_gravity(self, function: str) -> None:
         """ValueError if ``function`` (a catalog, reentry, screening or close-approach run)
@@ -180,13 +202,20 @@ def resolve(
 
 
 def resolve_automatic(
-    function: str, dynamics: Dynamics | None, defaults: Dynamics, **given: object
+    function: str,
+    dynamics: Dynamics | None,
+    defaults: Dynamics,
+    integrators: tuple[str, ...] | None = None,
+    **given: object,
 ) -> Dynamics:
     """:func:`resolve` for a function that runs every orbit with the automatic terms of
     its regime: a ValueError if ``dynamics`` sets ``field_degree`` or ``third_bodies``
-    (:meth:`Dynamics.require_automatic_gravity`)."""
+    (:meth:`Dynamics.require_automatic_gravity`), or, given the ``integrators`` the
+    function can use, an integrator or rtol it cannot (:meth:`Dynamics.require_integrator`)."""
     dyn = resolve(function, dynamics, defaults, **given)
     dyn.require_automatic_gravity(function)
+    if integrators is not None:
+        dyn.require_integrator(function, integrators)
     return dyn
 
 

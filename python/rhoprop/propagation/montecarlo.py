@@ -189,6 +189,7 @@ def monte_carlo(
     step, floor_altitude, zonal_degree = dyn.step, dyn.floor_altitude, dyn.zonal_degree
     if method not in METHODS:
         raise ValueError(f"unknown integrator {method!r}; a Monte Carlo uses 'rk8', 'rk4' or 'abm'")
+    dyn.require_integrator("monte_carlo", METHODS)
     h = fixed_step(method, step, state)
     if output_times is None:
         span = span_of(duration, None, "output_times")
