@@ -44,6 +44,8 @@ ELSEWHERE = {
     "architecture.md": "no python blocks",
     "conventions.md": "no python blocks",
     "catalog-realism.md": "no python blocks",
+    "prediction-accuracy.md": "no python blocks",
+    "reentry-notes.md": "no python blocks",
 }
 
 _BLOCK = re.compile(

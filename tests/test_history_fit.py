@@ -93,9 +93,10 @@ def test_a_history_fit_against_a_single_fit_on_a_real_week(week, monkeypatch):
     # set's positions weighted as one observation of the orbit: median 11.5 km
     # against 10.2 km, better for 54 % of the 48 objects (before that weighting,
     # 11.3 against 9.8 km and 50 %), which is why load's default is history="newest"
-    # (docs/catalog-realism.md, "History fits"). The bands pin the measured figures (the
-    # fraction within 2 binomial sigma of 48 objects): a change that makes history fits
-    # better (or worse still) must update the docs.
+    # (docs/catalog-realism.md, "What changed: B* as the prior, weights, history fits").
+    # The bands pin the measured figures (the fraction within 2 binomial sigma of 48
+    # objects): a change that makes history fits better (or worse still) must update
+    # the docs.
     files, truth, ids = week
     model = Msis("2.1")
     single = catalog.load(files[-1], fit=True, model=model)

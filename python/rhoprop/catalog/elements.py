@@ -332,7 +332,7 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
 #: with it: over longer arcs one constant Cd*A/m carries the model's density errors of
 #: past days into the prediction. On the dense 2026 history (a set every ~6 h) one day
 #: beat two and three; on the 2023 snapshots (sets 3-85 days apart) no older set helped
-#: (docs/catalog-realism.md, "History fits").
+#: (docs/catalog-realism.md, "What changed: B* as the prior, weights, history fits").
 HISTORY_DAYS = 1.0
 
 
@@ -401,7 +401,7 @@ def load(
             not the default because on the development data it does not predict better
             than the newest element set's fit: on every third day of the dense 2026
             history a smaller median error at 1 day, the same at 3, larger at 7
-            (docs/catalog-realism.md, "History fits").
+            (docs/catalog-realism.md, "What changed: B* as the prior, weights, history fits").
         far_orbits: an element set whose state at its epoch lies beyond
             :data:`~rhoprop.propagation.state.MAX_RADII` (10) Earth radii, such as TESS's
             (high orbits that published catalogs hold: 4 of the 8,838 element sets of
