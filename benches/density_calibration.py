@@ -7,7 +7,8 @@ prints how the paper's settings and the calibrated ones cover the observations.
 
 Tables (docs/density-calibration.md): the fitted values beside the library's; the
 empirical correlation of the standardised errors against the fitted two-scale process;
-per family and for the mixture, the share of orbits inside mean +- 1/2/3 sigma and the
+per family and for the mixture (spread-adjusted; the linear pool beside it), the share of
+orbits inside mean +- 1/2/3 sigma and the
 median observed/model ratio, in quiet, main-phase and recovery orbits, for the paper's
 settings (18-minute Gauss-Markov kappa, literature sigmas, no mean correction, equal
 weights) and the calibrated ones, cross-validated by storm window (each window predicted by
@@ -131,19 +132,24 @@ def main(argv: list[str] | None = None) -> int:
         f"{np.median(paper_factors):.2f}; under the calibrated one: "
         f"{np.median(cal.orbit_factors(orbits, process)):.2f}"
     )
-    means, sigmas, mix = cal.cross_validated(orbits, samples, c.kappa)
+    means, sigmas, mix, adjusted = cal.cross_validated(orbits, samples, c.kappa)
     coverage_table(
         "Calibrated, cross-validated by storm window (each predicted by the other 33)",
         log_obs,
         means,
         sigmas,
-        mix,
+        adjusted,
         phase,
     )
-    cv_score = cal.log_score(log_obs, means, sigmas, c.weights)
+    print(_row("linear pool", mix, None, phase))
+    cv_score = cal.log_score(log_obs, means, [x * c.spread for x in sigmas], c.weights)
+    pool_score = cal.log_score(log_obs, means, sigmas, c.weights)
     print(
+        f"  mixture: spread-adjusted (every family's sigma x {c.spread:.3f} inside it); "
+        "'linear pool': the families' own sigmas\n"
         f"  mixture log score (mean ln density of the log density): paper "
-        f"{cal.log_score(log_obs, p_means, p_sigmas, equal):.3f}, calibrated {cv_score:.3f}"
+        f"{cal.log_score(log_obs, p_means, p_sigmas, equal):.3f}, calibrated {cv_score:.3f} "
+        f"(linear pool {pool_score:.3f})"
     )
     # The library's defaults, evaluated exactly through the models.
     models = cal.default_family_models()
@@ -154,12 +160,13 @@ def main(argv: list[str] | None = None) -> int:
         d_means.append(np.log(orbits.average(mean)))
         d_sigmas.append(cal.orbit_sigma(orbits, mean, std / mean, factors))
     weights = np.array([calibrated.ENSEMBLE_WEIGHTS[n] for n in cal.FAMILIES])
+    spread = calibrated.ENSEMBLE_SPREAD
     coverage_table(
         "Library defaults (models' own mean_std, TwoScale kappa), all windows, in sample",
         log_obs,
         d_means,
         d_sigmas,
-        cal.pit(log_obs, d_means, d_sigmas, weights),
+        cal.pit(log_obs, d_means, [x * spread for x in d_sigmas], weights),
         phase,
     )
     if args.json:

@@ -67,6 +67,50 @@ def test_ccsp_ensemble_and_weights(analytic):
         rp.ensemble(state, craft, models, "ref", method="ccsp", duration=3600.0, weights=[1.0])
 
 
+def test_a_spread_narrows_every_component_as_a_scaled_model_would(analytic):
+    # spread s runs each model as SigmaScaled(model, s): an exponential model's sigma
+    # scaled by 0.5 is the model with half the relative sigma, bit for bit (the core
+    # multiplies 0.2 x 0.5 = 0.1 exactly), so each component equals a plain ensemble of
+    # those halved models.
+    state, craft, models = analytic
+    run = dict(method="ccsp", duration=86400.0, cds={"denser": 3.0912})
+    ens = rp.ensemble(state, craft, models, "ref", spread=0.5, **run)
+    halved = {
+        name: rp.density.Exponential(m.rho0, m.h0, m.scale_height, rel_sigma=0.1)
+        for name, m in models.items()
+    }
+    plain = rp.ensemble(state, craft, halved, "ref", **run)
+    assert ens.spread == 0.5 and plain.spread == 1.0  # analytic models: no calibrated spread
+    np.testing.assert_array_equal(ens.component_covariances, plain.component_covariances)
+    np.testing.assert_array_equal(ens.component_means, plain.component_means)
+    wide = rp.ensemble(state, craft, models, "ref", **run)
+    assert (wide.component_covariances[-1, :, 1, 1] > ens.component_covariances[-1, :, 1, 1]).all()
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="spread must be"):
+            rp.ensemble(state, craft, models, "ref", spread=bad, **run)
+
+
+def test_the_calibrated_families_pool_with_their_calibrated_spread():
+    # The spread fitted with the calibrated weights applies with them only: the default
+    # weights of calibrated NRLMSIS 2.1 and JB2008 (not their paper presets, nor other
+    # models) and no weights given.
+    from rhoprop.density import calibrated
+    from rhoprop.ensemble.combine import default_spread
+
+    families = {"msis": rp.density.Msis("2.1"), "jb": rp.density.Jb2008()}
+    assert default_spread(families) == calibrated.ENSEMBLE_SPREAD < 1
+    assert default_spread({"msis": rp.density.Msis("2.1", preset="paper")}) == 1.0
+    assert default_spread({"exp": rp.density.Exponential.benchmark()}) == 1.0
+    scaled = rp.density.SigmaScaled(families["msis"], 0.5)
+    where = ("2003-10-30T12:00", 10.0, 20.0, 400e3)
+    (m0, s0), (m1, s1) = families["msis"].mean_std(*where), scaled.mean_std(*where)
+    assert m1 == m0 and s1 == pytest.approx(0.5 * s0, rel=1e-15)
+    with pytest.raises(ValueError, match="factor must be finite and >= 0"):
+        rp.density.SigmaScaled(families["msis"], -0.1)
+    with pytest.raises(TypeError, match="model must be a rhoprop density model"):
+        rp.density.SigmaScaled("msis", 0.5)
+
+
 def test_four_cases_end_to_end_solar_max_spreads_more():
     ens = studies.case_ensembles(n=40, duration=86400.0, progress=False)
     assert list(ens) == list(scenarios.CASE_EPOCHS)

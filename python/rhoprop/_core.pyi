@@ -78,6 +78,9 @@ class ExponentialAtmosphere:
     def __new__(
         cls, rho0: float, h0: float, scale_height: float, rel_sigma: float = 0.0
     ) -> Self: ...
+    def with_sigma_scale(self, factor: float) -> ExponentialAtmosphere:
+        """This atmosphere with every sigma times ``factor`` (finite, >= 0)."""
+
     def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
         """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
 
@@ -102,6 +105,9 @@ class GriddedAtmosphere:
     @property
     def nbytes(self) -> int:
         """Bytes of the values of the field's tiles."""
+    def with_sigma_scale(self, factor: float) -> GriddedAtmosphere:
+        """This atmosphere with every sigma times ``factor`` (finite, >= 0)."""
+
     def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
         """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
 
@@ -125,6 +131,9 @@ class StreamedAtmosphere:
     def nbytes(self) -> int:
         """Bytes of the tiles the field holds now."""
     def __len__(self) -> int: ...
+    def with_sigma_scale(self, factor: float) -> StreamedAtmosphere:
+        """This atmosphere with every sigma times ``factor`` (finite, >= 0)."""
+
     def mean_sigma(self, ut1: _F64, positions: _F64) -> tuple[_F64, _F64]:
         """Mean and sigma (kg/m^3) at inertial positions (n, 3) m, UT1 s since J2000 (n,)."""
 

@@ -362,7 +362,10 @@ def density_pc(
         drag_parameters: Cd*A/m of object 1 and 2, m^2/kg (default: each object's
             CD_AREA_OVER_MASS in the message).
         method: ``"ccsp"`` (default) or ``"monte_carlo"`` per model.
-        weights: model weights (default equal).
+        weights: model weights, as :func:`rhoprop.ensemble` takes them (default: its
+            default, the calibrated weights and spread when every model is a calibrated
+            family, else equal weights; given weights run every model with its own
+            sigma).
         shape: hard-body shape, as :func:`~rhoprop.conjunction.pc_2d`.
         **method_options: passed on to :func:`rhoprop.ensemble` (e.g. ``n``, ``seed``,
             ``update_interval``, ``debias_window``).
@@ -387,17 +390,15 @@ def density_pc(
     ]
     if "output_step" not in method_options and method == "monte_carlo":
         method_options["output_step"] = None
+    if weights is not None:
+        method_options["weights"] = weights
     ens1, off1, cov1 = _object_mixture(
         a, betas[0], models, reference, lead, message.tca, method, method_options
     )
     ens2, off2, cov2 = _object_mixture(
         b, betas[1], models, reference, lead, message.tca, method, method_options
     )
-    if weights is not None:
-        w = np.asarray(weights, dtype=float)
-        w = w / w.sum()
-    else:
-        w = ens1.weights
+    w = ens1.weights
     results = [
         pc_2d(
             a.position + off1[k],

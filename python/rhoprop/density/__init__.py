@@ -11,6 +11,8 @@ thermospheric density (kg/m^3) and an atmosphere the Rust core evaluates.
 - :class:`PcaRom`: a PCA reduced-order model as HASDM-ML outputs it.
 - :class:`FromFunction`: any callable (times, lat, lon, alt) -> (mean, std).
 - :class:`DensityField`: a sampled field (what :meth:`SampledModel.field` returns).
+- :class:`SigmaScaled`: any model with its standard deviation scaled (an ensemble's
+  spread-adjusted pool).
 - :class:`Atlas`: how a sampled model reaches the core, as UTC-day tiles under a memory
   budget (:func:`set_memory_budget`, :func:`field_memory`).
 
@@ -35,6 +37,7 @@ from .model import DensityModel, SampledModel, as_atmosphere
 from .msis import DriverUncertainty, Msis, RelativeSigma
 from .pcarom import PcaRom
 from .point_model import ActivitySigma
+from .scaled import SigmaScaled
 
 __all__ = [
     "JB2008_CALIBRATED",
@@ -63,6 +66,7 @@ __all__ = [
     "Preset",
     "RelativeSigma",
     "SampledModel",
+    "SigmaScaled",
     "altitude_band",
     "as_atmosphere",
     "atlas",

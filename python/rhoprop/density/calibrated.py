@@ -42,6 +42,10 @@ KAPPA_SLOW_FRACTION = 0.537
 #: Mixture weights of the three families by log score (:func:`rhoprop.ensemble`'s
 #: default when its models are these families).
 ENSEMBLE_WEIGHTS = {"NRLMSIS 2.1": 0.849, "JB2008": 0.151, "Jacchia-Roberts": 0.0}
+#: The factor on every family's sigma inside that mixture, by log score at those weights
+#: (a pool of calibrated families is over-dispersed where their means differ: the
+#: spread-adjusted linear pool; :func:`rhoprop.ensemble`'s default with the weights).
+ENSEMBLE_SPREAD = 0.861
 
 
 def preset_argument(preset: object) -> Preset:
@@ -71,6 +75,7 @@ NAMES = (
     "KAPPA_HALF_LIFE",
     "KAPPA_SLOW_HALF_LIFE",
     "KAPPA_SLOW_FRACTION",
+    "ENSEMBLE_SPREAD",
 )
 
 

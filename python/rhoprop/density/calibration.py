@@ -1,6 +1,7 @@
 """Calibration of the density uncertainty on observed orbit-averaged densities
 (docs/density-calibration.md): per family a correction of the mean, a relative sigma
-growing with activity, one kappa process for all, and the mixture weights of the ensemble.
+growing with activity, one kappa process for all, and the mixture weights and spread of
+the ensemble.
 
 Everything is judged on orbit averages, because that is what the observations are: a
 model's orbit average (Picone-weighted, as the observation) against the observed one,
@@ -414,6 +415,26 @@ def mixture_weights(
     return w
 
 
+#: Bounds of the mixture's common spread factor.
+SPREAD_BOUNDS = (0.5, 1.5)
+
+
+def mixture_spread(
+    log_obs: np.ndarray, means: list[np.ndarray], sigmas: list[np.ndarray], weights: np.ndarray
+) -> float:
+    """The factor on every family's sigma that maximises the mixture's log score at the
+    given weights: the spread-adjusted linear pool (Gneiting & Ranjan 2013), since a pool
+    of calibrated families is over-dispersed where their means differ."""
+
+    def negative(s: float) -> float:
+        return -log_score(log_obs, means, [x * s for x in sigmas], weights)
+
+    best = _scipy_optimize().minimize_scalar(
+        negative, bounds=SPREAD_BOUNDS, method="bounded", options={"xatol": 1e-4}
+    )
+    return float(best.x)
+
+
 def pit(
     log_obs: np.ndarray, means: list[np.ndarray], sigmas: list[np.ndarray], weights: np.ndarray
 ) -> np.ndarray:
@@ -443,11 +464,13 @@ def log_score(
 @dataclass
 class Calibration:
     """The calibration's results: per family its fit, the kappa process (slow_fraction,
-    half_life s, slow_half_life s), the mixture weights, and the empirical correlation."""
+    half_life s, slow_half_life s), the mixture weights and spread, and the empirical
+    correlation."""
 
     families: list[FamilyFit]
     kappa: tuple[float, float, float]
     weights: np.ndarray
+    spread: float
     lags: np.ndarray = field(repr=False)
     correlation: np.ndarray = field(repr=False)
     pairs: np.ndarray = field(repr=False)
@@ -477,6 +500,7 @@ class Calibration:
         out.update(
             {"KAPPA_HALF_LIFE": fast, "KAPPA_SLOW_HALF_LIFE": slow, "KAPPA_SLOW_FRACTION": w}
         )
+        out["ENSEMBLE_SPREAD"] = self.spread
         out.update({f"WEIGHT {n}": float(x) for n, x in zip(FAMILIES, self.weights, strict=True)})
         return out
 
@@ -517,8 +541,10 @@ def calibrate(
     fits = [fit_family(fs, orbits, factors, rows) for fs in samples]
     means, sigmas = _predictions(samples, fits, orbits, factors)
     log_obs = np.log(orbits.observed)
-    weights = mixture_weights(log_obs[rows], [m[rows] for m in means], [s[rows] for s in sigmas])
-    return Calibration(fits, kappa, weights, lags, corr, pairs)
+    sub_means, sub_sigmas = [m[rows] for m in means], [s[rows] for s in sigmas]
+    weights = mixture_weights(log_obs[rows], sub_means, sub_sigmas)
+    spread = mixture_spread(log_obs[rows], sub_means, sub_sigmas, weights)
+    return Calibration(fits, kappa, weights, spread, lags, corr, pairs)
 
 
 def _subset(orbits: ObservedOrbits, rows: np.ndarray) -> ObservedOrbits:
@@ -540,22 +566,27 @@ def _subset(orbits: ObservedOrbits, rows: np.ndarray) -> ObservedOrbits:
 
 def cross_validated(
     orbits: ObservedOrbits, samples: list[FamilySamples], kappa: tuple[float, float, float]
-) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray]:
+) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray, np.ndarray]:
     """Each storm window predicted by a calibration on the others (the kappa process
-    held at ``kappa``): per family the log means and sigmas, and the mixture's PIT."""
+    held at ``kappa``): per family the log means and sigmas, and the mixture's PIT, as
+    a linear pool and with its spread adjusted (fitted on the other windows too)."""
     factors = orbit_factors(orbits, two_scale_correlation(kappa))
     n = len(orbits)
     means = [np.empty(n) for _ in samples]
     sigmas = [np.empty(n) for _ in samples]
-    mix = np.empty(n)
+    mix, adjusted = np.empty(n), np.empty(n)
     log_obs = np.log(orbits.observed)
     for storm in np.unique(orbits.storm):
         test = orbits.storm == storm
         train = np.flatnonzero(~test)
         fits = [fit_family(fs, orbits, factors, train) for fs in samples]
         m, s = _predictions(samples, fits, orbits, factors)
-        w = mixture_weights(log_obs[train], [x[train] for x in m], [x[train] for x in s])
+        tm, ts = [x[train] for x in m], [x[train] for x in s]
+        w = mixture_weights(log_obs[train], tm, ts)
+        spread = mixture_spread(log_obs[train], tm, ts, w)
         for k in range(len(samples)):
             means[k][test], sigmas[k][test] = m[k][test], s[k][test]
-        mix[test] = pit(log_obs[test], [x[test] for x in m], [x[test] for x in s], w)
-    return means, sigmas, mix
+        held_m, held_s = [x[test] for x in m], [x[test] for x in s]
+        mix[test] = pit(log_obs[test], held_m, held_s, w)
+        adjusted[test] = pit(log_obs[test], held_m, [x * spread for x in held_s], w)
+    return means, sigmas, mix, adjusted

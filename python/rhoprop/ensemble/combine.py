@@ -20,6 +20,7 @@ from ..density import (
     Jb2008,
     MeanCorrection,
     Msis,
+    SigmaScaled,
     calibrated,
 )
 from ..options import UncertaintyMethod
@@ -67,6 +68,9 @@ class EnsembleResult:
             (Monte Carlo); NaN where a model has no statistics (decayed).
         component_covariances: the matching covariances (nt, k, 3, 3), m^2.
         weights: mixture weights (k,), summing to 1.
+        spread: the factor every model's density sigma ran with (1: the model's own;
+            the calibrated families with their calibrated weights run narrowed,
+            :func:`default_spread`).
     """
 
     names: list[str]
@@ -79,6 +83,7 @@ class EnsembleResult:
     component_means: np.ndarray
     component_covariances: np.ndarray
     weights: np.ndarray
+    spread: float = 1.0
 
     def gaussian(self) -> np.ndarray:
         """Per output and model (nt, k), whether that model's Gaussian holds the shape of
@@ -199,6 +204,11 @@ class EnsembleResult:
                     {"units": "1", "long_name": "drag coefficient"},
                 ),
                 "weight": ("model", w, {"units": "1", "long_name": "mixture weight"}),
+                "spread": (
+                    (),
+                    float(self.spread),
+                    {"units": "1", "long_name": "factor on every model's density sigma"},
+                ),
                 "component_mean": (
                     ("model", "epoch", "rtn"),
                     means.transpose(1, 0, 2),
@@ -275,6 +285,19 @@ def default_weights(models: Mapping[str, object]) -> np.ndarray:
     return np.ones(len(families))
 
 
+def default_spread(models: Mapping[str, object]) -> float:
+    """The factor on every model's density sigma of an ensemble with the default weights:
+    :data:`rhoprop.density.calibrated.ENSEMBLE_SPREAD` when :func:`default_weights` are
+    the calibrated families' (fitted together with them by log score on observed
+    densities: a pool of calibrated models is over-dispersed where their means differ),
+    else 1."""
+    if all(_family(m) is not None for m in models.values()):
+        w = np.array([calibrated.ENSEMBLE_WEIGHTS[str(_family(m))] for m in models.values()])
+        if w.sum() > 0:
+            return calibrated.ENSEMBLE_SPREAD
+    return 1.0
+
+
 def ensemble(
     state: OrbitState,
     spacecraft: Spacecraft,
@@ -283,6 +306,7 @@ def ensemble(
     *,
     method: UncertaintyMethod = "monte_carlo",
     weights: npt.ArrayLike | Mapping[str, float] | None = None,
+    spread: float | None = None,
     debias_window: float = 8 * 3600.0,
     duration: float = 259200.0,
     cds: dict[str, float] | None = None,
@@ -301,6 +325,10 @@ def ensemble(
             {model name: weight}. Default: :func:`default_weights` (the weights calibrated
             by log score on observed densities when every model is a calibrated NRLMSIS
             2.x, JB2008 or Jacchia-Roberts; else equal).
+        spread: factor on every model's density sigma inside the mixture (each runs as
+            :class:`~rhoprop.density.SigmaScaled`); None (default): with the default
+            weights :func:`default_spread` (the calibrated families' fitted factor), with
+            weights given 1 (each model's own sigma).
         debias_window: s before the epoch over which each model's Cd is debiased against
             the reference (:func:`~rhoprop.debias_drag_coefficient`); ``cds`` overrides it
             per model.
@@ -333,6 +361,12 @@ def ensemble(
     w = default_weights(models) if weights is None else _validate.real_array("weights", weights)
     if w.shape != (len(names),) or not np.isfinite(w).all() or (w < 0).any() or w.sum() <= 0:
         raise ValueError(f"weights must be {len(names)} finite non-negative numbers, not all 0")
+    if spread is None:
+        factor = default_spread(models) if weights is None else 1.0
+    else:
+        factor = _validate.real("spread", spread)
+        if not (np.isfinite(factor) and factor > 0):
+            raise ValueError(f"spread must be a finite positive number, got {spread!r}")
     cd: dict[str, float] = {}
     for name in names:
         if cds and name in cds:
@@ -347,7 +381,8 @@ def ensemble(
     run = monte_carlo if method == "monte_carlo" else ccsp
     for name in names:
         craft = Spacecraft(cd[name], spacecraft.area_to_mass, spacecraft.cr)
-        results[name] = run(state, craft, models[name], duration, **method_options)
+        model = models[name] if factor == 1.0 else SigmaScaled(models[name], factor)
+        results[name] = run(state, craft, model, duration, **method_options)
     # A CCSP that stopped at decay has fewer outputs: every component is laid on the
     # longest output grid, NaN where its model has no statistics.
     times = max((r.times for r in results.values()), key=len)
@@ -364,6 +399,7 @@ def ensemble(
         component_means=np.stack([p[0] for p in parts], axis=1),
         component_covariances=np.stack([p[1] for p in parts], axis=1),
         weights=w / w.sum(),
+        spread=factor,
     )
 
 

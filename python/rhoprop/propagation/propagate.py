@@ -21,7 +21,6 @@ from ..density.model import (
     CoreAtmosphere,
     DensityModel,
     ModelLike,
-    SampledModel,
     as_atmosphere,
 )
 from ..options import Integrator
@@ -257,7 +256,8 @@ def run_in_field(
             f"a run of {span:g} s from {state.epoch} would end outside the epochs rhoprop "
             f"can represent ({err})"
         ) from None
-    atlas = model.served_by() if isinstance(model, SampledModel) else model
+    served = getattr(model, "served_by", None)  # a sampled model, or a wrapper of one
+    atlas = served() if callable(served) else model
     if isinstance(atlas, Atlas) and floor < atlas.altitude[0]:
         raise ValueError(
             f"floor_altitude = {floor:g} m is below {atlas.model!r}'s lowest altitude "

@@ -32,6 +32,11 @@ impl PyExponential {
             .map_err(to_py)
     }
 
+    /// This atmosphere with its sigma times `factor` (finite, >= 0).
+    fn with_sigma_scale(&self, factor: f64) -> PyResult<Self> {
+        self.0.with_sigma_scale(factor).map(Self).map_err(to_py)
+    }
+
     /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s
     /// since J2000.
     fn mean_sigma<'py>(
@@ -93,6 +98,14 @@ impl PyGridded {
     #[getter]
     fn nbytes(&self) -> usize {
         self.0.tiles().iter().map(|t| t.bytes()).sum()
+    }
+
+    /// This field with every sigma times `factor` (finite, >= 0); the tiles are shared.
+    fn with_sigma_scale(&self, factor: f64) -> PyResult<Self> {
+        self.0
+            .with_sigma_scale(factor)
+            .map(|f| Self(Arc::new(f)))
+            .map_err(to_py)
     }
 
     /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s
@@ -232,6 +245,15 @@ impl PyStreamed {
     /// Number of tiles.
     fn __len__(&self) -> usize {
         self.0.len()
+    }
+
+    /// This field with every sigma times `factor` (finite, >= 0): the same source, its
+    /// own held tiles.
+    fn with_sigma_scale(&self, factor: f64) -> PyResult<Self> {
+        self.0
+            .with_sigma_scale(factor)
+            .map(|f| Self(Arc::new(f)))
+            .map_err(to_py)
     }
 
     /// Mean and sigma (kg/m^3) at inertial positions (n, 3) m and times ut1 (n,) s

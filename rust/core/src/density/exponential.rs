@@ -1,5 +1,6 @@
 //! Exponential atmosphere: a standard analytic benchmark.
 
+use super::sigma_factor;
 use super::{Atmosphere, LaneMemory};
 use crate::constants::R_EARTH;
 use crate::error::{finite, positive, CoreError};
@@ -16,6 +17,17 @@ pub struct Exponential {
 }
 
 impl Exponential {
+    /// This atmosphere with its sigma times `factor` (finite, >= 0).
+    pub fn with_sigma_scale(&self, factor: f64) -> Result<Self, CoreError> {
+        let factor = sigma_factor(factor)?;
+        Self::new(
+            self.rho0,
+            self.h0,
+            self.scale_height,
+            self.rel_sigma * factor,
+        )
+    }
+
     /// `rho0` kg/m^3 at altitude `h0` m, scale height `scale_height` m, relative sigma
     /// (dimensionless, >= 0).
     pub fn new(rho0: f64, h0: f64, scale_height: f64, rel_sigma: f64) -> Result<Self, CoreError> {

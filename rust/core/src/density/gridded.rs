@@ -14,6 +14,7 @@
 //! covered.
 
 use super::exponential::exp;
+use super::sigma_factor;
 use super::{Atmosphere, LaneMemory};
 use crate::error::{finite, CoreError};
 use crate::frames::{geodetic, geodetic_lanes, EarthRotation};
@@ -315,6 +316,9 @@ pub struct GriddedField {
     /// integrator stage of a step that crosses the decay floor goes there: such a step is
     /// cut at the crossing). Without it, either is an error.
     open_altitude: bool,
+    /// Factor on every sigma the field gives (1: the tiles' own): a model's uncertainty
+    /// widened or narrowed without resampling it (an ensemble's spread-adjusted pool).
+    sigma_scale: f64,
 }
 
 impl GriddedField {
@@ -401,6 +405,7 @@ impl GriddedField {
             ],
             open_altitude,
             tiles,
+            sigma_scale: 1.0,
         })
     }
 
@@ -415,6 +420,15 @@ impl GriddedField {
         let (k, local) = self.cells[it];
         let k = k as usize;
         (k, &self.tiles[k].table, local as usize)
+    }
+
+    /// This field with every sigma times `factor` (finite, >= 0; the tiles are shared).
+    pub fn with_sigma_scale(&self, factor: f64) -> Result<Self, CoreError> {
+        let factor = sigma_factor(factor)?;
+        Ok(Self {
+            sigma_scale: self.sigma_scale * factor,
+            ..self.clone()
+        })
     }
 
     /// Mean and sigma at `ut1` seconds since J2000 and geodetic (lat, lon) in rad, alt m.
@@ -485,7 +499,7 @@ impl GriddedField {
             }
         }
         let mean = ln_m.exp();
-        Ok((mean, rs * mean))
+        Ok((mean, rs * mean * self.sigma_scale))
     }
 }
 
@@ -671,7 +685,7 @@ impl Atmosphere for GriddedField {
         for l in 0..W {
             let keep = if outside[l] { 0 } else { u64::MAX };
             mean[l] = f64::from_bits(exp(ln_m[l]).to_bits() & keep);
-            sigma[l] = f64::from_bits((rs[l] * mean[l]).to_bits() & keep);
+            sigma[l] = f64::from_bits((rs[l] * mean[l] * self.sigma_scale).to_bits() & keep);
         }
         // The scalar lookup of an active lane outside: the error naming the axis and value,
         // or (within the lane conversion's centimetres of an edge) the lane's value.
@@ -783,6 +797,55 @@ mod tests {
         assert!(((at(337.5).ln()) - 0.5 * (a + b)).abs() < 1e-12);
         assert!((at(-22.5) - at(337.5)).abs() < 1e-25);
         assert!((at(720.0 + 10.0) - at(10.0)).abs() < 1e-25);
+    }
+
+    #[test]
+    fn a_sigma_scale_multiplies_every_sigma_and_no_mean() {
+        use crate::frames::{geodetic_to_fixed, Geodetic};
+        let f = affine_field();
+        let g = f
+            .with_sigma_scale(2.5)
+            .unwrap()
+            .with_sigma_scale(0.5)
+            .unwrap();
+        let rot = EarthRotation::new(0.7);
+        for k in 0..20 {
+            let fixed = geodetic_to_fixed(Geodetic {
+                lat: (-50.0 + 5.0 * k as f64).to_radians(),
+                lon: (11.0 * k as f64).to_radians(),
+                alt: 320e3 + 4e3 * k as f64,
+            });
+            let r = rot.to_inertial(fixed);
+            let ut1 = 100.0 + 50.0 * k as f64;
+            let (m, s) = f.mean_sigma(ut1, r, &rot).unwrap();
+            let (mg, sg) = g.mean_sigma(ut1, r, &rot).unwrap();
+            assert_eq!(m.to_bits(), mg.to_bits());
+            assert!((sg / s - 1.25).abs() < 1e-15, "{k}: {}", sg / s);
+            let one = |v: f64| [v; 4];
+            let lanes = |field: &GriddedField| {
+                let (mut ml, mut sl) = ([0.0; 4], [0.0; 4]);
+                field
+                    .mean_sigma_lanes(
+                        ut1,
+                        &one(r[0]),
+                        &one(r[1]),
+                        &one(r[2]),
+                        &one(1.0),
+                        &rot,
+                        &mut ml,
+                        &mut sl,
+                        &mut LaneMemory::default(),
+                    )
+                    .unwrap();
+                (ml, sl)
+            };
+            let ((ml, sl), (mgl, sgl)) = (lanes(&f), lanes(&g));
+            assert_eq!(ml[2].to_bits(), mgl[2].to_bits());
+            assert!((sgl[1] / sl[1] - 1.25).abs() < 1e-15);
+        }
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
+            assert!(f.with_sigma_scale(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -16,6 +16,19 @@ use crate::error::CoreError;
 use crate::frames::EarthRotation;
 use std::sync::Arc;
 
+/// A factor on a source's sigma, checked: finite and >= 0.
+pub(crate) fn sigma_factor(factor: f64) -> Result<f64, CoreError> {
+    if factor.is_finite() && factor >= 0.0 {
+        Ok(factor)
+    } else {
+        Err(CoreError::invalid(
+            "sigma scale",
+            factor,
+            "must be finite and >= 0",
+        ))
+    }
+}
+
 /// What one batch keeps between its right-hand-side evaluations for an atmosphere that
 /// can reuse work from the previous stage: a field's cell corners per lane (consecutive
 /// stages of a step mostly fall in the same cell, so its 16 table reads are skipped).

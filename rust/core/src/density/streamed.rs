@@ -7,6 +7,7 @@
 //! later one), through a one-tile field on the same time axis.
 
 use super::gridded::{GriddedField, STEP_SNAP};
+use super::sigma_factor;
 use super::{Atmosphere, FieldTile, LaneMemory};
 use crate::error::{finite, CoreError};
 use crate::frames::EarthRotation;
@@ -26,9 +27,11 @@ pub struct StreamedField {
     epoch: f64,
     /// Tile k spans `bounds[k]..bounds[k + 1]`, s from `epoch`.
     bounds: Vec<f64>,
-    source: Box<dyn TileSource>,
+    source: Arc<dyn TileSource>,
     open_altitude: bool,
     keep: usize,
+    /// Factor on every sigma (as [`GriddedField::with_sigma_scale`]), given to each tile.
+    sigma_scale: f64,
     /// (tile index, its one-tile field), least recently entered first.
     held: Mutex<Vec<(usize, Arc<GriddedField>)>>,
     loads: AtomicUsize,
@@ -83,9 +86,26 @@ impl StreamedField {
         Ok(Self {
             epoch,
             bounds,
-            source,
+            source: Arc::from(source),
             open_altitude,
             keep,
+            sigma_scale: 1.0,
+            held: Mutex::new(Vec::new()),
+            loads: AtomicUsize::new(0),
+        })
+    }
+
+    /// This field with every sigma times `factor` (finite, >= 0): the same source, its
+    /// own held tiles.
+    pub fn with_sigma_scale(&self, factor: f64) -> Result<Self, CoreError> {
+        let factor = sigma_factor(factor)?;
+        Ok(Self {
+            epoch: self.epoch,
+            bounds: self.bounds.clone(),
+            source: self.source.clone(),
+            open_altitude: self.open_altitude,
+            keep: self.keep,
+            sigma_scale: self.sigma_scale * factor,
             held: Mutex::new(Vec::new()),
             loads: AtomicUsize::new(0),
         })
@@ -170,11 +190,12 @@ impl StreamedField {
                 ),
             ));
         }
-        let field = Arc::new(GriddedField::from_tiles(
-            self.epoch,
-            vec![tile],
-            self.open_altitude,
-        )?);
+        let field = GriddedField::from_tiles(self.epoch, vec![tile], self.open_altitude)?;
+        let field = Arc::new(if self.sigma_scale == 1.0 {
+            field
+        } else {
+            field.with_sigma_scale(self.sigma_scale)?
+        });
         let mut held = self.lock();
         if let Some((_, other)) = held.first() {
             if !other.tiles()[0].same_grid(&field.tiles()[0]) {
@@ -378,6 +399,33 @@ mod tests {
                 "t = {t}"
             );
         }
+    }
+
+    #[test]
+    fn a_scaled_streamed_field_is_the_scaled_composed_one() {
+        // The scaled copy shares the source, holds its own tiles and gives the bits of the
+        // composed field scaled alike; the original is unchanged.
+        let n = 3;
+        let tiles = (0..n).map(|k| Arc::new(tile(k))).collect();
+        let composed = GriddedField::from_tiles(EPOCH, tiles, true)
+            .unwrap()
+            .with_sigma_scale(0.8)
+            .unwrap();
+        let bounds = (0..=n).map(|k| k as f64 * HOUR).collect();
+        let source = Box::new(Counting(AtomicUsize::new(0)));
+        let streamed = StreamedField::new(EPOCH, bounds, source, true, 2).unwrap();
+        let scaled = streamed.with_sigma_scale(0.8).unwrap();
+        let rot = EarthRotation::new(0.3);
+        let r = [6.778e6, 1.0e5, 2.0e5];
+        for t in [0.0, 0.5 * HOUR, HOUR, 2.5 * HOUR] {
+            let (m1, s1) = composed.mean_sigma(EPOCH + t, r, &rot).unwrap();
+            let (m2, s2) = scaled.mean_sigma(EPOCH + t, r, &rot).unwrap();
+            let (m3, s3) = streamed.mean_sigma(EPOCH + t, r, &rot).unwrap();
+            assert_eq!((m1.to_bits(), s1.to_bits()), (m2.to_bits(), s2.to_bits()));
+            assert_eq!(m3.to_bits(), m1.to_bits());
+            assert!((s2 / s3 - 0.8).abs() < 1e-15, "t = {t}");
+        }
+        assert!(streamed.with_sigma_scale(-0.1).is_err());
     }
 
     #[test]
