@@ -2,7 +2,8 @@
 ephemeris and summary of a catalog run (``ephemeris``, ``summary``), the event table of an
 all-on-all screen (``events``), the output folder of a run with its manifest and atomic
 writes (``files``), and one format read in: precise orbits to judge predictions against
-(``sp3``). A new output format is a module here. Two formats stay with
+(``sp3``). The writers take protocols of their own (``protocols``: what a catalog run
+gives them), not the catalog's types. A new output format is a module here. Two formats stay with
 what they describe: CCSDS conjunction data messages in :mod:`rhoprop.conjunction.cdm` (a
 message computes its own Pc, which belongs to the conjunction stage above this one) and
 the xarray datasets in the results'
@@ -13,12 +14,15 @@ from .ephemeris import ephemeris_table, write_ephemeris
 from .events import write_event_table
 from .files import MANIFEST, OutputFolder, atomic_path, command_line, sanitise, write_text_atomic
 from .oem import DUPLICATES, duplicate_ids, oem_names, write_oem
+from .protocols import CatalogEntry, CatalogRun
 from .sp3 import Sp3, read_sp3
 from .summary import summary_table, write_summary
 
 __all__ = [
     "DUPLICATES",
     "MANIFEST",
+    "CatalogEntry",
+    "CatalogRun",
     "OutputFolder",
     "Sp3",
     "atomic_path",

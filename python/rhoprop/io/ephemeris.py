@@ -7,15 +7,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .files import atomic_path, sanitise
 from .oem import OEM_FRAMES, _from_teme
-
-if TYPE_CHECKING:
-    from ..catalog import CatalogResult
+from .protocols import CatalogRun
 
 #: Names of the state's components, in the order of ``mean``'s last axis.
 STATE = ("x", "y", "z", "vx", "vy", "vz")
@@ -29,7 +26,7 @@ ROW_GROUP_OBJECTS = 500
 
 
 def ephemeris_table(
-    result: CatalogResult, frame: str = "TEME", objects: slice | None = None
+    result: CatalogRun, frame: str = "TEME", objects: slice | None = None
 ) -> dict[str, np.ndarray]:
     """The columns of :func:`write_ephemeris`: ``object`` (index in the result),
     ``norad_id``, ``epoch`` (datetime64[ns] UTC), ``x`` .. ``z`` (m), ``vx`` .. ``vz``
@@ -53,7 +50,7 @@ def ephemeris_table(
     rows_, cols_ = np.tril_indices(6)
     table = {
         "object": objects_.astype(np.int64),
-        "norad_id": np.array([result.objects[k].norad_id for k in objects_], dtype=np.int64),
+        "norad_id": np.array([result.objects[int(k)].norad_id for k in objects_], dtype=np.int64),
         "epoch": np.asarray(result.epochs, dtype="datetime64[ns]")[epochs],
         **{name: mean[:, i] for i, name in enumerate(STATE)},
     }
@@ -63,7 +60,7 @@ def ephemeris_table(
     return table
 
 
-def write_ephemeris(result: CatalogResult, path: str | Path, *, frame: str = "TEME") -> Path:
+def write_ephemeris(result: CatalogRun, path: str | Path, *, frame: str = "TEME") -> Path:
     """Writes a catalog run's ephemeris (:func:`ephemeris_table`) to the Parquet file
     ``path`` (pyarrow, zstd-compressed), through a temporary name and a rename. The file's
     metadata (key ``rhoprop``, JSON) names the frame, the time scale (UTC), the units and
@@ -71,7 +68,8 @@ def write_ephemeris(result: CatalogResult, path: str | Path, *, frame: str = "TE
     (:func:`~rhoprop.io.write_summary`) gives each object's status.
 
     Args:
-        result: a :class:`~rhoprop.catalog.CatalogResult`.
+        result: a catalog run (:class:`~rhoprop.catalog.CatalogResult`, or anything with
+            the attributes of :class:`~rhoprop.io.protocols.CatalogRun`).
         path: the file to write (``.parquet``).
         frame: "TEME" (default, the states as computed) or "GCRF"/"EME2000"/"ICRF".
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import datetime as _dt
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -19,23 +20,23 @@ from .files import _iso, atomic_path, sanitise, write_text_atomic
 if TYPE_CHECKING:
     from typing import TypeAlias
 
-    from ..catalog import CatalogResult
+    from .protocols import CatalogRun
 
     #: What :func:`write_oem` writes: one trajectory, a Monte Carlo or CCSP result, a
     #: catalog run.
-    ResultLike: TypeAlias = Trajectory | MonteCarloResult | CcspResult | CatalogResult
+    ResultLike: TypeAlias = Trajectory | MonteCarloResult | CcspResult | CatalogRun
 
 #: What ``duplicates`` of :func:`write_oem` accepts.
 DUPLICATES = ("error", "suffix")
 
 
-def duplicate_ids(objects: list[Any]) -> list[int]:
+def duplicate_ids(objects: Sequence[Any]) -> list[int]:
     """NORAD ids that more than one of ``objects`` carries, sorted."""
     counts = Counter(o.norad_id for o in objects)
     return sorted(i for i, c in counts.items() if c > 1)
 
 
-def oem_names(objects: list[Any], duplicates: Duplicates = "error") -> list[str]:
+def oem_names(objects: Sequence[Any], duplicates: Duplicates = "error") -> list[str]:
     """OEM file names per object: ``<NORAD id>.oem``; a repeated id is an error naming
     it (``duplicates="error"``) or gets ``_2``, ``_3``, ... in input order
     (``duplicates="suffix"``)."""

@@ -3,19 +3,16 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..propagation.results import rtn_basis
 from .files import atomic_path, sanitise
 from .oem import _note
-
-if TYPE_CHECKING:
-    from ..catalog import CatalogResult
+from .protocols import CatalogRun
 
 
-def summary_table(result: CatalogResult) -> dict[str, np.ndarray]:
+def summary_table(result: CatalogRun) -> dict[str, np.ndarray]:
     """Per-object statistics at the last valid output: radial, along-track and
     cross-track 1-sigma (m, in the RTN frame of the mean; NaN for an object with no valid
     output), the status and reason, decay epoch and fraction, and what the covariance
@@ -50,7 +47,7 @@ def summary_table(result: CatalogResult) -> dict[str, np.ndarray]:
     }
 
 
-def write_summary(result: CatalogResult, path: str | Path) -> Path:
+def write_summary(result: CatalogRun, path: str | Path) -> Path:
     """The per-object summary as a Parquet file (pyarrow), one row per object (failed
     ones included, with their status and reason), written to a temporary name and
     renamed."""
