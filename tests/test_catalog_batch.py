@@ -18,7 +18,7 @@ import rhoprop as rp
 from rhoprop import catalog
 from rhoprop.catalog import run as catalog_run
 from rhoprop.constants import DEFAULT_FLOOR_ALTITUDE
-from rhoprop.propagation.ccsp import ccsp_many
+from rhoprop.propagation.ccsp import CcspRun, ccsp_many
 
 SAMPLE = Path(__file__).parent / "data" / "sample.tle"
 END = "2002-09-07T06:00:00"
@@ -62,24 +62,24 @@ def test_ccsp_many_agrees_with_each_object_alone(kind, sampled):
         times = np.arange(1, 7 + k) * (1800.0 + 300.0 * k)
         cov = np.diag([1e2, 1e2, 1e2, 1e-2, 1e-2, 1e-2]) * (1 + k)
         runs.append(
-            {
-                "state": obj.state,
-                "spacecraft": craft,
-                "update_times": times,
-                "initial_covariance": cov if k % 2 else None,
-                "drag_sigma": [0.0, 0.1, 0.3][k % 3],
-            }
+            CcspRun(
+                obj.state,
+                craft,
+                times,
+                initial_covariance=cov if k % 2 else None,
+                drag_sigma=[0.0, 0.1, 0.3][k % 3],
+            )
         )
     together = ccsp_many(runs, model)
     for run, got in zip(runs, together, strict=True):
         assert isinstance(got, rp.CcspResult)
         alone = rp.ccsp(
-            run["state"],
-            run["spacecraft"],
+            run.state,
+            run.spacecraft,
             model,
-            update_times=run["update_times"],
-            initial_covariance=run["initial_covariance"],
-            drag_sigma=run["drag_sigma"],
+            update_times=run.update_times,
+            initial_covariance=run.initial_covariance,
+            drag_sigma=run.drag_sigma,
         )
         np.testing.assert_array_equal(got.times, alone.times)
         for name in ("mean", "covariance", "cross_covariance", "drag_cross_covariance"):
@@ -97,11 +97,7 @@ def test_ccsp_many_returns_each_objects_error_and_decay():
     dense = rp.density.Exponential(1e-8, 400e3, 58.515e3, rel_sigma=0.2)
     cat = catalog.load(SAMPLE)
     runs = [
-        {
-            "state": o.state,
-            "spacecraft": rp.Spacecraft(1.0, o.drag_parameter),
-            "update_times": np.arange(1, 60) * 3600.0,
-        }
+        CcspRun(o.state, rp.Spacecraft(1.0, o.drag_parameter), np.arange(1, 60) * 3600.0)
         for o in cat
     ]
     together = ccsp_many(runs, dense, coordinates="cartesian")
@@ -110,10 +106,10 @@ def test_ccsp_many_returns_each_objects_error_and_decay():
     for run, got in zip(runs, together, strict=True):
         try:
             alone = rp.ccsp(
-                run["state"],
-                run["spacecraft"],
+                run.state,
+                run.spacecraft,
                 dense,
-                update_times=run["update_times"],
+                update_times=run.update_times,
                 coordinates="cartesian",
             )
         except rp.RhopropError as err:

@@ -28,7 +28,7 @@ from ..propagation import (
     monte_carlo,
     propagate,
 )
-from ..propagation.ccsp import ccsp_many, update_schedule
+from ..propagation.ccsp import CcspRun, ccsp_many, update_schedule
 from ..propagation.dynamics import Dynamics, zonal_degree_argument
 from ..propagation.gaussian_check import arc_sag_share, holds, member_coverage
 from ..propagation.kappa import KappaProcess, TwoScale
@@ -728,15 +728,15 @@ def _ccsp_chunk(
         # Optimistically over every output: the mean orbit (one lane, for its decay time)
         # is needed only if the CCSP comes near the floor (checked below).
         runs.append(
-            {
-                "state": obj.state,
-                "spacecraft": craft,
-                "update_times": updates,
-                "output_times": outputs,
-                "initial_covariance": plan.initial,
-                "drag_sigma": plan.drag_sigma,
-                "step": plan.step,
-            }
+            CcspRun(
+                obj.state,
+                craft,
+                updates,
+                initial_covariance=plan.initial,
+                drag_sigma=plan.drag_sigma,
+                step=plan.step,
+                output_times=outputs,
+            )
         )
         owners.append(i)
 

@@ -4,7 +4,7 @@ consider parameter (paper section 4, as made unambiguous in docs/conventions.md,
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -436,8 +436,26 @@ def coordinates_argument(coordinates: object) -> Coordinates:
     )
 
 
+@dataclass(frozen=True)
+class CcspRun:
+    """One object of :func:`ccsp_many`: the keywords of :func:`ccsp` that differ per
+    object. ``state`` (an :class:`OrbitState`, or a (6,) inertial state), ``spacecraft``,
+    ``update_times`` (s from the epoch), ``initial_covariance`` (6, 6) or None,
+    ``drag_sigma`` (relative sigma of Cd*A/m), the RK8 ``step`` (s, None: the default),
+    further ``output_times`` (s) and the ``kappa`` process (None: the default)."""
+
+    state: Any
+    spacecraft: Spacecraft
+    update_times: npt.ArrayLike
+    initial_covariance: npt.ArrayLike | None = None
+    drag_sigma: float = 0.0
+    step: float | None = None
+    output_times: npt.ArrayLike | None = None
+    kappa: KappaProcess | None = None
+
+
 def ccsp_many(
-    runs: list[dict[str, Any]],
+    runs: Sequence[CcspRun],
     model: ModelLike,
     *,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
@@ -445,10 +463,9 @@ def ccsp_many(
     progress: Callable[[int], None] | None = None,
     coordinates: Coordinates = "equinoctial",
 ) -> list[CcspResult | Exception]:
-    """The CCSP of several objects in one core call (a catalog chunk): each entry of
-    ``runs`` holds the keywords of :func:`ccsp` that differ per object (``state``,
-    ``spacecraft``, ``update_times``, ``initial_covariance``, ``drag_sigma``; optional
-    ``step`` and ``output_times``; scaling and perturbation are the defaults). Objects
+    """The CCSP of several objects in one core call (a catalog chunk): each of ``runs``
+    (a :class:`CcspRun`) holds the keywords of :func:`ccsp` that differ per object
+    (scaling and perturbation are the defaults). Objects
     run in parallel, each object's sigma points in one SIMD batch, and every result
     equals (bit for bit) :func:`ccsp` of that object alone. Objects whose
     core atmosphere differs (a model sampled per object) go in separate calls. Returns,
@@ -460,31 +477,33 @@ def ccsp_many(
     coordinates = coordinates_argument(coordinates)
     prepared = []
     frames_of: list[tuple[str, np.ndarray | None, OrbitState, Any]] = []
-    for run in runs:
-        given = run["state"]
+    for k, run in enumerate(runs):
+        if not isinstance(run, CcspRun):
+            raise TypeError(f"runs[{k}] must be a CcspRun, got {type(run).__name__}")
+        given = run.state
         state, cov, rot = (
-            run_frame.into_run(given, run.get("initial_covariance"))
+            run_frame.into_run(given, run.initial_covariance)
             if isinstance(given, OrbitState)
-            else (given, run.get("initial_covariance"), None)
+            else (given, run.initial_covariance, None)
         )
         args, span = _arguments(
             state,
-            run["spacecraft"],
+            run.spacecraft,
             model,
             None,
             update_interval=None,
             initial_covariance=cov,
             scaling=None,
-            step=run.get("step"),
+            step=run.step,
             floor_altitude=floor_altitude,
-            update_times=run["update_times"],
+            update_times=run.update_times,
             zonal_degree=zonal_degree,
-            drag_sigma=run.get("drag_sigma", 0.0),
-            output_times=run.get("output_times"),
-            kappa=run.get("kappa"),
+            drag_sigma=run.drag_sigma,
+            output_times=run.output_times,
+            kappa=run.kappa,
         )
-        prepared.append((state, run["spacecraft"], args, as_atmosphere(model, state, span)))
-        frames_of.append((given.frame, rot, given, run.get("initial_covariance")))
+        prepared.append((state, run.spacecraft, args, as_atmosphere(model, state, span)))
+        frames_of.append((given.frame, rot, given, run.initial_covariance))
     results: list[CcspResult | Exception] = [RuntimeError("not run")] * len(prepared)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, (_s, _c, a, atmosphere) in enumerate(prepared):
