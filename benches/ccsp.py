@@ -83,7 +83,7 @@ def main() -> None:
 def slow_point_cost(field, state, craft, repeat: int) -> dict[str, float]:
     """Seconds of 64 seven-day CCSP runs (ccsp_many, drag_sigma 0.1) with the default
     kappa (17 sigma points) and without its slow term (16), and their ratio."""
-    from rhoprop.propagation.ccsp import ccsp_many
+    from rhoprop.propagation.ccsp import CcspRun, ccsp_many
 
     rng = np.random.default_rng(0)
     hours = np.arange(1, 7 * 24 + 1) * 3600.0
@@ -95,16 +95,7 @@ def slow_point_cost(field, state, craft, repeat: int) -> dict[str, float]:
     ]
 
     def run(kappa):
-        runs = [
-            {
-                "state": s,
-                "spacecraft": craft,
-                "update_times": hours,
-                "drag_sigma": 0.1,
-                "kappa": kappa,
-            }
-            for s in states
-        ]
+        runs = [CcspRun(s, craft, hours, drag_sigma=0.1, kappa=kappa) for s in states]
         out = ccsp_many(runs, field)
         assert not any(isinstance(r, Exception) for r in out), out
 
