@@ -361,8 +361,9 @@ def load(
         path: the file, or several (e.g. snapshots of a catalog at different dates),
             read in turn.
         errors: ``"raise"`` (default): the first malformed line/record (or failed fit of
-            a B* <= 0 object) raises ValueError naming it and the field; ``"skip"``: it
-            is skipped and listed in ``Catalog.skipped``.
+            a B* <= 0 object) raises ValueError naming it and the field; ``"record"``:
+            it is skipped and listed in ``Catalog.skipped`` (``"skip"``, its old name,
+            still works with a DeprecationWarning).
         drag_parameters: optional {NORAD id: Cd*A/m (m^2/kg)} overriding B* (with
             ``fit=True``: the fit's starting value and prior).
         fit: fit each object's state and Cd*A/m to its SGP4 positions over ``span`` with

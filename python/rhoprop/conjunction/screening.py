@@ -431,7 +431,8 @@ def screen(
             ``third_bodies`` are refused (ValueError).
         threads: worker threads (default: CPU count); the core releases the GIL.
         errors: ``"raise"`` (default): a secondary that fails raises its error with the
-            object named; ``"skip"``: it is listed in ``skipped`` and the screen goes on.
+            object named; ``"record"``: it is listed in ``skipped`` and the screen goes on
+            (``"skip"``, its old name, still works with a DeprecationWarning).
         progress: show a progress bar (secondaries done) on a terminal for screens over a
             second, or a callable given the number done.
 
