@@ -90,14 +90,16 @@ def test_a_spread_narrows_every_component_as_a_scaled_model_would(analytic):
             rp.ensemble(state, craft, models, "ref", spread=bad, **run)
 
 
-def test_the_calibrated_families_pool_with_their_calibrated_spread():
+def test_the_calibrated_families_pool_with_their_calibrated_spread(test_data):
     # The spread fitted with the calibrated weights applies with them only: the default
     # weights of calibrated NRLMSIS 2.1 and JB2008 (not their paper presets, nor other
     # models) and no weights given.
     from rhoprop.density import calibrated
     from rhoprop.ensemble.combine import default_spread
 
-    families = {"msis": rp.density.Msis("2.1"), "jb": rp.density.Jb2008()}
+    jb = test_data / "jb2008"
+    indices = rp.density.Jb2008Indices(jb / "SOLFSMY.TXT", jb / "DTCFILE.TXT")
+    families = {"msis": rp.density.Msis("2.1"), "jb": rp.density.Jb2008(indices)}
     assert default_spread(families) == calibrated.ENSEMBLE_SPREAD < 1
     assert default_spread({"msis": rp.density.Msis("2.1", preset="paper")}) == 1.0
     assert default_spread({"exp": rp.density.Exponential.benchmark()}) == 1.0

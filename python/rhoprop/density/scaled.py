@@ -29,7 +29,7 @@ class SigmaScaled:
 
     Example:
         >>> import rhoprop as rp
-        >>> base = rp.density.Exponential.benchmark()
+        >>> base = rp.density.Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=0.2)
         >>> narrow = rp.density.SigmaScaled(base, 0.5)
         >>> m, s = narrow.mean_std("2023-01-01", 0.0, 0.0, 400e3)
         >>> float(s / base.mean_std("2023-01-01", 0.0, 0.0, 400e3)[1])
