@@ -173,6 +173,14 @@ def test_each_object_to_its_own_epochs_is_the_catalog_run_at_those_epochs(local_
         np.testing.assert_array_equal(mine.covariance[i, :k], r.covariance[i, :k])
         assert mine.valid[i, :k].all() and not mine.valid[i, k:].any()
         assert np.isnan(mine.mean[i, k:]).all()
+    # A sigma scale (screen_all's mixture spread) is the model with its sigma scaled:
+    # 0.5 x an exponential's 20 % is its 10 %, bit for bit.
+    own_short = [r.epochs[:3]] * len(objs)
+    half = propagate_to_own_epochs(
+        objs, rp.scenarios.benchmark_exponential(0.2), own_short, sigma_scale=0.5
+    )
+    tenth = propagate_to_own_epochs(objs, rp.scenarios.benchmark_exponential(0.1), own_short)
+    np.testing.assert_array_equal(half.covariance, tenth.covariance)
     early = [objs[0].state.epoch - np.timedelta64(1, "s")]
     with pytest.raises(ValueError, match="is before its own"):
         propagate_to_own_epochs(objs[:1], rp.scenarios.benchmark_exponential(0.2), [early])

@@ -103,6 +103,11 @@ def test_the_calibrated_families_pool_with_their_calibrated_spread(test_data):
     assert default_spread(families) == calibrated.ENSEMBLE_SPREAD < 1
     assert default_spread({"msis": rp.density.Msis("2.1", preset="paper")}) == 1.0
     assert default_spread({"exp": rp.density.Exponential.benchmark()}) == 1.0
+    # screen_all's Pc stage mixes them alike: the calibrated weights, not equal ones.
+    from rhoprop.conjunction.event_pc import _weights
+
+    np.testing.assert_allclose(_weights(families, None), [0.849, 0.151])
+    np.testing.assert_allclose(_weights(families, {"msis": 1.0, "jb": 1.0}), [0.5, 0.5])
     scaled = rp.density.SigmaScaled(families["msis"], 0.5)
     where = ("2003-10-30T12:00", 10.0, 20.0, 400e3)
     (m0, s0), (m1, s1) = families["msis"].mean_std(*where), scaled.mean_std(*where)

@@ -18,6 +18,7 @@ import numpy.typing as npt
 from .. import _validate
 from ..constants import MU, R_EARTH
 from ..density.model import ModelLike
+from ..density.scaled import SigmaScaled
 from ..errors import CovarianceError, RhopropError
 from ..options import Integrator
 from ..progress import ProgressBar
@@ -209,6 +210,9 @@ class RunSettings:
     zonal_degree: int
     integrator: Integrator | None = None
     step: float | None = None
+    #: Factor on the model's density sigma in the CCSP and the Monte Carlo (1: the
+    #: model's own; a mixture's calibrated spread, :class:`~rhoprop.density.SigmaScaled`).
+    sigma_scale: float = 1.0
 
     @classmethod
     def checked(
@@ -220,6 +224,7 @@ class RunSettings:
         update_interval: object,
         dynamics: Dynamics,
         errors: str,
+        sigma_scale: float = 1.0,
     ) -> RunSettings:
         """The settings of a run, checked (ValueError or TypeError naming the argument):
         ``kappa`` None is :class:`~rhoprop.kappa.TwoScale`; ``dynamics``' integrator must
@@ -245,6 +250,7 @@ class RunSettings:
             zonal_degree=zonal_degree_argument(dynamics.zonal_degree),
             integrator=dynamics.integrator,
             step=dynamics.step,
+            sigma_scale=_validate.positive("sigma_scale", sigma_scale),
         )
 
 
@@ -581,13 +587,14 @@ def _propagate_object(
     fraction = 0.0
     gaussian = np.ones(nt, dtype=bool)
     status, reason = Status.PROPAGATED, ""
+    uncertain = _with_spread(model, cfg)
     if cfg.method == "ccsp":
         decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done, plan.step)
         if k:
             means, covs, stopped, checked = _ccsp_outputs(
                 obj,
                 craft,
-                model,
+                uncertain,
                 offsets[:k],
                 cfg,
                 initial,
@@ -610,7 +617,7 @@ def _propagate_object(
         mc = monte_carlo(
             obj.state,
             craft,
-            model,
+            uncertain,
             output_times=offsets,
             n=cfg.n,
             drag_sigma=plan.drag_sigma,
@@ -668,6 +675,11 @@ def _gaussian_status(
         Status.NON_GAUSSIAN if status is Status.PROPAGATED else status,
         f"{reason}; {said}" if reason else said,
     )
+
+
+def _with_spread(model: Any, cfg: RunSettings) -> Any:
+    """``model`` with its density sigma times ``cfg.sigma_scale`` (itself when 1)."""
+    return model if cfg.sigma_scale == 1.0 else SigmaScaled(model, cfg.sigma_scale)
 
 
 def _mean_orbit(
@@ -749,7 +761,7 @@ def _ccsp_chunk(
         try:
             outs = ccsp_many(
                 runs,
-                model,
+                _with_spread(model, cfg),
                 floor_altitude=cfg.floor_altitude,
                 zonal_degree=cfg.zonal_degree,
                 progress=check,

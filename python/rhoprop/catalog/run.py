@@ -478,6 +478,7 @@ def propagate_to_own_epochs(
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     zonal_degree: int = CATALOG_ZONAL_DEGREE,
     step: float | None = None,
+    sigma_scale: float = 1.0,
     client: object = None,  # a distributed.Client
     errors: Errors = "record",
 ) -> OwnEpochsResult:
@@ -488,7 +489,8 @@ def propagate_to_own_epochs(
     at a few epochs of its own (a screen's Pc at each event's TCA) would otherwise
     update every object's CCSP at the union of them all (a 300-s grid cost 3.5x an
     hourly run: benches/README.md, "All-on-all"). ``step``: every object's RK8 step, s
-    (None: its :func:`~rhoprop.catalog.objects.catalog_step`)."""
+    (None: its :func:`~rhoprop.catalog.objects.catalog_step`); ``sigma_scale``: the
+    factor on the model's density sigma (a mixture's spread: screen_all's Pc stage)."""
     objs = list(objects)
     if len(epochs) != len(objs):
         raise ValueError(f"epochs must give one array per object ({len(objs)}), got {len(epochs)}")
@@ -507,6 +509,7 @@ def propagate_to_own_epochs(
         3600.0,
         Dynamics(zonal_degree=zonal_degree, floor_altitude=floor_altitude, step=step),
         errors,
+        sigma_scale,
     )
     plans = [
         dataclasses.replace(p, epochs=e)

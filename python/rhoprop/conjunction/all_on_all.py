@@ -98,7 +98,8 @@ class AllOnAllResult:
             the input), sorted by mixture Pc (largest first), then TCA; without Pc by
             TCA.
         models: the density models' names (reference first); weights: their mixture
-            weights.
+            weights; spread: the factor every model's density sigma ran with in the Pc
+            stage (1: its own; the calibrated families' default mixture: 0.861).
         pc_models: per event and model, the 2-D Pc (events, models); NaN where a model's
             covariance is not available at TCA (see ``pc_notes``).
         pc: per event the mixture's Pc, sum_k w_k Pc_k over the models with a value
@@ -165,6 +166,7 @@ class AllOnAllResult:
     pc_method: list[str] = field(default_factory=list)
     pc_max: np.ndarray = field(default_factory=lambda: np.empty(0))
     dilution: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=bool))
+    spread: float = 1.0
 
     def table(self) -> dict[str, np.ndarray]:
         """The events as columns (one row per event, in order): names and ids, TCA
@@ -287,7 +289,12 @@ def screen_all(
             the screening propagates with; default the first); e.g.
             ``rhoprop.studies.scenarios.default_models()``.
         start, end: the window, UTC; distance: screening distance, m.
-        weights: mixture weights {model name: weight} (default equal).
+        weights: mixture weights {model name: weight}; default as ``rp.ensemble``'s:
+            when every model is a calibrated family, the calibrated weights (NRLMSIS 2.1
+            0.849, JB2008 0.151, Jacchia-Roberts 0) with every model's density sigma times
+            the calibrated spread 0.861 in its CCSP and Monte Carlo (``spread`` of the
+            result; docs/density-calibration.md); else equal weights and each model's
+            own sigma. Given weights keep each model's own sigma.
         pc: compute the Pc of every event (default True).
         grid_step, fine_step: coarse grid and refinement output steps, s.
         floor_altitude, zonal_degree, dynamics: as for ``rp.propagate`` (default J2..J4,
@@ -372,15 +379,15 @@ def screen_all(
         run.close()
     skipped += gone
     counts["objects"] = given
-    chosen = n_mc if pc else 0
     mc_models, mc = _monte_carlo(
-        events, pairs, objs, models, pcs, chosen, members, seed, cfg, timings
+        events, pairs, objs, models, pcs, n_mc if pc else 0, members, seed, cfg, timings
     )
     order = _by_pc(events, pcs.pc)
     return AllOnAllResult(
         events=[events[i] for i in order],
         models=list(models),
         weights=pcs.weights,
+        spread=pcs.spread,
         pc_models=pcs.pc_models[order],
         pc=pcs.pc[order],
         hard_body_radius=pcs.hard_body_radius[order],
@@ -444,6 +451,7 @@ def _monte_carlo(
         cfg.degree,
         cfg.floor,
         cfg.dynamics.step,
+        pcs.spread,
     )
     timings["pc_monte_carlo"] = time.perf_counter() - t0
     return out

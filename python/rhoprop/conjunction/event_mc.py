@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..catalog.objects import _drag_sigma
+from ..density.scaled import SigmaScaled
 from ..propagation import Spacecraft
 from ..propagation.montecarlo import monte_carlo
 from ..time import seconds_between
@@ -41,10 +42,12 @@ def event_monte_carlo(
     degree: int,
     floor: float,
     step: float | None = None,
+    spread: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Monte Carlo Pc per model (events, models) and the mixture's (events,) for the
     events ``chosen`` (NaN elsewhere, and where an object's epoch is after TCA).
-    ``drag[k][index[i]]`` is object i's Cd*A/m for model k."""
+    ``drag[k][index[i]]`` is object i's Cd*A/m for model k; each model's density sigma
+    times ``spread`` (the mixture's, as the CCSP Pc)."""
     per_model = np.full((len(events), len(models)), np.nan)
     for e in chosen:
         ev, (i, j) = events[e], pairs[e]
@@ -60,7 +63,7 @@ def event_monte_carlo(
                     monte_carlo(
                         cat.state,
                         Spacecraft(1.0, beta),
-                        model,
+                        model if spread == 1.0 else SigmaScaled(model, spread),
                         output_times=np.array([lead]),
                         n=members,
                         seed=seed + obj,

@@ -33,6 +33,7 @@ from .. import frames
 from ..catalog.covariance import tle_covariance
 from ..catalog.elements import CatalogObject
 from ..catalog.run import OwnEpochsResult, propagate_to_own_epochs
+from ..ensemble.combine import default_spread, default_weights
 from ..ensemble.debias import backward_orbit
 from ..propagation import Spacecraft
 from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
@@ -90,12 +91,13 @@ class EventPcs:
     methods: list[str] = dataclasses.field(default_factory=list)
     pc_max: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     dilution: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0, dtype=bool))
+    spread: float = 1.0
 
 
 def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
     names = list(models)
     if weights is None:
-        w = np.ones(len(names))
+        w = default_weights(models)
     else:
         if set(weights) != set(names):
             raise ValueError(f"weights must name exactly the models {names}, got {list(weights)}")
@@ -277,6 +279,9 @@ def event_probabilities(
     :func:`~rhoprop.conjunction.encounter.pc_interval`, its draws seeded with ``seed``
     and the event's index."""
     w = _weights(models, weights)
+    # The calibrated families with their calibrated weights mix as rp.ensemble does: each
+    # model's density sigma times the calibrated spread.
+    spread = default_spread(models) if weights is None else 1.0
     radius = _radii(events, hbr, radii)
     n_ev, n_mod = len(events), len(models)
     pcm = np.full((n_ev, n_mod), np.nan)
@@ -294,6 +299,7 @@ def event_probabilities(
             methods=[""] * n_ev,
             pc_max=np.full(n_ev, np.nan),
             dilution=np.zeros(n_ev, dtype=bool),
+            spread=spread,
         )
     involved = sorted({i for p in pairs for i in p})
     local = {g: m for m, g in enumerate(involved)}
@@ -307,7 +313,7 @@ def event_probabilities(
     for e, (i, j) in enumerate(pairs):
         needs[local[i]].append((e, 0))
         needs[local[j]].append((e, 1))
-    moments = _model_moments(events, sub, models, ref, drag, needs, cfg, client, report)
+    moments = _model_moments(events, sub, models, ref, drag, needs, cfg, spread, client, report)
     timings["pc_covariance"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     methods = [""] * n_ev
@@ -333,7 +339,9 @@ def event_probabilities(
         if name == ref:
             cov[side, e] = c6
     timings["pc"] = time.perf_counter() - t0
-    return EventPcs(w, pcm, pc, radius, notes, cov[0], cov[1], drag, local, methods, top, diluted)
+    return EventPcs(
+        w, pcm, pc, radius, notes, cov[0], cov[1], drag, local, methods, top, diluted, spread
+    )
 
 
 #: Per (model, event, side): (RTN offset (3,), RTN covariance (6, 6), note) at TCA.
@@ -348,6 +356,7 @@ def _model_moments(
     drag: dict[str, np.ndarray],
     needs: dict[int, list[tuple[int, int]]],
     cfg: Any,
+    spread: float,
     client: Any,
     report: Any,
 ) -> _Moments:
@@ -374,6 +383,7 @@ def _model_moments(
                     floor_altitude=cfg.floor,
                     zonal_degree=cfg.degree,
                     step=cfg.dynamics.step,
+                    sigma_scale=spread,
                     client=client,
                 )
             base = res if name == ref else base

@@ -8,7 +8,9 @@ times the factor."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -19,6 +21,9 @@ from ..time import EpochsLike
 from ._inputs import StateLike
 from .atlas import Atlas
 from .model import DensityModel, SampledModel, as_atmosphere
+
+#: Base atmospheres (and their scaled copies) a :class:`SigmaScaled` holds at most.
+HELD_FIELDS = 4
 
 
 @dataclass(frozen=True)
@@ -38,6 +43,14 @@ class SigmaScaled:
 
     model: DensityModel
     factor: float
+    #: The last few base atmospheres given out and their scaled copies, by identity:
+    #: objects that share a field (a catalog's atlas hands the same one to a chunk of
+    #: objects in one window) share its scaled copy, so they still run in one core call.
+    _scaled: Any = field(default_factory=OrderedDict, compare=False, repr=False)
+    _lock: Any = field(default_factory=threading.Lock, compare=False, repr=False)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (SigmaScaled, (self.model, self.factor))
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, DensityModel):
@@ -65,8 +78,22 @@ class SigmaScaled:
     def atmosphere(self, state: StateLike, duration: float) -> Any:
         """The model's core atmosphere over ``duration`` s from ``state``, every sigma
         times ``factor``."""
-        return as_atmosphere(self.model, state, duration).with_sigma_scale(self.factor)
+        base = as_atmosphere(self.model, state, duration)
+        with self._lock:
+            held = self._scaled.get(id(base))
+            if held is not None and held[0] is base:
+                self._scaled.move_to_end(id(base))
+                return held[1]
+            scaled = base.with_sigma_scale(self.factor)
+            # The base is held too: its identity keys the entry, and while held the
+            # atlas hands the same field to the next object of its window.
+            self._scaled[id(base)] = (base, scaled)
+            while len(self._scaled) > HELD_FIELDS:
+                self._scaled.popitem(last=False)
+        return scaled
 
     def served_by(self) -> Atlas | None:
         """The atlas that serves the base model (None for a model that is not sampled)."""
+        if isinstance(self.model, Atlas):
+            return self.model
         return self.model.served_by() if isinstance(self.model, SampledModel) else None
