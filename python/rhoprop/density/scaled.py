@@ -46,8 +46,8 @@ class SigmaScaled:
     #: The last few base atmospheres given out and their scaled copies, by identity:
     #: objects that share a field (a catalog's atlas hands the same one to a chunk of
     #: objects in one window) share its scaled copy, so they still run in one core call.
-    _scaled: Any = field(default_factory=OrderedDict, compare=False, repr=False)
-    _lock: Any = field(default_factory=threading.Lock, compare=False, repr=False)
+    _scaled: Any = field(default_factory=OrderedDict, init=False, compare=False, repr=False)
+    _lock: Any = field(default_factory=threading.Lock, init=False, compare=False, repr=False)
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (SigmaScaled, (self.model, self.factor))
