@@ -52,7 +52,12 @@ r = catalog.propagate_catalog(
 )
 h("catalog ccsp", r.mean, r.covariance)
 r = catalog.propagate_catalog(
-    cat, msis, "2002-09-07T12:00", output_step=1800.0, progress=False, method="monte_carlo", n=16
+    cat,
+    msis,
+    "2002-09-07T12:00",
+    output_step=1800.0,
+    progress=False,
+    method=rp.MonteCarlo(n=16),
 )
 h("catalog mc msis", r.mean, r.covariance)
 objs = list(cat)
@@ -72,8 +77,7 @@ ens = rp.ensemble(
     {"a": msis, "b": rp.density.Msis("00", resolution=coarse)},
     "a",
     duration=86400.0,
-    n=32,
-    progress=False,
+    method=rp.MonteCarlo(n=32, progress=False),
 )
 h("ensemble", ens.component_means, ens.component_covariances)
 for k, v in out.items():

@@ -311,7 +311,7 @@ def test_monte_carlo_catalog_goes_through_the_public_wrapper():
     cat = catalog.load(SAMPLE)
     model = rp.scenarios.benchmark_exponential(0.2)
     r = catalog.propagate_catalog(
-        cat, model, END, method="monte_carlo", n=16, seed=3, output_step=1800.0, progress=False
+        cat, model, END, method=rp.MonteCarlo(n=16, seed=3), output_step=1800.0, progress=False
     )
     obj = cat[2]
     mc = rp.monte_carlo(

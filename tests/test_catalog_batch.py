@@ -127,11 +127,7 @@ def one_by_one(cat, model, end, **kw):
     """The catalog run object by object, as before the batched core call."""
     objs = list(cat)
     cfg = catalog_run.RunSettings(
-        method="ccsp",
-        n=100,
-        kappa=rp.kappa.GaussMarkov(),
-        seed=0,
-        update_interval=kw.get("update_interval", 3600.0),
+        method=rp.Ccsp(update_interval=kw.get("update_interval", 3600.0)),
         floor_altitude=DEFAULT_FLOOR_ALTITUDE,
         errors=kw.get("errors", "raise"),
         zonal_degree=kw.get("zonal_degree", catalog_run.CATALOG_ZONAL_DEGREE),

@@ -225,7 +225,12 @@ def test_shooting_finds_the_state_that_reaches_tca():
 def test_density_pc_without_density_uncertainty_is_the_message_pc():
     msg = _leo_message()
     model = rp.density.Exponential.benchmark(rel_sigma=0.0)
-    out = density_pc(msg, {"exp": model}, "exp", method="ccsp")
+    out = density_pc(
+        msg,
+        {"exp": model},
+        "exp",
+        method=rp.Ccsp(),
+    )
     assert out.pc_message == pytest.approx(float(getattr(msg.pc(), "pc", msg.pc())), rel=1e-12)
     # Only the CCSP's near-zero initial covariance (1 mm, 1 um/s) grows over the day.
     assert out.pc == pytest.approx(out.pc_message, rel=1e-4)
@@ -238,7 +243,7 @@ def test_density_pc_mixes_models_with_shared_atmosphere():
         "low": rp.density.Exponential.benchmark(rel_sigma=0.1),
         "high": rp.density.Exponential(1.5 * 3.725e-12, 400e3, 58.515e3, rel_sigma=0.3),
     }
-    out = density_pc(msg, models, "low", method="ccsp", cds={"high": 2.2})
+    out = density_pc(msg, models, "low", method=rp.Ccsp(), cds={"high": 2.2})
     assert out.names == ["low", "high"]
     assert out.pc == pytest.approx(out.weights @ out.pc_models, rel=1e-12)
     # More drag in "high" (Cd not debiased here): the orbit sinks and speeds up, so the

@@ -26,12 +26,10 @@ def two_model_ensemble():
         "low",
         duration=86400.0,
         cds={"high": 2.2},
-        n=600,
         # The paper's 18-minute process: model means more than 2 sigma apart in a day.
-        kappa=rp.kappa.GaussMarkov(1080.0),
-        seed=3,
-        output_step=None,
-        progress=False,
+        method=rp.MonteCarlo(
+            n=600, kappa=rp.kappa.GaussMarkov(1080.0), seed=3, output_step=None, progress=False
+        ),
     )
 
 
@@ -66,9 +64,7 @@ def test_most_disputed_picks_the_case_whose_models_disagree(two_model_ensemble):
         "a",
         duration=86400.0,
         cds={"b": 2.2},
-        n=100,
-        output_step=None,
-        progress=False,
+        method=rp.MonteCarlo(n=100, output_step=None, progress=False),
     )
     assert most_disputed({"calm": calm, "stormy": two_model_ensemble}) == "stormy"
 
@@ -80,7 +76,7 @@ def test_the_study_needs_members(two_model_ensemble):
         rp.Spacecraft(2.2, 0.01),
         {"a": rp.density.Exponential.benchmark(rel_sigma=0.15)},
         "a",
-        method="ccsp",
+        method=rp.Ccsp(),
         duration=3600.0,
     )
     with pytest.raises(ValueError, match="Monte Carlo"):

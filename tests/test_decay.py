@@ -147,9 +147,7 @@ def test_ensemble_components_use_the_survivors(setup):
         "ref",
         duration=1.8 * DAY,
         cds={"same": craft.cd},
-        n=200,
-        kappa=rp.kappa.Constant(),
-        progress=False,
+        method=rp.MonteCarlo(n=200, kappa=rp.kappa.Constant(), progress=False),
     )
     r = ens.results["ref"]
     assert r.decayed.any()
@@ -169,7 +167,7 @@ def test_ccsp_ensemble_with_a_model_that_comes_down(setup):
     state, craft = setup
     models = {"ref": rp.scenarios.benchmark_exponential(0.2), "dense": DENSE}
     ens = rp.ensemble(
-        state, craft, models, "ref", method="ccsp", duration=3 * DAY, cds={"dense": craft.cd}
+        state, craft, models, "ref", method=rp.Ccsp(), duration=3 * DAY, cds={"dense": craft.cd}
     )
     assert ens.results["dense"].decayed_at is not None
     assert len(ens.times) == 73 and np.isnan(ens.component_means[-1, 1]).all()
@@ -183,7 +181,7 @@ def test_catalog_monte_carlo_moments_use_the_survivors():
     cat = catalog.load(catalog_sample())
     end = "2002-09-09T00:00"
     res = catalog.propagate_catalog(
-        cat, dense, end, method="monte_carlo", n=20, seed=5, progress=False
+        cat, dense, end, method=rp.MonteCarlo(n=20, seed=5), progress=False
     )
     assert set(res.status) <= {"propagated", "decayed"} and "decayed" in set(res.status)
     # Object k is the public Monte Carlo seeded with seed + k at the common epochs.

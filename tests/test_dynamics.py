@@ -151,7 +151,7 @@ def test_catalog_runs_honour_the_integration_settings():
     assert 1e-4 < moved < 1.0, moved
     # The Monte Carlo takes the integrator too (RK4 at 10 s against RK8 at 180 s: the
     # same orbit within metres over 6 h, not the same bits).
-    mc = dict(method="monte_carlo", n=8, seed=1)
+    mc = dict(method=rp.MonteCarlo(n=8, seed=1))
     rk8 = run(**mc)
     rk4 = run(**mc, dynamics=rp.Dynamics(zonal_degree=4, integrator="rk4", step=10.0))
     assert not np.array_equal(rk4.mean, rk8.mean)
@@ -187,7 +187,7 @@ def test_a_setting_a_function_cannot_use_is_refused(setup, call, message):
             cat, bench, END, dynamics=rp.Dynamics(zonal_degree=4, rtol=1e-9)
         ),
         "catalog_mc_dop853": lambda: catalog.propagate_catalog(
-            cat, bench, END, method="monte_carlo", dynamics=rp.Dynamics(integrator="dop853")
+            cat, bench, END, method=rp.MonteCarlo(n=100), dynamics=rp.Dynamics(integrator="dop853")
         ),
         "reentry_rtol": lambda: catalog.reentry(cat, bench, dynamics=rp.Dynamics(rtol=1e-9)),
         "monte_carlo_rtol": lambda: rp.monte_carlo(

@@ -26,7 +26,14 @@ def analytic():
 
 def test_monte_carlo_ensemble_on_analytic_models(analytic):
     state, craft, models = analytic
-    ens = rp.ensemble(state, craft, models, "ref", duration=86400.0, n=300, progress=False)
+    ens = rp.ensemble(
+        state,
+        craft,
+        models,
+        "ref",
+        duration=86400.0,
+        method=rp.MonteCarlo(n=300, progress=False),
+    )
     assert ens.cd["ref"] == 3.0912
     assert ens.cd["denser"] == pytest.approx(3.0912 / 1.2, rel=1e-12)
     # Debiased with a constant ratio, both models give the same drag: same mean offsets
@@ -52,7 +59,7 @@ def test_ccsp_ensemble_and_weights(analytic):
         craft,
         models,
         "ref",
-        method="ccsp",
+        method=rp.Ccsp(),
         duration=86400.0,
         weights=[3.0, 1.0],
         cds={"denser": 3.0912},
@@ -62,9 +69,9 @@ def test_ccsp_ensemble_and_weights(analytic):
     assert ens.component_means[-1, 1, 1] > ens.component_means[-1, 0, 1] + 10.0
     assert abs(ens.component_means[-1, 0, 1]) < 1e-6  # the reference is the mean orbit
     with pytest.raises(ValueError, match="reference 'nope'"):
-        rp.ensemble(state, craft, models, "nope", method="ccsp", duration=3600.0)
+        rp.ensemble(state, craft, models, "nope", method=rp.Ccsp(), duration=3600.0)
     with pytest.raises(ValueError, match="weights must be 2"):
-        rp.ensemble(state, craft, models, "ref", method="ccsp", duration=3600.0, weights=[1.0])
+        rp.ensemble(state, craft, models, "ref", method=rp.Ccsp(), duration=3600.0, weights=[1.0])
 
 
 def test_a_spread_narrows_every_component_as_a_scaled_model_would(analytic):
@@ -73,7 +80,7 @@ def test_a_spread_narrows_every_component_as_a_scaled_model_would(analytic):
     # multiplies 0.2 x 0.5 = 0.1 exactly), so each component equals a plain ensemble of
     # those halved models.
     state, craft, models = analytic
-    run = dict(method="ccsp", duration=86400.0, cds={"denser": 3.0912})
+    run = dict(method=rp.Ccsp(), duration=86400.0, cds={"denser": 3.0912})
     ens = rp.ensemble(state, craft, models, "ref", spread=0.5, **run)
     halved = {
         name: rp.density.Exponential(m.rho0, m.h0, m.scale_height, rel_sigma=0.1)
@@ -217,7 +224,7 @@ def test_example_scenario_is_valid():
     from pathlib import Path
 
     sc = load_scenario(Path(__file__).parents[1] / "examples" / "scenario.toml")
-    assert sc["reference"] == "NRLMSIS 2.1" and sc["options"]["n"] == 500
+    assert sc["reference"] == "NRLMSIS 2.1" and sc["method"].n == 500
 
 
 def test_a_scenario_may_give_the_radiation_pressure_coefficient(tmp_path):
@@ -235,12 +242,7 @@ def test_example_scenario_switches_method_with_one_word(tmp_path):
     path = tmp_path / "ccsp.toml"
     path.write_text(text.replace('kind = "monte_carlo"', 'kind = "ccsp"'))
     sc = load_scenario(path)
-    assert sc["method"] == "ccsp"
-    assert sc["options"] == {
-        "perturbation": "additive",
-        "update_interval": 3600.0,
-        "drag_sigma": 0.0,
-    }
+    assert sc["method"] == rp.Ccsp(perturbation="additive", update_interval=3600.0, drag_sigma=0.0)
     # The sub-tables are checked for their own method's keys.
     path.write_text(text.replace("update_interval = 3600.0", "members = 3"))
     with pytest.raises(ScenarioError, match=r"method\.ccsp has unknown key"):

@@ -155,9 +155,8 @@ def test_ensemble_components_say_where_their_gaussian_holds():
         craft,
         models,
         "low",
-        method="ccsp",
+        method=rp.Ccsp(drag_sigma=0.1),
         duration=7 * DAY,
-        drag_sigma=0.1,
     )
     ok = ens.gaussian()
     assert ok.shape == (len(ens.times), 2)

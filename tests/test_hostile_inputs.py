@@ -221,7 +221,7 @@ def test_equal_orbit_states_compare_equal():
 
 def test_ensemble_weights_by_model_name():
     models = {"low": rp.scenarios.benchmark_exponential(0.1), "high": MODEL}
-    kwargs = dict(duration=3600.0, method="ccsp")
+    kwargs = dict(duration=3600.0, method=rp.Ccsp())
     by_name = rp.ensemble(PAPER, CRAFT, models, "low", weights={"high": 3.0, "low": 1.0}, **kwargs)
     in_order = rp.ensemble(PAPER, CRAFT, models, "low", weights=[1.0, 3.0], **kwargs)
     np.testing.assert_array_equal(by_name.weights, in_order.weights)

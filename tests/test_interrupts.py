@@ -74,7 +74,7 @@ RUNS = {
     # ~80 s: two models of 100,000 members each.
     "ensemble": (
         "rp.ensemble(state, craft, {'a': model, 'b': model}, 'a', duration=3 * 86400.0, "
-        "cds={'b': 2.2}, n=100_000, output_step=None, progress=False)"
+        "cds={'b': 2.2}, method=rp.MonteCarlo(n=100_000, output_step=None, progress=False))"
     ),
 }
 

@@ -60,9 +60,7 @@ def test_debiased_cd_of_three_families_differ(
             scenarios.case_models("solar-max-storm", preset=preset),
             scenarios.REFERENCE_MODEL,
             duration=6 * 3600.0,
-            n=20,
-            seed=1,
-            progress=False,
+            method=rp.MonteCarlo(n=20, seed=1, progress=False),
         )
         cd = ens.cd
         assert cd["NRLMSIS 2.1"] == pytest.approx(scenarios.PAPER_CD)

@@ -29,9 +29,7 @@ def runs():
         "a",
         duration=21600.0,
         cds={"b": 2.2},
-        n=200,
-        output_step=None,
-        progress=False,
+        method=rp.MonteCarlo(n=200, output_step=None, progress=False),
     )
     return mc, cc, ens
 

@@ -173,7 +173,13 @@ def test_ensemble(setup, tmp_path):
         "denser": rp.density.Exponential(1.2 * 3.725e-12, 400e3, 58.515e3, rel_sigma=0.2),
     }
     ens = rp.ensemble(
-        state, craft, models, "ref", duration=6 * 3600.0, n=100, weights=[3, 1], progress=False
+        state,
+        craft,
+        models,
+        "ref",
+        duration=6 * 3600.0,
+        method=rp.MonteCarlo(n=100, progress=False),
+        weights=[3, 1],
     )
     ds = ens.to_xarray()
     check_common(ds, "EnsembleResult")
@@ -199,7 +205,7 @@ def test_ensemble(setup, tmp_path):
     round_trip(ds, tmp_path, "ensemble")
     # A CCSP ensemble: the same layout, method "ccsp", no kappa settings.
     cc = rp.ensemble(
-        state, craft, models, "ref", method="ccsp", duration=6 * 3600.0, cds={"denser": 3.0}
+        state, craft, models, "ref", method=rp.Ccsp(), duration=6 * 3600.0, cds={"denser": 3.0}
     )
     ds = cc.to_xarray()
     assert ds.attrs["method"] == "ccsp" and "kappa" not in ds.attrs

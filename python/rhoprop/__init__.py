@@ -25,8 +25,10 @@ from .errors import (
     ScenarioError,
 )
 from .propagation import (
+    Ccsp,
     CcspResult,
     Dynamics,
+    MonteCarlo,
     MonteCarloResult,
     OrbitFit,
     OrbitState,
@@ -72,6 +74,7 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "Ccsp",
     "CcspResult",
     "CovarianceError",
     "DecayError",
@@ -80,6 +83,7 @@ __all__ = [
     "EnsembleResult",
     "GaussianMixture",
     "IntegrationError",
+    "MonteCarlo",
     "MonteCarloResult",
     "OrbitFit",
     "OrbitState",

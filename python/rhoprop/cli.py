@@ -15,6 +15,7 @@ from typing import Any
 
 from ._version import __version__
 from .catalog.job import MODEL_NAMES
+from .propagation.methods import NAMES as METHOD_NAMES
 
 
 def _paper(args: argparse.Namespace) -> int:
@@ -36,13 +37,15 @@ def _paper(args: argparse.Namespace) -> int:
 
 def _catalog(args: argparse.Namespace) -> int:
     from .catalog.job import run_catalog_file
+    from .propagation.methods import from_name
 
     run_catalog_file(
         args.file,
         args.end,
         args.out,
-        method=args.method,
-        members=args.members,
+        method=from_name(
+            args.method, n=args.members, seed=args.seed, update_interval=args.update_interval
+        ),
         model=args.model,
         output_step=args.output_step,
         scheduler=args.scheduler,
@@ -53,8 +56,6 @@ def _catalog(args: argparse.Namespace) -> int:
         fit=args.fit,
         initial_covariance=args.initial_covariance,
         zonal_degree=args.zonal_degree,
-        seed=args.seed,
-        update_interval=args.update_interval,
         drag_file=args.drag_file,
         cd=args.cd,
         drag_sigma=args.drag_sigma,
@@ -170,14 +171,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _conjunction(args: argparse.Namespace) -> int:
+    from .propagation.methods import from_name
     from .studies.conjunction import assess_cdm
 
     assess_cdm(
         args.file,
         hard_body_radius=args.hbr,
         lead_time=args.lead,
-        method=args.method,
-        members=args.members or 200,
+        method=from_name(args.method, n=args.members or 200, progress=False, output_step=None),
         drag_parameters=tuple(args.drag) if args.drag else (None, None),
         json_path=args.json,
     )
@@ -351,7 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument("--out", default="rhoprop-catalog", help="output directory")
     cat.add_argument(
         "--method",
-        choices=("ccsp", "monte_carlo"),
+        choices=METHOD_NAMES,
         default="ccsp",
         help="the sigma-point filter or a Monte Carlo per object",
     )
@@ -539,7 +540,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     conj.add_argument(
         "--method",
-        choices=("ccsp", "monte_carlo"),
+        choices=METHOD_NAMES,
         default="ccsp",
         help="the sigma-point filter or a Monte Carlo",
     )

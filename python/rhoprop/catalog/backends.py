@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..parallel import map_in_threads, worker_count
+from ..propagation.methods import Ccsp
 from .objects import ObjectOutcome, ObjectPlan, RunSettings, _ccsp_chunk, _run_object
 
 #: Most objects per core call of a local CCSP run (:func:`_ccsp_chunk`).
@@ -66,7 +67,7 @@ def _run_chunk(
 ) -> list[tuple[int, ObjectOutcome]]:
     """A Dask task: run the objects of the chunk (the model arrives unpickled once per
     worker); CCSPs in one core call per chunk."""
-    if cfg.method == "ccsp":
+    if isinstance(cfg.method, Ccsp):
         return _ccsp_chunk(model, chunk, epochs, cfg)
     return [(p.index, _run_object(p, model, epochs, cfg)) for p in chunk]
 
@@ -159,7 +160,7 @@ def _run_local(
         if bar is not None:
             bar(len(results))
 
-    if cfg.method == "ccsp":
+    if isinstance(cfg.method, Ccsp):
         # Chunks of objects per core call (objects in parallel there), small enough that
         # every worker gets several.
         size = max(1, min(CCSP_CHUNK, -(-len(plans) // (4 * workers))))

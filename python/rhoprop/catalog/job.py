@@ -20,7 +20,8 @@ from ..io import (
     write_oem,
     write_summary,
 )
-from ..options import Duplicates, UncertaintyMethod
+from ..options import Duplicates
+from ..propagation.methods import Ccsp, Method
 from ..spaceweather import SpaceWeather
 from ..time import to_datetime64
 from .covariance import COVARIANCE_NAMES
@@ -195,8 +196,7 @@ def run_catalog_file(
     end: str,
     out: str | Path,
     *,
-    method: UncertaintyMethod = "ccsp",
-    members: int = 100,
+    method: Method = Ccsp(),
     model: str = "2.1",
     output_step: float = 3600.0,
     scheduler: str | None = None,
@@ -207,8 +207,6 @@ def run_catalog_file(
     fit: bool | Literal["auto"] = "auto",
     initial_covariance: str | None = None,
     zonal_degree: int = 4,
-    seed: int = 0,
-    update_interval: float = 3600.0,
     drag_file: str | Path | None = None,
     cd: float | None = None,
     drag_sigma: str | float = "auto",
@@ -233,8 +231,9 @@ def run_catalog_file(
     none. ``initial_covariance``:
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only) to 6 (J2..J6), default 4 (J2..J4).
-    ``seed``: Monte Carlo seed (object i uses seed + i). ``update_interval``: CCSP update
-    interval, s. ``drag_file``/``cd``: per-object drag (:func:`read_drag_file`).
+    ``method``: :class:`~rhoprop.Ccsp` (default) or :class:`~rhoprop.MonteCarlo` with
+    its settings (object i seeded ``seed + i``). ``drag_file``/``cd``: per-object drag
+    (:func:`read_drag_file`).
     ``drag_sigma``: "auto" or a number (or its text), see ``propagate_catalog``.
     ``max_span_days``: objects with an epoch more days before ``end`` end "stale", not
     run (``propagate_catalog``'s ``max_span``; 0 or None: no limit). ``frame``: the OEM
@@ -275,14 +274,11 @@ def run_catalog_file(
         atmosphere,
         end,
         method=method,
-        n=members,
         client=client,
         output_step=output_step,
         errors="record" if skip_bad else "raise",
         initial_covariance=covariance,
         zonal_degree=zonal_degree,
-        seed=seed,
-        update_interval=update_interval,
         drag_sigma=sigma,
         fit="auto" if fit == "auto" else False,
         max_span=max_span_option(max_span_days),
@@ -309,7 +305,7 @@ def run_catalog_file(
                 file=sys.stderr,
             )
     print(
-        f"{len(cat)} objects ({len(cat.skipped)} skipped), {method}, "
+        f"{len(cat)} objects ({len(cat.skipped)} skipped), {method.name}, "
         f"{_iso(result.epochs[0])} to {_iso(result.epochs[-1])}: "
         f"{wall:.1f} s ({len(cat) / wall:.1f} objects/s); "
         + ", ".join(f"{v} {k}" for k, v in counts.items())

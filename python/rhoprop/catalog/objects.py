@@ -29,10 +29,11 @@ from ..propagation import (
     monte_carlo,
     propagate,
 )
-from ..propagation.ccsp import CcspRun, ccsp_many, update_schedule
+from ..propagation.ccsp import DEFAULT_UPDATE_INTERVAL, CcspRun, ccsp_many, update_schedule
 from ..propagation.dynamics import Dynamics, zonal_degree_argument
 from ..propagation.gaussian_check import arc_sag_share, holds, member_coverage
-from ..propagation.kappa import KappaProcess, TwoScale
+from ..propagation.kappa import KappaProcess
+from ..propagation.methods import Ccsp, Method, require_defaults
 from ..propagation.montecarlo import METHODS as MONTE_CARLO_INTEGRATORS
 from ..propagation.montecarlo import drag_sigma_argument
 from ..propagation.propagate import (
@@ -194,17 +195,13 @@ class Status(enum.Enum):
 @dataclass(frozen=True)
 class RunSettings:
     """The settings every object of a catalog run shares (checked by
-    :func:`propagate_catalog`): ``method`` ("ccsp" or "monte_carlo"), members ``n`` and
-    ``kappa`` and base ``seed`` of a Monte Carlo, the CCSP's ``update_interval`` (s), the
-    ``floor_altitude`` (m), ``errors`` ("raise" or "record"), the ``zonal_degree``, and
-    the user's ``integrator`` and fixed ``step`` (s) of :class:`~rhoprop.Dynamics` (None:
-    the CCSP's RK8 at each object's :func:`catalog_step`, the Monte Carlo's RK8 at 180 s)."""
+    :func:`propagate_catalog`): the uncertainty ``method`` (a :class:`~rhoprop.MonteCarlo`,
+    object i seeded ``seed + i``, or a :class:`~rhoprop.Ccsp`), the ``floor_altitude``
+    (m), ``errors`` ("raise" or "record"), the ``zonal_degree``, and the user's
+    ``integrator`` and fixed ``step`` (s) of :class:`~rhoprop.Dynamics` (None: the CCSP's
+    RK8 at each object's :func:`catalog_step`, the Monte Carlo's RK8 at 180 s)."""
 
-    method: str
-    n: int
-    kappa: KappaProcess
-    seed: int
-    update_interval: float
+    method: Method
     floor_altitude: float
     errors: str
     zonal_degree: int
@@ -217,34 +214,39 @@ class RunSettings:
     @classmethod
     def checked(
         cls,
-        method: str,
-        n: object,
-        kappa: object,
-        seed: object,
-        update_interval: object,
+        method: Method,
         dynamics: Dynamics,
         errors: str,
         sigma_scale: float = 1.0,
+        function: str = "propagate_catalog",
     ) -> RunSettings:
         """The settings of a run, checked (ValueError or TypeError naming the argument):
-        ``kappa`` None is :class:`~rhoprop.kappa.TwoScale`; ``dynamics``' integrator must
-        be one the method integrates with (RK8 for the CCSP)."""
-        if method not in ("ccsp", "monte_carlo"):
-            raise ValueError(f"unknown method {method!r}; expected 'ccsp' or 'monte_carlo'")
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-            raise ValueError(f"n must be an integer >= 2, got {n!r}")
-        process = TwoScale() if kappa is None else kappa
-        if not isinstance(process, KappaProcess):
-            raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
-        integrators = ("rk8",) if method == "ccsp" else MONTE_CARLO_INTEGRATORS
-        dynamics.require_integrator("propagate_catalog", integrators)
+        ``dynamics``' integrator must be one the method integrates with (RK8 for the
+        CCSP); the method's settings that the catalog takes per object or not at all
+        (its own outputs, ``drag_sigma`` and progress; the CCSP's scaling, perturbation
+        and coordinates) must be at their defaults."""
+        if isinstance(method, Ccsp):
+            require_defaults(
+                method,
+                function,
+                ("scaling", "perturbation", "drag_sigma", "coordinates"),
+                "a catalog's CCSP runs the calibrated filter in equinoctial elements, "
+                "with each object's own drag_sigma",
+            )
+            integrators: tuple[str, ...] = ("rk8",)
+        else:
+            require_defaults(
+                method,
+                function,
+                ("output_step", "drag_sigma", "record_density", "progress"),
+                "a catalog has its own output_step, drag_sigma and progress",
+            )
+            # Object i runs with seed + i: room for any catalog below 2**64.
+            _validate.seed(method.seed, limit=2**63)
+            integrators = MONTE_CARLO_INTEGRATORS
+        dynamics.require_integrator(function, integrators)
         return cls(
             method=method,
-            n=int(n),
-            kappa=process,
-            # Object i runs with seed + i: room for any catalog below 2**64.
-            seed=_validate.seed(seed, limit=2**63),
-            update_interval=_validate.positive("update_interval", update_interval),
             floor_altitude=dynamics.floor_altitude,
             errors=errors,
             zonal_degree=zonal_degree_argument(dynamics.zonal_degree),
@@ -252,6 +254,17 @@ class RunSettings:
             step=dynamics.step,
             sigma_scale=_validate.positive("sigma_scale", sigma_scale),
         )
+
+    @property
+    def update_interval(self) -> float:
+        """The CCSP's update interval, s (hourly when the method leaves it None)."""
+        given = self.method.update_interval if isinstance(self.method, Ccsp) else None
+        return DEFAULT_UPDATE_INTERVAL if given is None else given
+
+    @property
+    def kappa(self) -> KappaProcess | None:
+        """The method's kappa process (None: the calibrated default)."""
+        return self.method.kappa
 
 
 @dataclass(frozen=True)
@@ -588,7 +601,7 @@ def _propagate_object(
     gaussian = np.ones(nt, dtype=bool)
     status, reason = Status.PROPAGATED, ""
     uncertain = _with_spread(model, cfg)
-    if cfg.method == "ccsp":
+    if isinstance(cfg.method, Ccsp):
         decay, k = _mean_orbit(obj, craft, model, offsets, cfg, done, plan.step)
         if k:
             means, covs, stopped, checked = _ccsp_outputs(
@@ -619,12 +632,15 @@ def _propagate_object(
             craft,
             uncertain,
             output_times=offsets,
-            n=cfg.n,
+            n=cfg.method.n,
             drag_sigma=plan.drag_sigma,
-            kappa=cfg.kappa,
-            seed=cfg.seed + plan.index,
+            kappa=cfg.method.kappa,
+            seed=cfg.method.seed + plan.index,
             output_step=None,
             initial_covariance=initial,
+            perturbation=cfg.method.perturbation,
+            threads=cfg.method.threads,
+            max_memory=cfg.method.max_memory,
             progress=check,
             floor_altitude=cfg.floor_altitude,
             zonal_degree=cfg.zonal_degree,
@@ -748,6 +764,7 @@ def _ccsp_chunk(
                 drag_sigma=plan.drag_sigma,
                 step=plan.step,
                 output_times=outputs,
+                kappa=cfg.kappa,
             )
         )
         owners.append(i)
@@ -846,6 +863,7 @@ def _ccsp_outputs(
             zonal_degree=cfg.zonal_degree,
             drag_sigma=drag_sigma,
             step=step,
+            kappa=cfg.kappa,
         )
 
     k, why = len(offsets), ""

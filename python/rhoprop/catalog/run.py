@@ -18,12 +18,20 @@ import numpy as np
 from .. import _validate
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel
-from ..options import Errors, UncertaintyMethod
+from ..options import Errors
 from ..progress import ProgressBar
 from ..propagation import OrbitState
 from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.interpolate import DEFAULT_TOLERANCE
 from ..propagation.kappa import KappaProcess
+from ..propagation.methods import (
+    Ccsp,
+    Method,
+    MethodName,
+    MonteCarlo,
+    method_argument,
+    with_keywords,
+)
 from ..propagation.results import (
     StateMoments,
     dataset_attrs,
@@ -99,7 +107,7 @@ class CatalogResult:
             object.
         decay_epoch: predicted decay epoch of the mean orbit, or NaT.
         decay_fraction: Monte Carlo only: fraction of members decayed by the end (else 0).
-        method: "ccsp" or "monte_carlo".
+        method: the name of the uncertainty method, "ccsp" or "monte_carlo".
         covariance_note: per object, what the covariance includes (initial covariance
             and what propagation adds), in words.
         status: per object (objects,): ``"propagated"`` (every output from the
@@ -291,12 +299,12 @@ def propagate_catalog(
     model: DensityModel,
     end: EpochLike,
     *,
-    method: UncertaintyMethod = "ccsp",
-    n: int = 100,
+    method: Method | MethodName = Ccsp(),
+    n: int | None = None,
     kappa: KappaProcess | None = None,
-    seed: int = 0,
+    seed: int | None = None,
     output_step: float = 3600.0,
-    update_interval: float = 3600.0,
+    update_interval: float | None = None,
     floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     chunk_size: int = 50,
@@ -318,11 +326,20 @@ def propagate_catalog(
             50 km below the floor) or a :class:`~rhoprop.density.DensityField` /
             ``Exponential``.
         end: common end epoch, after every object's epoch.
-        method: ``"ccsp"`` (default; updates every ``update_interval`` s, for an
+        method: :class:`~rhoprop.Ccsp` (default ``rp.Ccsp()``: updates hourly, for an
             eccentric orbit, e >= 0.1, once per revolution at apogee with the outputs in
-            between) or ``"monte_carlo"`` (``n`` members, ``kappa`` process, object i
-            seeded with ``seed + i``; statistics over the members still flying at each
-            output).
+            between; its ``update_interval`` and ``kappa`` are honoured; its scaling,
+            perturbation, ``drag_sigma`` and coordinates must stay at their defaults) or
+            :class:`~rhoprop.MonteCarlo` (its ``n`` members, ``kappa``, ``perturbation``,
+            ``threads`` and ``max_memory``; object i seeded with ``seed + i``;
+            statistics over the members still flying at each output; its
+            ``output_step``, ``drag_sigma``, ``record_density`` and ``progress`` must
+            stay at their defaults: the catalog has its own). The strings ``"ccsp"`` and
+            ``"monte_carlo"`` are deprecated: ``rp.Ccsp()`` and ``rp.MonteCarlo(n=100)``
+            with a warning.
+        n, kappa, seed, update_interval: deprecated: the method's settings, folded into
+            ``method`` with a warning (give ``rp.MonteCarlo(n=..., kappa=..., seed=...)``
+            or ``rp.Ccsp(update_interval=..., kappa=...)``).
         output_step: spacing of the common output epochs, s, counted back from ``end``.
         start: no output epoch before it (UTC; default: the newest object's epoch, so
             every object is valid at every output). An earlier start gives the objects
@@ -419,7 +436,11 @@ def propagate_catalog(
         floor_altitude=floor_altitude,
         zonal_degree=zonal_degree,
     )
-    cfg = RunSettings.checked(method, n, kappa, seed, update_interval, dyn, errors)
+    chosen = method_argument(method, "propagate_catalog", MonteCarlo(n=100))
+    chosen = with_keywords(
+        chosen, "propagate_catalog", n=n, kappa=kappa, seed=seed, update_interval=update_interval
+    )
+    cfg = RunSettings.checked(chosen, dyn, errors)
     fresh = [i for i in range(len(objs)) if i not in stale]
     fitted = fit_catalog_objects(
         [objs[i] for i in fresh], model, fit, cfg.zonal_degree, progress=progress is True
@@ -450,7 +471,7 @@ def propagate_catalog(
     finally:
         if shown is not None:
             shown.close()
-    return _result(objs, epochs, method, results, plans, notes)
+    return _result(objs, epochs, cfg.method.name, results, plans, notes)
 
 
 @dataclass(frozen=True)
@@ -502,14 +523,11 @@ def propagate_to_own_epochs(
             raise ValueError(f"object {o.norad_id}: epoch {e[0]} is before its own")
     errors = _validate.errors_and_client("propagate_to_own_epochs", errors, client)
     cfg = RunSettings.checked(
-        "ccsp",
-        2,
-        None,
-        0,
-        3600.0,
+        Ccsp(),
         Dynamics(zonal_degree=zonal_degree, floor_altitude=floor_altitude, step=step),
         errors,
         sigma_scale,
+        function="propagate_to_own_epochs",
     )
     plans = [
         dataclasses.replace(p, epochs=e)

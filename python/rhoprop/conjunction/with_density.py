@@ -19,8 +19,9 @@ independent within a model: over hours to days they accumulate along different t
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -30,9 +31,13 @@ from ..density.model import ModelLike
 from ..ensemble import EnsembleResult
 from ..ensemble import ensemble as run_ensemble
 from ..frames import rtn_basis
-from ..options import HardBodyShape, UncertaintyMethod
-from ..propagation import OrbitState, Spacecraft, propagate
+from ..options import HardBodyShape
+from ..propagation import Ccsp, Dynamics, MonteCarlo, OrbitState, Spacecraft, propagate
+from ..propagation.methods import Method, MethodName, method_argument, with_keywords
 from .cdm import CdmObject, ConjunctionMessage
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
 
 #: Cd of the reference model when a CDM gives only Cd*A/m: the ensemble debiases the
 #: other models' Cd against it; only the product enters the reference model's dynamics.
@@ -40,6 +45,27 @@ REFERENCE_CD = 2.2
 
 #: The lead time is rounded to this grid (s) so it is a whole number of integration steps.
 LEAD_GRID = 60.0
+
+
+class EnsembleOptions(TypedDict, total=False):
+    """The keywords of :func:`rhoprop.ensemble` that :func:`density_pc` passes on."""
+
+    spread: float | None
+    debias_window: float
+    cds: dict[str, float] | None
+    dynamics: Dynamics | None
+    # Deprecated: the method's settings, folded into ``method`` with a warning.
+    n: int
+    seed: int
+    kappa: object
+    output_step: float | None
+    update_interval: float | None
+    drag_sigma: float
+    progress: bool
+
+
+#: The method settings among :class:`EnsembleOptions` (deprecated there).
+_METHOD_KEYS = ("n", "seed", "kappa", "output_step", "update_interval", "drag_sigma", "progress")
 
 
 @dataclass(frozen=True)
@@ -318,8 +344,8 @@ def _object_mixture(
     reference: str,
     lead: float,
     tca: np.datetime64,
-    method: UncertaintyMethod,
-    options: dict[str, Any],
+    method: Method,
+    options: Mapping[str, Any],
 ) -> tuple[EnsembleResult, np.ndarray, np.ndarray]:
     """One object's ensemble from ``lead`` before TCA; its per-model inertial offsets
     (k, 3) and position covariances (k, 3, 3) at TCA, the message's covariance added."""
@@ -329,7 +355,7 @@ def _object_mixture(
     )
     result = run_ensemble(start, craft, models, reference, method=method, duration=lead, **options)
     if abs(result.times[-1] - lead) > 1e-6:
-        raise ValueError(f"the {method} run stopped at {result.times[-1]:g} s, before TCA")
+        raise ValueError(f"the {method.name} run stopped at {result.times[-1]:g} s, before TCA")
     mix = result.mixture(-1)  # RTN of the reference mean orbit at TCA
     basis = rtn_basis(result.reference_positions[-1], result.reference_velocities[-1])
     offsets = mix.means @ basis
@@ -345,10 +371,10 @@ def density_pc(
     hard_body_radius: float | None = None,
     lead_time: float | None = None,
     drag_parameters: tuple[float | None, float | None] = (None, None),
-    method: UncertaintyMethod = "ccsp",
+    method: Method | MethodName = Ccsp(),
     weights: npt.ArrayLike | None = None,
     shape: HardBodyShape = "circle",
-    **method_options: Any,  # the keywords of ensemble(), passed on as they are
+    **ensemble_options: Unpack[EnsembleOptions],
 ) -> DensityPc:
     """The Pc of ``message`` with density-model uncertainty added (module docstring).
 
@@ -361,14 +387,19 @@ def density_pc(
             TCA minus the message's CREATION_DATE), rounded to whole minutes.
         drag_parameters: Cd*A/m of object 1 and 2, m^2/kg (default: each object's
             CD_AREA_OVER_MASS in the message).
-        method: ``"ccsp"`` (default) or ``"monte_carlo"`` per model.
+        method: :class:`~rhoprop.Ccsp` (default ``rp.Ccsp()``) or
+            :class:`~rhoprop.MonteCarlo` (the strings ``"ccsp"`` / ``"monte_carlo"`` are
+            deprecated; ``"monte_carlo"`` is ``rp.MonteCarlo(output_step=None)``, outputs
+            at the start and TCA only), run per model and object.
         weights: model weights, as :func:`rhoprop.ensemble` takes them (default: its
             default, the calibrated weights and spread when every model is a calibrated
             family, else equal weights; given weights run every model with its own
             sigma).
         shape: hard-body shape, as :func:`~rhoprop.conjunction.pc_2d`.
-        **method_options: passed on to :func:`rhoprop.ensemble` (e.g. ``n``, ``seed``,
-            ``update_interval``, ``debias_window``).
+        **ensemble_options: passed on to :func:`rhoprop.ensemble` (``spread``,
+            ``debias_window``, ``cds``, ``dynamics``); the method's settings (``n``,
+            ``seed``, ``update_interval``, ...) are deprecated here: give them in
+            ``method``.
 
     Returns:
         :class:`DensityPc`.
@@ -388,15 +419,17 @@ def density_pc(
         _drag_parameter(obj, given, k)
         for k, (obj, given) in enumerate(zip((a, b), drag_parameters, strict=True), start=1)
     ]
-    if "output_step" not in method_options and method == "monte_carlo":
-        method_options["output_step"] = None
+    chosen = method_argument(method, "density_pc", MonteCarlo(output_step=None))
+    options: dict[str, Any] = dict(ensemble_options)
+    settings = {k: options.pop(k) for k in _METHOD_KEYS if k in options}
+    chosen = with_keywords(chosen, "density_pc", **settings)
     if weights is not None:
-        method_options["weights"] = weights
+        options["weights"] = weights
     ens1, off1, cov1 = _object_mixture(
-        a, betas[0], models, reference, lead, message.tca, method, method_options
+        a, betas[0], models, reference, lead, message.tca, chosen, options
     )
     ens2, off2, cov2 = _object_mixture(
-        b, betas[1], models, reference, lead, message.tca, method, method_options
+        b, betas[1], models, reference, lead, message.tca, chosen, options
     )
     w = ens1.weights
     results = [

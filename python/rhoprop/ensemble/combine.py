@@ -23,15 +23,15 @@ from ..density import (
     SigmaScaled,
     calibrated,
 )
-from ..options import UncertaintyMethod
 from ..propagation import (
     CcspResult,
+    Dynamics,
+    MonteCarlo,
     MonteCarloResult,
     OrbitState,
     Spacecraft,
-    ccsp,
-    monte_carlo,
 )
+from ..propagation.methods import Ccsp, Method, MethodName, method_argument, with_keywords
 from ..propagation.propagate import check_model
 from ..propagation.results import (
     dataset_attrs,
@@ -48,7 +48,8 @@ from .mixture import GaussianMixture
 if TYPE_CHECKING:
     import xarray
 
-METHODS = ("monte_carlo", "ccsp")
+#: The names of the uncertainty methods (``EnsembleResult.to_xarray``'s ``method``).
+METHODS = (MonteCarlo.name, Ccsp.name)
 
 
 @dataclass(frozen=True)
@@ -251,7 +252,7 @@ class EnsembleResult:
                 rtn_frame=rtn,
                 initial_epoch=iso_utc(first.epoch),
                 reference=self.reference,
-                method="monte_carlo" if isinstance(first, MonteCarloResult) else "ccsp",
+                method=MonteCarlo.name if isinstance(first, MonteCarloResult) else Ccsp.name,
                 **extra,
             ),
         )
@@ -304,13 +305,14 @@ def ensemble(
     models: dict[str, DensityModel],
     reference: str,
     *,
-    method: UncertaintyMethod = "monte_carlo",
+    method: Method | MethodName = MonteCarlo(),
     weights: npt.ArrayLike | Mapping[str, float] | None = None,
     spread: float | None = None,
     debias_window: float = 8 * 3600.0,
     duration: float = 259200.0,
     cds: dict[str, float] | None = None,
-    **method_options: Any,  # monte_carlo()/ccsp() keywords, passed on as they are
+    dynamics: Dynamics | None = None,
+    **method_options: object,  # deprecated: the method's settings, now in ``method``
 ) -> EnsembleResult:
     """Propagates ``state`` through every model and combines them into a Gaussian mixture.
 
@@ -318,9 +320,11 @@ def ensemble(
         state, spacecraft: the initial state and the object (``spacecraft.cd`` is Cd_ref,
             the drag coefficient that belongs to the reference model).
         models: {name: density model}; ``reference`` names the reference model.
-        method: ``"monte_carlo"`` (default; the calibrated :class:`~rhoprop.kappa.TwoScale`
-            unless ``kappa`` is given)
-            or ``"ccsp"``.
+        method: :class:`~rhoprop.MonteCarlo` (default ``rp.MonteCarlo()``: 1,000 members
+            of the calibrated :class:`~rhoprop.kappa.TwoScale`, hourly outputs) or
+            :class:`~rhoprop.Ccsp`, with its settings (``rp.MonteCarlo(n=300, seed=2)``);
+            every model runs with them. The strings ``"monte_carlo"`` and ``"ccsp"`` are
+            deprecated (the default objects, with a warning).
         weights: mixture weights per model, in the order of ``models`` or as a mapping
             {model name: weight}. Default: :func:`default_weights` (the weights calibrated
             by log score on observed densities when every model is a calibrated NRLMSIS
@@ -333,14 +337,17 @@ def ensemble(
             the reference (:func:`~rhoprop.debias_drag_coefficient`); ``cds`` overrides it
             per model.
         duration: s.
-        **method_options: passed to :func:`~rhoprop.monte_carlo` (n, kappa, seed,
-            output_step, ...) or :func:`~rhoprop.ccsp` (update_interval, ...).
+        dynamics: the :class:`~rhoprop.Dynamics` every model's run integrates with
+            (None: the method's defaults).
+        **method_options: deprecated: the method's settings (``n=``, ``seed=``,
+            ``update_interval=``, ...) folded into ``method`` with a warning; give them
+            in the method object instead.
 
     Returns:
         :class:`EnsembleResult`; ``.mixture()`` and ``.along_track_pdf(x)`` give the PDF.
     """
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; expected 'monte_carlo' or 'ccsp'")
+    method = method_argument(method, "ensemble", MonteCarlo())
+    method = with_keywords(method, "ensemble", **method_options)
     if not models:
         raise ValueError("models must name at least one density model")
     if reference not in models:
@@ -378,11 +385,10 @@ def ensemble(
                 state, spacecraft, models[reference], models[name], debias_window
             )
     results: dict[str, MonteCarloResult | CcspResult] = {}
-    run = monte_carlo if method == "monte_carlo" else ccsp
     for name in names:
         craft = Spacecraft(cd[name], spacecraft.area_to_mass, spacecraft.cr)
         model = models[name] if factor == 1.0 else SigmaScaled(models[name], factor)
-        results[name] = run(state, craft, model, duration, **method_options)
+        results[name] = method.run(state, craft, model, duration, dynamics=dynamics)
     # A CCSP that stopped at decay has fewer outputs: every component is laid on the
     # longest output grid, NaN where its model has no statistics.
     times = max((r.times for r in results.values()), key=len)

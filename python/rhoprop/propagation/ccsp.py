@@ -327,6 +327,22 @@ def _arguments(
     return args, span
 
 
+def scaling_argument(scaling: object, kappa: KappaProcess | None) -> tuple[float, float] | None:
+    """``scaling`` checked: None, or two positive numbers (lambda1 + n, lambda2 + p),
+    and then no ``kappa`` (both would set kappa's correlation between updates)."""
+    if scaling is None:
+        return None
+    if kappa is not None:
+        raise ValueError(
+            "give kappa or scaling, not both: scaling's lambda2 sets the correlation "
+            "of kappa between updates, which the kappa process sets too"
+        )
+    pair = list(scaling) if isinstance(scaling, (tuple, list, np.ndarray)) else []
+    if len(pair) != 2:
+        raise ValueError(f"scaling must be two numbers, got {scaling!r}")
+    return (_validate.positive("scaling[0]", pair[0]), _validate.positive("scaling[1]", pair[1]))
+
+
 def consider_settings(
     kappa: KappaProcess | None,
     scaling: tuple[float, float] | None,
@@ -336,16 +352,9 @@ def consider_settings(
     """((lambda1 + n, lambda2 + p), kappa_scale, slow) of a run: how the filter stands
     for ``kappa`` (see :func:`ccsp`); slow is (scale, half-life s; inf: constant) of the
     slow density term, else None."""
-    if scaling is not None:
-        if kappa is not None:
-            raise ValueError(
-                "give kappa or scaling, not both: scaling's lambda2 sets the correlation "
-                "of kappa between updates, which the kappa process sets too"
-            )
-        if len(scaling) != 2:
-            raise ValueError(f"scaling must be two numbers, got {scaling!r}")
-        l1 = _validate.positive("scaling[0]", scaling[0])
-        return (l1, _validate.positive("scaling[1]", scaling[1])), 1.0, None
+    pair = scaling_argument(scaling, kappa)
+    if pair is not None:
+        return pair, 1.0, None
     process = TwoScale() if kappa is None else kappa
     if not isinstance(process, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(process).__name__}")

@@ -53,6 +53,21 @@ def drag_sigma_argument(value: object) -> float:
     return out
 
 
+def members_argument(value: object) -> int:
+    """``n`` checked: the number of members, an integer >= 2."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 2:
+        raise ValueError(f"n must be an integer >= 2, got {value!r}")
+    return int(value)
+
+
+def threads_argument(value: object) -> int:
+    """``threads`` checked: a positive integer, at most the limit of every pool
+    (:func:`rhoprop.parallel.worker_count`)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"threads must be a positive integer, got {value!r}")
+    return worker_count(int(value))
+
+
 #: Member-outputs per block of the RTN conversion (bounds its temporaries: ~100 MB).
 RTN_BLOCK = 1 << 20
 
@@ -167,15 +182,9 @@ def monte_carlo(
     kappa = TwoScale() if kappa is None else kappa
     if not isinstance(kappa, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    n = members_argument(n)
     seed = _validate.seed(seed)
-    if threads is not None:
-        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
-            raise ValueError(f"threads must be a positive integer, got {threads!r}")
-        threads = worker_count(int(threads))  # the limit of every pool
-    else:
-        threads = core_threads()
+    threads = core_threads() if threads is None else threads_argument(threads)
     dyn = resolve(
         "monte_carlo",
         dynamics,

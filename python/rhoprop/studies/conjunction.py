@@ -20,8 +20,8 @@ import numpy as np
 from ..conjunction import pc_2d, pc_monte_carlo
 from ..ensemble import EnsembleResult
 from ..frames import rtn_basis
-from ..options import UncertaintyMethod
-from ..propagation import MonteCarloResult
+from ..propagation import Ccsp, MonteCarloResult
+from ..propagation.methods import Method
 
 
 @dataclass(frozen=True)
@@ -260,8 +260,7 @@ def assess_cdm(
     *,
     hard_body_radius: float | None = None,
     lead_time: float | None = None,
-    method: UncertaintyMethod = "ccsp",
-    members: int = 200,
+    method: Method = Ccsp(),
     drag_parameters: tuple[float | None, float | None] = (None, None),
     json_path: str | Path | None = None,
 ) -> Any:
@@ -280,7 +279,6 @@ def assess_cdm(
     print(f"{message.object1.name} x {message.object2.name}, TCA {str(message.tca)[:23]} UTC")
     print(f"models: {', '.join(names)}: {reason}")
     models = default_models(SpaceWeather.cached().with_forecast())
-    options: dict[str, Any] = {"n": members, "progress": False} if method == "monte_carlo" else {}
     result = density_pc(
         message,
         models,
@@ -289,13 +287,12 @@ def assess_cdm(
         lead_time=lead_time,
         drag_parameters=drag_parameters,
         method=method,
-        **options,
     )
     if message.collision_probability is not None:
         print(f"Pc stated in the message: {message.collision_probability:.4g}")
     print(
         f"density uncertainty from {result.lead_time / 3600:g} h before TCA, HBR "
-        f"{result.hard_body_radius:g} m, {method}\n"
+        f"{result.hard_body_radius:g} m, {method.name}\n"
     )
     print(result.table())
     if result.dilution:
@@ -319,7 +316,7 @@ def assess_cdm(
             "dilution": result.dilution,
             "lead_time_s": result.lead_time,
             "hard_body_radius_m": result.hard_body_radius,
-            "method": method,
+            "method": method.name,
         }
         Path(json_path).write_text(json.dumps(summary, indent=2))
         print(f"\nwrote {json_path}")

@@ -15,8 +15,17 @@ from .. import frames
 from ..density import Msis
 from ..density.model import DensityModel, ModelLike
 from ..ensemble import debias_drag_coefficient, ensemble
-from ..options import Integrator, UncertaintyMethod
-from ..propagation import MonteCarloResult, OrbitState, Spacecraft, ccsp, kappa, monte_carlo
+from ..options import Integrator
+from ..propagation import (
+    MonteCarlo,
+    MonteCarloResult,
+    OrbitState,
+    Spacecraft,
+    ccsp,
+    kappa,
+    monte_carlo,
+)
+from ..propagation.methods import Method, MethodName, method_argument
 from ..spaceweather import SpaceWeather
 from . import scenarios
 from .scenarios import LABELS
@@ -310,38 +319,33 @@ def case_ensembles(
     *,
     n: int = 1000,
     duration: float = scenarios.PAPER_DURATION,
-    method: UncertaintyMethod = "monte_carlo",
+    method: Method | MethodName | None = None,
     seed: int = 0,
     progress: bool = True,
     record: SpaceWeather | None = None,
 ) -> dict[str, Any]:
     """The paper's Fig. 5: the three-model ensemble for each space-weather case (default
-    all four), Monte Carlo GaussMarkov(18 min) per model, Cd debiased over 8 h against
-    NRLMSIS 2.1. Returns {case: EnsembleResult}."""
+    all four), Cd debiased over 8 h against NRLMSIS 2.1, each model run with ``method``:
+    None (default) the paper's Monte Carlo, ``rp.MonteCarlo(n=n, seed=seed,
+    kappa=GaussMarkov(18 min), output_step=None, progress=progress)``; or a
+    :class:`~rhoprop.MonteCarlo` / :class:`~rhoprop.Ccsp` of its own (then ``n``,
+    ``seed`` and ``progress`` are its). Returns {case: EnsembleResult}."""
+    paper_mc = MonteCarlo(
+        n=n, kappa=_GAUSS_MARKOV_18MIN, seed=seed, output_step=None, progress=progress
+    )
+    chosen = paper_mc if method is None else method_argument(method, "case_ensembles", paper_mc)
     record = record if record is not None else SpaceWeather()
     out = {}
     for case in cases or scenarios.CASE_EPOCHS:
         state = scenarios.paper_state(scenarios.CASE_EPOCHS[case])
-        options: dict[str, Any] = (
-            {
-                "n": n,
-                "kappa": _GAUSS_MARKOV_18MIN,
-                "seed": seed,
-                "output_step": None,
-                "progress": progress,
-            }
-            if method == "monte_carlo"
-            else {}
-        )
         models = scenarios.case_models(case, record, preset="paper")
         out[case] = ensemble(
             state,
             scenarios.paper_spacecraft(),
             models,
             scenarios.REFERENCE_MODEL,
-            method=method,
+            method=chosen,
             weights=np.ones(len(models)),
             duration=duration,
-            **options,
         )
     return out

@@ -3,6 +3,7 @@ bad key, then run as an ensemble. See ``examples/scenario.toml`` for the schema.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import sys
@@ -19,7 +20,8 @@ from ..density import DensityModel, Exponential, Msis
 from ..ensemble import ensemble
 from ..errors import ScenarioError
 from ..io import OutputFolder, command_line, sanitise, write_oem
-from ..propagation import OrbitState, Spacecraft, kappa
+from ..propagation import MonteCarlo, OrbitState, Spacecraft, kappa
+from ..propagation.methods import from_name
 from ..spaceweather import SpaceWeather
 from .plots import ensemble_figure
 
@@ -165,10 +167,13 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
         raise ScenarioError(f"exactly one model must have reference = true, got {references}")
 
     me = _table(doc, "method")
-    kind = _get(me, "method", "kind", str, "monte_carlo")
-    if kind not in ("monte_carlo", "ccsp"):
+    kind = _get(me, "method", "kind", str, MonteCarlo.name)
+    if kind not in METHOD_KEYS:
         raise ScenarioError(f"method.kind must be 'monte_carlo' or 'ccsp', got {kind!r}")
-    options = _method_options(me, kind)
+    try:
+        method = from_name(kind, **_method_options(me, kind))
+    except (ValueError, TypeError) as err:
+        raise ScenarioError(f"[method]: {err}") from err
     outp = doc.get("output", {})
     if not isinstance(outp, dict):
         raise ScenarioError("[output] must be a table")
@@ -180,10 +185,9 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
         "spacecraft": craft,
         "models": models,
         "reference": references[0],
-        "method": kind,
+        "method": method,
         "weights": weights,
         "duration": duration,
-        "options": options,
     }
 
 
@@ -195,16 +199,25 @@ METHOD_KEYS = {
 }
 
 
+#: The type of each method setting in a file, and the method's name of those spelt
+#: otherwise (a file's ``members`` is ``n``).
+SETTING_TYPES: dict[str, type] = {
+    "members": int,
+    "seed": int,
+    "output_step": float,
+    "update_interval": float,
+    "perturbation": str,
+    "drag_sigma": float,
+}
+SETTING_NAMES = {"members": "n"}
+
+
 def _method_options(me: dict[str, Any], kind: str) -> dict[str, Any]:
-    """Options of ``kind`` from ``[method]``: its own keys at the top of the table or in
-    a ``[method.monte_carlo]`` / ``[method.ccsp]`` sub-table; the other method's keys and
-    sub-table are ignored (its sub-table's keys are still checked)."""
-    other = "ccsp" if kind == "monte_carlo" else "monte_carlo"
-    _unknown(
-        me,
-        "method",
-        {"kind", "monte_carlo", "ccsp"} | METHOD_KEYS["monte_carlo"] | METHOD_KEYS["ccsp"],
-    )
+    """Settings of ``kind`` (None: the method's default) from ``[method]``: its own keys
+    at the top of the table or in a ``[method.monte_carlo]`` / ``[method.ccsp]``
+    sub-table; the other method's keys and sub-table are ignored (its sub-table's keys
+    are still checked)."""
+    _unknown(me, "method", {"kind", *METHOD_KEYS, *set().union(*METHOD_KEYS.values())})
     table = {k: v for k, v in me.items() if k in METHOD_KEYS[kind]}
     where = "method"
     if kind in me:
@@ -212,18 +225,14 @@ def _method_options(me: dict[str, Any], kind: str) -> dict[str, Any]:
         _unknown(sub, f"method.{kind}", METHOD_KEYS[kind])
         table.update(sub)
         where = f"method.{kind}"
-    if other in me:  # unused, but checked: a typo there should not wait for the switch
-        _unknown(_get(me, "method", other, dict), f"method.{other}", METHOD_KEYS[other])
+    for other, keys in METHOD_KEYS.items():
+        # Unused, but checked: a typo there should not wait for the switch.
+        if other != kind and other in me:
+            _unknown(_get(me, "method", other, dict), f"method.{other}", keys)
     options: dict[str, Any] = {
-        "perturbation": _get(table, where, "perturbation", str, "additive"),
-        "drag_sigma": _get(table, where, "drag_sigma", float, 0.0),
+        SETTING_NAMES.get(key, key): _get(table, where, key, SETTING_TYPES[key], None)
+        for key in METHOD_KEYS[kind] - {"kappa"}
     }
-    if kind == "ccsp":
-        options["update_interval"] = _get(table, where, "update_interval", float, None)
-        return options
-    options["n"] = _get(table, where, "members", int, 1000)
-    options["seed"] = _get(table, where, "seed", int, 0)
-    options["output_step"] = _get(table, where, "output_step", float, 3600.0)
     if "kappa" in table:
         kp = _get(table, where, "kappa", dict)
         ktype = _get(kp, f"{where}.kappa", "type", str)
@@ -292,8 +301,8 @@ def run_scenario_file(
     earlier run's files is refused unless ``overwrite`` (which clears it). ``seed``
     overrides the file's Monte Carlo seed."""
     sc = load_scenario(path)
-    if seed is not None and sc["method"] == "monte_carlo":
-        sc["options"]["seed"] = int(seed)
+    if seed is not None and isinstance(sc["method"], MonteCarlo):
+        sc["method"] = dataclasses.replace(sc["method"], seed=int(seed))
     folder = OutputFolder(
         Path(out) if out is not None else sc["directory"],
         command=command or command_line(),
@@ -302,7 +311,7 @@ def run_scenario_file(
     directory = folder.directory
     name = sanitise(sc["name"])
     print(
-        f"rhoprop run: {name}: {len(sc['models'])} models, {sc['method']}, "
+        f"rhoprop run: {name}: {len(sc['models'])} models, {sc['method'].name}, "
         f"{sc['duration'] / 86400:g} days"
     )
     ens = ensemble(
@@ -313,7 +322,6 @@ def run_scenario_file(
         method=sc["method"],
         weights=sc["weights"],
         duration=sc["duration"],
-        **sc["options"],
     )
     with folder.path("ensemble.png") as tmp:
         ensemble_figure({name: ens}, tmp)
