@@ -328,7 +328,7 @@ class Ccsp:
 #: A method object (the type of ``method=`` everywhere).
 Method: TypeAlias = MonteCarlo | Ccsp
 #: The method classes by name.
-_CLASSES: dict[str, type[MonteCarlo] | type[Ccsp]] = {MonteCarlo.name: MonteCarlo, Ccsp.name: Ccsp}
+_CLASSES: dict[str, type[MonteCarlo] | type[Ccsp]] = {Ccsp.name: Ccsp, MonteCarlo.name: MonteCarlo}
 #: The method names (a command line's choices).
 NAMES = tuple(_CLASSES)
 
