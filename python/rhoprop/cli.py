@@ -15,6 +15,7 @@ from typing import Any
 
 from ._version import __version__
 from .catalog.job import MODEL_NAMES
+from .io.tables import FORMATS as TABLE_FORMATS
 from .propagation.methods import NAMES as METHOD_NAMES
 
 
@@ -63,6 +64,7 @@ def _catalog(args: argparse.Namespace) -> int:
         frame=args.frame,
         start=args.start,
         oem=args.oem,
+        table_format=args.format,
     )
     return 0
 
@@ -113,6 +115,7 @@ def _reentry(args: argparse.Namespace) -> int:
         skip_bad=args.skip_bad,
         overwrite=args.overwrite,
         command=args.command_line,
+        table_format=args.format,
     )
     return 0
 
@@ -146,6 +149,7 @@ def _screen(args: argparse.Namespace) -> int:
         max_span_days=args.max_span,
         cdm_min_pc=None if args.no_cdm else args.cdm_min_pc,
         scheduler=args.scheduler,
+        table_format=args.format,
     )
     return 0
 
@@ -223,6 +227,15 @@ def _cache(args: argparse.Namespace) -> int:
         if 1 < len(days) <= 31:
             print(f"    days: {', '.join(days)}")
     return 0
+
+
+def _table_format(parser: argparse.ArgumentParser, default: str, tables: str) -> None:
+    parser.add_argument(
+        "--format",
+        choices=TABLE_FORMATS,
+        default=default,
+        help=f"format of {tables}: parquet (typed columns, compressed) or csv (any spreadsheet)",
+    )
 
 
 def _overwrite(parser: argparse.ArgumentParser) -> None:
@@ -468,6 +481,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="objects whose epoch lies more days than this before --end are not run "
         "(status 'stale': a run holds its days of density tiles in memory); 0: no limit",
     )
+    _table_format(
+        cat,
+        "parquet",
+        "the ephemeris and the summary (csv: the ephemeris's metadata in ephemeris.meta.json)",
+    )
     _overwrite(cat)
     cat.set_defaults(run=_catalog)
     reentry = sub.add_parser(
@@ -517,6 +535,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="skip malformed element sets (listed on stderr; orbits beyond 10 Earth radii "
         "are always set aside and listed)",
     )
+    _table_format(reentry, "csv", "the reentry table (csv: epochs as ISO text)")
     _overwrite(reentry)
     reentry.set_defaults(run=_reentry)
     conj = sub.add_parser(
@@ -641,6 +660,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop at the first element set that cannot be read or propagated (default: "
         "skip it, listed on stderr, and screen the rest, as a published catalog needs)",
     )
+    _table_format(scr, "parquet", "the event table")
     _overwrite(scr)
     scr.set_defaults(run=_screen)
     data = sub.add_parser("data", help="manage data files (space weather, JB2008 indices)")

@@ -17,6 +17,8 @@ UncertaintyMethod = Literal["monte_carlo", "ccsp"]
 Perturbation = Literal["additive", "lognormal"]
 #: ``errors=``: the first failure raises, or each failure is recorded and the rest goes on.
 Errors = Literal["raise", "record"]
+#: The format of a table a command writes (``--format``): Parquet or CSV.
+TableFormat = Literal["parquet", "csv"]
 #: What ``write_oem`` does with a repeated object id: an error, or ``_2``, ``_3`` suffixes.
 Duplicates = Literal["error", "suffix"]
 #: The hard body of a collision probability: a circle of the hard-body radius, a square of
@@ -33,5 +35,6 @@ __all__ = [
     "Integrator",
     "NpdPolicy",
     "Perturbation",
+    "TableFormat",
     "UncertaintyMethod",
 ]

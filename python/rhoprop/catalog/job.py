@@ -16,17 +16,19 @@ from ..io import (
     command_line,
     oem_names,
     sanitise,
+    table_name,
     write_ephemeris,
     write_oem,
     write_summary,
 )
-from ..options import Duplicates
+from ..io.tables import format_argument, meta_path, write_folder_table
+from ..options import Duplicates, TableFormat
 from ..propagation.methods import Ccsp, Method
 from ..spaceweather import SpaceWeather
 from ..time import to_datetime64
 from .covariance import COVARIANCE_NAMES
 from .elements import Catalog, load
-from .run import MAX_SPAN, STATUSES, propagate_catalog
+from .run import MAX_SPAN, STATUSES, CatalogResult, propagate_catalog
 
 #: Density models by the names the command line accepts.
 MODEL_NAMES = ("2.1", "2.0", "00", "exponential")
@@ -214,6 +216,7 @@ def run_catalog_file(
     frame: str = "TEME",
     start: str | None = None,
     oem: bool = False,
+    table_format: TableFormat = "parquet",
 ) -> list[Path]:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes the
     catalog's ephemeris to ``out/ephemeris.parquet`` (:func:`~rhoprop.io.write_ephemeris`:
@@ -241,8 +244,11 @@ def run_catalog_file(
     "GCRF"/"EME2000" (rotated,
     :func:`~rhoprop.io.write_oem`). ``start``: the first output epoch at or after it
     (UTC ISO; default :func:`default_start`, the epoch 99 % of the element sets are not
-    after: the newer few have no valid output before their epoch). Returns the paths
-    written."""
+    after: the newer few have no valid output before their epoch). ``table_format``:
+    ``"parquet"`` (default) or ``"csv"``, the format of the ephemeris and the summary
+    (``ephemeris.csv``, ``summary.csv``; the ephemeris's metadata then in
+    ``ephemeris.meta.json``). Returns the paths written."""
+    table_format = format_argument(table_format)
     covariance = initial_covariance_option(initial_covariance or "object")
     sigma = _drag_sigma_option(drag_sigma)
     drag = read_drag_file(drag_file, cd) if drag_file is not None else None
@@ -285,17 +291,9 @@ def run_catalog_file(
         start=to_datetime64(start, "--start") if start else default_start(cat),
     )
     wall = time.perf_counter() - t0
-    directory = folder.directory
-    # Announced before they are written, so that an interrupted run's files are its own.
-    ephemeris = directory / "ephemeris.parquet"
-    folder.expect([ephemeris, directory / "summary.parquet"])
-    if oem:
-        folder.expect([directory / "oem" / n for n in oem_names(result.objects, kind)])
-    folder.add([write_ephemeris(result, ephemeris, frame=frame)])
-    paths = write_oem(result, directory / "oem", duplicates=kind, ref_frame=frame) if oem else []
-    folder.add(paths)
-    summary = write_summary(result, directory / "summary.parquet")
-    folder.add([summary])
+    ephemeris, meta, paths, summary = _write_catalog_tables(
+        result, folder, frame, table_format, kind if oem else None
+    )
     manifest = folder.finish()
     counts = {s: int(np.count_nonzero(result.status == s)) for s in STATUSES}
     for obj, status, reason in zip(result.objects, result.status, result.reason, strict=True):
@@ -313,12 +311,39 @@ def run_catalog_file(
     no_data = len(cat) - int(np.count_nonzero(np.asarray(result.valid).any(axis=1)))
     print(
         f"wrote {ephemeris}"
-        + (f", {len(paths)} OEM files to {directory / 'oem'}" if oem else "")
+        + (f" (its metadata in {meta[0].name})" if meta else "")
+        + (f", {len(paths)} OEM files to {folder.directory / 'oem'}" if oem else "")
         + (f" ({no_data} objects without a valid epoch have no ephemeris)" if no_data else "")
         + f", {summary} and {manifest}"
     )
     print(atlas_line())
-    return [ephemeris, *paths, summary, manifest]
+    return [ephemeris, *meta, *paths, summary, manifest]
+
+
+def _write_catalog_tables(
+    result: CatalogResult,
+    folder: OutputFolder,
+    frame: str,
+    table_format: TableFormat,
+    oem: Duplicates | None,
+) -> tuple[Path, list[Path], list[Path], Path]:
+    """The ephemeris (and, for a CSV, its metadata), the OEM files (``oem``: how
+    repeated ids are named; None: no OEM) and the summary of a catalog run, in
+    ``folder``: (ephemeris, [metadata], OEM paths, summary)."""
+    directory = folder.directory
+    # Announced before they are written, so that an interrupted run's files are its own.
+    ephemeris = directory / table_name("ephemeris", table_format)
+    summary_path = directory / table_name("summary", table_format)
+    meta = [meta_path(ephemeris)] if table_format == "csv" else []
+    folder.expect([ephemeris, *meta, summary_path])
+    if oem is not None:
+        folder.expect([directory / "oem" / n for n in oem_names(result.objects, oem)])
+    folder.add([write_ephemeris(result, ephemeris, frame=frame, fmt=table_format), *meta])
+    paths = write_oem(result, directory / "oem", duplicates=oem, ref_frame=frame) if oem else []
+    folder.add(paths)
+    summary = write_summary(result, summary_path, table_format)
+    folder.add([summary])
+    return ephemeris, meta, paths, summary
 
 
 def _drag_sigma_option(drag_sigma: str | float) -> float | Literal["auto"]:
@@ -367,6 +392,7 @@ def run_reentry_file(
     skip_bad: bool = False,
     overwrite: bool = False,
     command: str | None = None,
+    table_format: TableFormat = "csv",
 ) -> list[Path]:
     """Reentry windows (:func:`~rhoprop.catalog.reentry.reentry`) of every element set of
     ``file`` within ``horizon_days`` of its epoch: printed as a table and written to
@@ -377,12 +403,16 @@ def run_reentry_file(
     sets first; ``history``: for an object given several times, "auto" (default) is "fit"
     with ``fit`` and "newest" without, "newest" predicts from its newest element set,
     "fit" from it fitted together with the earlier ones, "each" from every one
-    (:func:`~rhoprop.catalog.reentry`). Returns the paths written."""
+    (:func:`~rhoprop.catalog.reentry`). ``table_format``: ``"csv"`` (default, the epochs
+    as ISO text) or ``"parquet"`` (``out/reentry.parquet``, the columns of
+    :meth:`~rhoprop.catalog.ReentryResult.table`: epochs typed, NaT beyond the horizon).
+    Returns the paths written."""
     import csv
     import io
 
     from .reentry_windows import reentry, resolved_history
 
+    table_format = format_argument(table_format)
     atmosphere = model_by_name(model)
     # reentry() itself predicts a history once (history="newest") or each element set
     cat = _load(file, skip_bad, history="each")
@@ -403,12 +433,16 @@ def run_reentry_file(
     )
     wall = time.perf_counter() - t0
     rows = result.rows()
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]))
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({**row, "name": sanitise(row["name"])})
-    path = folder.write_text("reentry.csv", buffer.getvalue())
+    if table_format == "csv":
+        # The epochs as ISO strings ending in Z, "" beyond the horizon (as printed).
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]))
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({**row, "name": sanitise(row["name"])})
+        path = folder.write_text("reentry.csv", buffer.getvalue())
+    else:  # typed columns: datetime64 UTC epochs, NaT beyond the horizon
+        path = write_folder_table(result.table(), folder, "reentry.parquet", table_format)
     manifest = folder.finish()
     print(f"{'NORAD':>6} {'name':24} {'2.5 %':20} {'median':20} {'97.5 %':20} decayed  state")
     for row in rows:

@@ -16,6 +16,8 @@ from ..catalog.job import connect, default_start, max_span_option, need_dask
 from ..catalog.run import MAX_SPAN
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
+from ..io.tables import format_argument, table_name
+from ..options import TableFormat
 from ..progress import ProgressBar
 from ..time import to_datetime64
 from .all_on_all import AllOnAllResult, screen_all
@@ -124,15 +126,20 @@ def _check_threshold(min_pc: float | None) -> None:
 
 
 def output_events(
-    res: AllOnAllResult, folder: OutputFolder, cdm_min_pc: float | None = CDM_MIN_PC
+    res: AllOnAllResult,
+    folder: OutputFolder,
+    cdm_min_pc: float | None = CDM_MIN_PC,
+    table_format: TableFormat = "parquet",
 ) -> list[Path]:
-    """``events.parquet`` (one row per event, :meth:`AllOnAllResult.table`) and a KVN CDM
+    """``events.parquet`` (one row per event, :meth:`AllOnAllResult.table`; ``events.csv``
+    with ``table_format="csv"``) and a KVN CDM
     in ``cdm/`` (``<rank>_<id1>_<id2>.cdm``, rank by mixture Pc) for each event of
     :func:`cdm_events` (mixture Pc >= ``cdm_min_pc``, default :data:`CDM_MIN_PC`; 0: every
     event; None: none). CDMs need ``ccsds-ndm``, the ``[cdm]`` extra: without it they are
     left out, said on stderr. Returns the paths written."""
     chosen = cdm_events(res, cdm_min_pc)
-    written = [write_event_table(res.table(), folder, "events.parquet")]
+    name = table_name("events", table_format)
+    written = [write_event_table(res.table(), folder, name, table_format)]
     if not chosen:
         return written
     try:
@@ -188,6 +195,7 @@ def run_screen_file(
     max_span_days: float | None = MAX_SPAN / 86400.0,
     cdm_min_pc: float | None = CDM_MIN_PC,
     scheduler: str | None = None,
+    table_format: TableFormat = "parquet",
 ) -> list[Path]:
     """Every element set of ``file`` screened against every other from ``start`` (default
     :func:`default_start`: the epoch 99 % of the element sets are not after) to ``end``
@@ -200,7 +208,9 @@ def run_screen_file(
     (``members`` members). ``max_span_days``: element sets further than that from the
     window are listed as skipped, not screened (0 or None: no limit). ``scheduler``: a
     Dask scheduler address, every stage runs there (:func:`screen_all`'s ``client``; the
-    same events). Returns the paths written."""
+    same events). ``table_format``: ``"parquet"`` (default) or ``"csv"``, the format of
+    the event table. Returns the paths written."""
+    table_format = format_argument(table_format)
     if scheduler:
         need_dask()
     span = max_span_option(max_span_days)
@@ -229,7 +239,7 @@ def run_screen_file(
     finally:
         if client is not None:
             client.close()
-    written = output_events(res, folder, cdm_min_pc)
+    written = output_events(res, folder, cdm_min_pc, table_format)
     manifest = folder.finish()
     _report(res)
     rule = "none asked" if cdm_min_pc is None else f"events with Pc >= {cdm_min_pc:g}"

@@ -1,4 +1,5 @@
-"""Files in and out, below the catalog and the studies: CCSDS OEM (``oem``), the Parquet
+"""Files in and out, below the catalog and the studies: tables as Parquet or CSV
+(``tables``, what ``--format`` chooses), CCSDS OEM (``oem``), the Parquet
 ephemeris and summary of a catalog run (``ephemeris``, ``summary``), the event table of an
 all-on-all screen (``events``), the output folder of a run with its manifest and atomic
 writes (``files``), and one format read in: precise orbits to judge predictions against
@@ -17,9 +18,11 @@ from .oem import DUPLICATES, duplicate_ids, oem_names, write_oem
 from .protocols import CatalogEntry, CatalogRun
 from .sp3 import Sp3, read_sp3
 from .summary import summary_table, write_summary
+from .tables import FORMATS, table_name, write_table
 
 __all__ = [
     "DUPLICATES",
+    "FORMATS",
     "MANIFEST",
     "CatalogEntry",
     "CatalogRun",
@@ -33,9 +36,11 @@ __all__ = [
     "read_sp3",
     "sanitise",
     "summary_table",
+    "table_name",
     "write_ephemeris",
     "write_event_table",
     "write_oem",
     "write_summary",
+    "write_table",
     "write_text_atomic",
 ]

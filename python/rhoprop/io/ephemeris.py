@@ -1,7 +1,8 @@
-"""A catalog run's ephemeris as one Parquet table: every object's mean and covariance at
-its valid epochs, one row per object and epoch, readable by any Parquet reader (pandas,
-polars, DuckDB, Arrow) without rhoprop. One file whatever the catalog's size: 8,834
-objects at hourly outputs for 3 days is about 640,000 rows."""
+"""A catalog run's ephemeris as one table (Parquet by default, or CSV): every object's
+mean and covariance at its valid epochs, one row per object and epoch, readable by any
+Parquet reader (pandas, polars, DuckDB, Arrow), or any spreadsheet as CSV, without
+rhoprop. One file whatever the catalog's size: 8,834 objects at hourly outputs for 3 days
+is about 640,000 rows."""
 
 from __future__ import annotations
 
@@ -10,9 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import atomic_path, sanitise
+from ..options import TableFormat
+from .files import sanitise
 from .oem import OEM_FRAMES, _from_teme
 from .protocols import CatalogRun
+from .tables import table_writer
 
 #: Names of the state's components, in the order of ``mean``'s last axis.
 STATE = ("x", "y", "z", "vx", "vy", "vz")
@@ -60,24 +63,27 @@ def ephemeris_table(
     return table
 
 
-def write_ephemeris(result: CatalogRun, path: str | Path, *, frame: str = "TEME") -> Path:
-    """Writes a catalog run's ephemeris (:func:`ephemeris_table`) to the Parquet file
-    ``path`` (pyarrow, zstd-compressed), through a temporary name and a rename. The file's
-    metadata (key ``rhoprop``, JSON) names the frame, the time scale (UTC), the units and
-    each object's NORAD id and name; the summary of the same run
+def write_ephemeris(
+    result: CatalogRun, path: str | Path, *, frame: str = "TEME", fmt: TableFormat = "parquet"
+) -> Path:
+    """Writes a catalog run's ephemeris (:func:`ephemeris_table`) to the table file
+    ``path``: ``fmt`` ``"parquet"`` (default; pyarrow, zstd-compressed) or ``"csv"``,
+    through a temporary name and a rename. The metadata (JSON: the frame, the time scale
+    (UTC), the units and each object's NORAD id and name) is the Parquet file's key
+    ``rhoprop``, or the file ``name.meta.json`` beside a CSV; the summary of the same run
     (:func:`~rhoprop.io.write_summary`) gives each object's status.
 
     Args:
         result: a catalog run (:class:`~rhoprop.catalog.CatalogResult`, or anything with
             the attributes of :class:`~rhoprop.io.protocols.CatalogRun`).
-        path: the file to write (``.parquet``).
+        path: the file to write (``.parquet`` or ``.csv``).
         frame: "TEME" (default, the states as computed) or "GCRF"/"EME2000"/"ICRF".
+        fmt: ``"parquet"`` or ``"csv"``.
 
     Returns:
         ``path``.
     """
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
     if not all(hasattr(result, a) for a in ("objects", "valid", "mean", "covariance")):
         raise TypeError(f"write_ephemeris takes a CatalogResult, not a {type(result).__name__}")
@@ -96,8 +102,7 @@ def write_ephemeris(result: CatalogRun, path: str | Path, *, frame: str = "TEME"
     schema = pa.schema(list(types.items()), metadata={"rhoprop": json.dumps(meta)})
     out = Path(path)
     n = len(result.objects)
-    with atomic_path(out) as tmp, pq.ParquetWriter(tmp, schema, compression="zstd") as writer:
+    with table_writer(out, schema, fmt) as write:
         for lo in range(0, max(n, 1), ROW_GROUP_OBJECTS):
-            columns = ephemeris_table(result, frame, slice(lo, lo + ROW_GROUP_OBJECTS))
-            writer.write_table(pa.table(columns, schema=schema))
+            write(ephemeris_table(result, frame, slice(lo, lo + ROW_GROUP_OBJECTS)))
     return out

@@ -1,4 +1,4 @@
-"""A columnar Parquet summary of a catalog run's per-object statistics."""
+"""A catalog run's per-object statistics as one table (Parquet or CSV)."""
 
 from __future__ import annotations
 
@@ -6,10 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..options import TableFormat
 from ..propagation.results import rtn_basis
-from .files import atomic_path, sanitise
+from .files import sanitise
 from .oem import _note
 from .protocols import CatalogRun
+from .tables import write_table
 
 
 def summary_table(result: CatalogRun) -> dict[str, np.ndarray]:
@@ -47,15 +49,9 @@ def summary_table(result: CatalogRun) -> dict[str, np.ndarray]:
     }
 
 
-def write_summary(result: CatalogRun, path: str | Path) -> Path:
-    """The per-object summary as a Parquet file (pyarrow), one row per object (failed
-    ones included, with their status and reason), written to a temporary name and
-    renamed."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    table = pa.table({k: pa.array(v) for k, v in summary_table(result).items()})
-    out = Path(path)
-    with atomic_path(out) as tmp:
-        pq.write_table(table, tmp)
-    return out
+def write_summary(result: CatalogRun, path: str | Path, fmt: TableFormat = "parquet") -> Path:
+    """The per-object summary (:func:`summary_table`) as a table file, one row per object
+    (failed ones included, with their status and reason): ``fmt`` ``"parquet"``
+    (default) or ``"csv"`` (:mod:`rhoprop.io.tables`), written to a temporary name and
+    renamed. Returns ``path``."""
+    return write_table(summary_table(result), path, fmt)
