@@ -215,16 +215,16 @@ def test_screens_and_closest_approach_propagate_with_the_integration_settings(mo
     # was given; the encounter is still found where the brute force puts it.
     from test_screening import CRAFT, MODEL, T, brute_force_tca, encounter
 
-    from rhoprop.conjunction import approach, screen, screen_all
+    from rhoprop.conjunction import kernel, screen, screen_all
 
     seen = []
-    real = approach.propagate
+    real = kernel.propagate  # every track and refinement of the searches goes through it
 
     def recording(*args, **kwargs):
         seen.append(kwargs["dynamics"].integration)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(approach, "propagate", recording)
+    monkeypatch.setattr(kernel, "propagate", recording)
     s1, s2 = encounter()
     window = dict(start=rp.time.add_seconds(T, -3 * 3600.0), end=rp.time.add_seconds(T, 3 * 3600.0))
     dyn = rp.Dynamics(integrator="rk8", step=20.0)

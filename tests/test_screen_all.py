@@ -21,7 +21,7 @@ from rhoprop import catalog
 from rhoprop.conjunction import pc_2d, screen_all
 from rhoprop.conjunction.all_on_all import ALL_ON_ALL_STAGES, radial_pair_count
 from rhoprop.conjunction.event_pc import RADII, object_radius
-from rhoprop.conjunction.screening import _as_object
+from rhoprop.conjunction.kernel import as_object
 from rhoprop.constants import MU
 from rhoprop.time import add_seconds, seconds_between
 
@@ -236,11 +236,11 @@ def test_radii_table_and_hard_body_radius(shell):
 
 def test_radial_pair_count_matches_a_direct_count(shell):
     objs, _ = shell
-    few = [_as_object(o, "o", i) for i, o in enumerate(objs[:60])]
+    few = [as_object(o, "o", i) for i, o in enumerate(objs[:60])]
     got = radial_pair_count(few, 5e3, 4)
-    from rhoprop.conjunction.all_on_all import J2, R_EARTH, RADIAL_MARGIN, ZONAL_PAD, _radial_ranges
+    from rhoprop.conjunction.all_on_all import J2, R_EARTH, RADIAL_MARGIN, ZONAL_PAD, radial_ranges
 
-    perigee, apogee, _a, p = _radial_ranges(few)
+    perigee, apogee, _a, p = radial_ranges(few)
     pad = ZONAL_PAD[6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
     lo, hi = perigee - pad, apogee + pad
     direct = sum(

@@ -104,7 +104,7 @@ def _auto_drag_sigma(obj: CatalogObject) -> float:
     return DEFAULT_DRAG_RELATIVE_SIGMA
 
 
-def _drag_sigma(obj: CatalogObject, choice: Any) -> float:
+def object_drag_sigma(obj: CatalogObject, choice: DragSigma) -> float:
     """The relative 1-sigma of Cd*A/m of ``obj`` for ``drag_sigma=choice``: "auto" is
     :func:`_auto_drag_sigma` (the fit's formal relative sigma, at least 0.08; 0.15 without
     a fit) capped at ``AUTO_DRAG_SIGMA_MAX`` (1); a number for every object; a callable
@@ -343,7 +343,7 @@ def _plans(
         sigma = (
             SCALED_BSTAR_DRAG_SIGMA
             if scaled is not obj and isinstance(drag_sigma, str) and drag_sigma == "auto"
-            else _drag_sigma(scaled, drag_sigma)
+            else object_drag_sigma(scaled, drag_sigma)
         )
         own = catalog_step(scaled.state) if step is None else step
         plans.append(ObjectPlan(i, scaled, initial, note, sigma, own))

@@ -1,5 +1,6 @@
-"""Conjunction assessment under density uncertainty: close approaches between propagated
-objects (``approach``), catalog screening (``screening``: one primary against many;
+"""Conjunction assessment under density uncertainty: the machinery every search shares
+(``kernel``: tracks, the window check, refinement, events), close approaches between
+propagated objects (``approach``), catalog screening (``screening``: one primary against many;
 ``all_on_all``: every pair, with each event's Pc per density model, ``event_pc``), the
 probability of collision for Gaussian states, Gaussian mixtures and Monte Carlo members
 (``probability``), whether the short-encounter model applies and a Pc over the encounter
@@ -8,9 +9,10 @@ message's Pc with the density models' disagreement added (``with_density``). Pos
 m, velocities m/s, covariances m^2, hard-body radius m."""
 
 from .all_on_all import AllOnAllResult, screen_all
-from .approach import CloseApproach, closest_approach
+from .approach import closest_approach
 from .cdm import CdmObject, ConjunctionMessage, read_cdm, write_cdm
 from .encounter import EncounterCheck, IntervalPcResult, encounter_check, pc_interval
+from .kernel import CloseApproach
 from .probability import (
     MixturePcResult,
     MonteCarloPcResult,

@@ -31,10 +31,21 @@ from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
-from .approach import DEFAULT_FINE_STEP, CloseApproach, _Dynamics, _event, event_columns
-from .approach import _models_for as models_for
+from .approach import DEFAULT_FINE_STEP, event_columns
 from .event_mc import event_monte_carlo
 from .event_pc import check_coverage, check_options, event_probabilities
+from .kernel import (
+    CloseApproach,
+    ScreenedObject,
+    TrackDynamics,
+    Window,
+    as_object,
+    make_event,
+    radial_ranges,
+    secondaries_list,
+    window_span,
+)
+from .kernel import models_for as models_for
 from .screen_stages import DaskStages, Track, refine_slice, track_one
 from .screening import (
     DEFAULT_GRID_STEP,
@@ -43,12 +54,6 @@ from .screening import (
     RADIAL_MARGIN,
     ZONAL_PAD,
     ScreenObject,
-    _as_object,
-    _Object,
-    _radial_ranges,
-    _secondaries_list,
-    _Window,
-    window_span,
 )
 
 if TYPE_CHECKING:
@@ -423,13 +428,13 @@ def _by_pc(events: list[CloseApproach], pc: np.ndarray) -> np.ndarray:
 def _monte_carlo(
     events: list[CloseApproach],
     pairs: list[tuple[int, int]],
-    objs: list[_Object],
+    objs: list[ScreenedObject],
     models: dict[str, Any],
     pcs: Any,
     chosen: int,
     members: int,
     seed: int,
-    cfg: _Window,
+    cfg: Window,
     timings: dict[str, float],
 ) -> tuple[np.ndarray, np.ndarray]:
     """The member Monte Carlo's Pc (per model, mixed) of the ``chosen`` events of
@@ -467,7 +472,7 @@ def _settings(
     zonal_degree: int,
     dynamics: Dynamics | None,
     pc: bool,
-) -> _Window:
+) -> Window:
     t_start, t_end, span = window_span(start, end)
     step = _validate.positive("grid_step", grid_step)
     if step > 300.0:
@@ -487,7 +492,7 @@ def _settings(
             "screen_all()'s Pc stage integrates with rk8 (its CCSP and Monte Carlo), not "
             f"dynamics.integrator = {dyn.integrator!r}: give None or 'rk8', or pc=False"
         )
-    return _Window(
+    return Window(
         t_start,
         t_end,
         span,
@@ -518,12 +523,12 @@ def _model_set(model: Any, reference: str | None) -> tuple[dict[str, Any], str]:
 
 
 def _recent(
-    objs: list[_Object],
+    objs: list[ScreenedObject],
     skipped: list[tuple[str, str]],
     start: np.datetime64,
     end: np.datetime64,
     max_span: float | None,
-) -> list[_Object]:
+) -> list[ScreenedObject]:
     """The objects whose epoch lies within ``max_span`` s before ``start`` or after
     ``end``; (name, reason) of the others go to ``skipped``."""
     kept = objs
@@ -555,15 +560,15 @@ def _recent(
     return kept
 
 
-def _unique_objects(objects: Any) -> tuple[list[_Object], list[tuple[str, str]], int]:
+def _unique_objects(objects: Any) -> tuple[list[ScreenedObject], list[tuple[str, str]], int]:
     """The objects, each element set once (same epoch and state: the later copy is
     skipped, named), and how many were given."""
-    items = _secondaries_list(objects, "objects")
-    objs = [_as_object(item, f"objects[{i}]", i) for i, item in enumerate(items)]
+    items = secondaries_list(objects, "objects")
+    objs = [as_object(item, f"objects[{i}]", i) for i, item in enumerate(items)]
     if len(objs) < 2:
         raise ValueError(f"screen_all needs at least two objects, got {len(objs)}")
-    seen: dict[tuple[Any, bytes], _Object] = {}
-    kept: list[_Object] = []
+    seen: dict[tuple[Any, bytes], ScreenedObject] = {}
+    kept: list[ScreenedObject] = []
     skipped: list[tuple[str, str]] = []
     for o in objs:
         key = (o.state.epoch, np.asarray(o.state.state, dtype=float).tobytes())
@@ -601,10 +606,10 @@ def _reporter(progress: Any) -> Callable[[str, int, int], object] | None:
     return _StageBars() if progress else None
 
 
-def radial_pair_count(objs: list[_Object], distance: float, degree: int) -> int:
+def radial_pair_count(objs: list[ScreenedObject], distance: float, degree: int) -> int:
     """Pairs whose perigee-apogee ranges, padded as one-primary screening pads them
     (zonal oscillation and margin, no drag), overlap within ``distance``."""
-    perigee, apogee, _a, p = _radial_ranges(objs)
+    perigee, apogee, _a, p = radial_ranges(objs)
     pad = ZONAL_PAD[2 if degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
     low, high = np.sort(perigee - pad), apogee + pad + distance
     n = len(objs)
@@ -618,8 +623,8 @@ class _Run:
 
     def __init__(
         self,
-        objs: list[_Object],
-        cfg: _Window,
+        objs: list[ScreenedObject],
+        cfg: Window,
         workers: int,
         errors: str,
         report: Callable[[str, int, int], object] | None,
@@ -629,7 +634,7 @@ class _Run:
         self.report = report
         self.dask = None if client is None else DaskStages(client)
         self.stop = threading.Event()
-        self.dyn = _Dynamics(cfg.start, True, cfg.dynamics, cfg.fine)
+        self.dyn = TrackDynamics(cfg.start, True, cfg.dynamics, cfg.fine)
         self.skipped: list[tuple[str, str]] = []
         self.notes: list[tuple[str, str]] = []
 
@@ -668,7 +673,7 @@ class _Run:
             timings["sieve"] += time.perf_counter() - t0
             t0 = time.perf_counter()
             refined.update(zip(cand[:, 0].tolist(), cand[:, 1].tolist(), strict=True))
-            for pair, events in self._refine(chunk, cand).items():
+            for pair, events in self._refine_chunk(chunk, cand).items():
                 found[pair] += events
             timings["refinement"] += time.perf_counter() - t0
         kept = [o for o, s in zip(self.objs, screened, strict=True) if s]
@@ -775,7 +780,7 @@ class _Run:
         counts["interpolated"] += int(interp)
         return np.column_stack([i, j, k]).astype(np.int64)
 
-    def _refine(
+    def _refine_chunk(
         self, chunk: _Chunk, cand: np.ndarray
     ) -> dict[tuple[int, int], list[CloseApproach]]:
         """Events within the distance per candidate pair of the chunk: the minima on the
@@ -805,7 +810,7 @@ class _Run:
         for m in range(len(t)):
             a, b = self.objs[int(i[m])], self.objs[int(j[m])]
             where = EDGES[int(edge[m])]
-            event = _event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy(), where)
+            event = make_event(self.dyn, a, b, float(t[m]), s1[m].copy(), s2[m].copy(), where)
             span = (
                 add_seconds(self.cfg.start, float(first[m])),
                 add_seconds(self.cfg.start, float(last[m])),

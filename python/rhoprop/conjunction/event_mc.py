@@ -15,13 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from ..catalog.objects import _drag_sigma
+from ..catalog.objects import object_drag_sigma
 from ..density.scaled import SigmaScaled
 from ..propagation import Spacecraft
 from ..propagation.montecarlo import monte_carlo
 from ..time import seconds_between
-from .approach import CloseApproach
-from .event_pc import _catalog_object
+from .kernel import CloseApproach, catalog_object
 from .probability import pc_monte_carlo
 
 __all__ = ["event_monte_carlo"]
@@ -54,7 +53,7 @@ def event_monte_carlo(
         for k, (name, model) in enumerate(models.items()):
             runs = []
             for obj in (i, j):
-                cat = _catalog_object(objs[obj])
+                cat = catalog_object(objs[obj])
                 lead = seconds_between(cat.state.epoch, ev.tca)
                 if lead <= 0:
                     break
@@ -68,7 +67,7 @@ def event_monte_carlo(
                         n=members,
                         seed=seed + obj,
                         initial_covariance=cat.covariance,
-                        drag_sigma=_drag_sigma(cat, "auto"),
+                        drag_sigma=object_drag_sigma(cat, "auto"),
                         zonal_degree=degree,
                         floor_altitude=floor,
                         step=step,

@@ -38,10 +38,9 @@ from ..ensemble.debias import backward_orbit
 from ..propagation import Spacecraft
 from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
 from ..time import seconds_between
-from .approach import CloseApproach
 from .encounter import encounter_check, pc_interval
+from .kernel import CloseApproach, Window, catalog_object
 from .probability import PcResult, pc_2d
-from .screening import _Window
 
 __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "RADII", "object_radius"]
 
@@ -138,23 +137,6 @@ def _radii(events: list[Any], hbr: float | None, radii: Any) -> np.ndarray:
         return float(table[oid]) if oid in table else object_radius(name)
 
     return np.array([one(e.name1, e.id1) + one(e.name2, e.id2) for e in events])
-
-
-def _catalog_object(obj: Any) -> CatalogObject:
-    """The object as a CatalogObject (a tuple gets the TLE accuracy of its regime)."""
-    item = obj.item
-    if isinstance(item, CatalogObject):
-        return item
-    return CatalogObject(
-        name=obj.name,
-        norad_id=-1 if obj.object_id is None else int(obj.object_id),
-        state=obj.state,
-        drag_parameter=obj.craft.drag_parameter,
-        bstar=0.0,
-        source="(OrbitState, Spacecraft)",
-        covariance=tle_covariance(obj.state),
-        covariance_note="TLE accuracy of its regime (no covariance given)",
-    )
 
 
 #: Points of the debiasing's density evaluations per model call: a model library call
@@ -263,7 +245,7 @@ def event_probabilities(
     models: dict[str, Any],
     ref: str,
     weights: Mapping[str, float] | None,
-    cfg: _Window,
+    cfg: Window,
     enabled: bool,
     hbr: float | None,
     radii: Mapping[int, float] | None,
@@ -362,7 +344,7 @@ def _model_moments(
 ) -> _Moments:
     """CCSP per model (in epoch batches, each object to its own TCAs) and each needed
     (event, side)'s moments."""
-    cats = [_catalog_object(o) for o in sub]
+    cats = [catalog_object(o) for o in sub]
     out: _Moments = {}
     done = 0
     for batch in _batches(cats):

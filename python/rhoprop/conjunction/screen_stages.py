@@ -29,8 +29,8 @@ import numpy as np
 from .. import _core
 from ..propagation import OrbitState
 from ..time import add_seconds
-from .approach import _Dynamics
-from .screening import HERMITE_SAMPLES, MAX_ACCELERATION, _coarse_track, _Object, _object_error
+from .kernel import ScreenedObject, TrackDynamics, coarse_track, object_error
+from .screening import HERMITE_SAMPLES, MAX_ACCELERATION
 
 #: One object's track over a chunk: times (s from start), positions, velocities, the
 #: decay time (s from start, or None) and why it was skipped ("" when it was not).
@@ -41,11 +41,11 @@ StartState = tuple[np.ndarray, np.ndarray] | None
 
 
 def track_one(
-    obj: _Object,
+    obj: ScreenedObject,
     start_state: StartState,
     times: np.ndarray,
     first: bool,
-    dyn: _Dynamics,
+    dyn: TrackDynamics,
     step: float,
     errors: str,
 ) -> Track:
@@ -55,7 +55,7 @@ def track_one(
     span = float(times[-1] - times[0])
     try:
         if first:
-            tr, decay = _coarse_track(obj, dyn, dyn.ref, span, step)
+            tr, decay = coarse_track(obj, dyn, dyn.ref, span, step)
             return tr.t, tr.pos, tr.vel, decay, ""
         if start_state is None:
             raise ValueError("no state at the chunk's start")  # guarded by the caller
@@ -66,7 +66,7 @@ def track_one(
         return times[0] + out.times, out.positions, out.velocities, decay, ""
     except Exception as err:
         if errors != "record":
-            named = _object_error(err, obj, "object")
+            named = object_error(err, obj, "object")
             if named is err:
                 raise
             raise named from err
@@ -75,13 +75,13 @@ def track_one(
 
 
 def track_block(
-    objs: list[_Object],
+    objs: list[ScreenedObject],
     which: list[int],
     models: list[Any],
     states: list[StartState],
     times: np.ndarray,
     first: bool,
-    dyn: _Dynamics,
+    dyn: TrackDynamics,
     step: float,
     errors: str,
 ) -> list[Track]:
@@ -184,7 +184,7 @@ class DaskStages:
             threads = sum(self.client.nthreads().values()) or 1
             self.pieces = 4 * threads
 
-    def _share_fields(self, objs: list[_Object]) -> None:
+    def _share_fields(self, objs: list[ScreenedObject]) -> None:
         if self._fields is not None:
             return
         unique: dict[int, Any] = {}
@@ -196,11 +196,11 @@ class DaskStages:
 
     def tracks(
         self,
-        objs: list[_Object],
+        objs: list[ScreenedObject],
         states: list[StartState],
         times: np.ndarray,
         first: bool,
-        dyn: _Dynamics,
+        dyn: TrackDynamics,
         step: float,
         errors: str,
         todo: list[int],

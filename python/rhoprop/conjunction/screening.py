@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -19,7 +19,7 @@ import numpy as np
 from .. import _validate
 from ..catalog.elements import CatalogObject
 from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, MU, R_EARTH, R_POLE
-from ..density.model import ModelLike, as_atmosphere
+from ..density.model import ModelLike
 from ..errors import DecayError
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
@@ -27,25 +27,30 @@ from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft
 from ..propagation.dynamics import Dynamics, resolve_automatic
 from ..propagation.propagate import (
-    MAX_STEP_FRACTION,
     check_model,
-    core_propagate,
-    orbital_period,
 )
 from ..propagation.results import optional_import
-from ..time import EpochLike, add_seconds, seconds_between, to_datetime64, to_seconds
-from .approach import (
-    DEFAULT_FINE_STEP,
+from ..time import EpochLike, add_seconds, to_seconds
+from .approach import DEFAULT_FINE_STEP, event_columns
+from .kernel import (
     CloseApproach,
-    _dedupe,
-    _Dynamics,
-    _event,
-    _hermite,
-    _merge,
-    _models_for,
-    _refine,
-    _Track,
-    event_columns,
+    SampledTrack,
+    ScreenedObject,
+    TrackDynamics,
+    Window,
+    as_object,
+    coarse_track,
+    dedupe,
+    drag_decay,
+    hermite,
+    make_event,
+    make_window,
+    merge_brackets,
+    models_for,
+    object_error,
+    radial_ranges,
+    refine,
+    secondaries_list,
 )
 
 if TYPE_CHECKING:
@@ -69,17 +74,8 @@ HERMITE_SAMPLES = 64
 ZONAL_PAD = {2: 4.0, 6: 6.0}
 #: Radial prefilter: fixed margin added to every pad, m.
 RADIAL_MARGIN = 5e3
-#: Radial prefilter: safety factor on the drag decay da = rho B sqrt(mu a) T, with rho the
-#: model's mean + 3 sigma at the perigee altitude (largest over 12 places and 5 times).
-DRAG_SAFETY = 3.0
-#: Radial prefilter: altitude step and top of the density table the drag bound reads, m
-#: (above the top, the density at the top: drag there moves no orbit by kilometres).
-DRAG_TABLE_STEP = 10e3
-DRAG_TABLE_TOP = 2000e3
 #: Names of the counts in :attr:`ScreeningResult.counts`, in order of the stages.
 STAGES = ("secondaries", "radial", "propagated", "coarse_grid", "interpolated", "events")
-#: Step of the fixed-step RK8 that takes an object back from a later epoch to ``start``, s.
-BACKWARD_STEP = 30.0
 
 
 #: An object :func:`screen` takes: a catalog object, or (state, spacecraft[, name]).
@@ -172,140 +168,7 @@ class ScreeningResult:
 # Geometry on sampled tracks
 
 
-@dataclass
-class _Object:
-    name: str
-    object_id: int | None
-    state: OrbitState
-    craft: Spacecraft
-    model: Any = None
-    item: Any = None  # what was given (a CatalogObject carries its covariance)
-
-
-def _as_object(item: Any, where: str, index: int) -> _Object:
-    if isinstance(item, CatalogObject):
-        craft = Spacecraft(1.0, item.drag_parameter)
-        return _Object(item.name, item.norad_id, item.state, craft, item=item)
-    if isinstance(item, tuple) and len(item) in (2, 3):
-        state, craft = item[0], item[1]
-        if not isinstance(state, OrbitState) or not isinstance(craft, Spacecraft):
-            raise TypeError(
-                f"{where} must be (OrbitState, Spacecraft[, name]), got "
-                f"({', '.join(type(x).__name__ for x in item)})"
-            )
-        name = str(item[2]) if len(item) == 3 else f"{where}"
-        # Screens run in TEME, the catalogs' frame: a state in another is rotated once.
-        state = state.in_frame("TEME")
-        return _Object(name, None if len(item) == 3 else index, state, craft, item=item)
-    raise TypeError(
-        f"{where} must be a rhoprop.catalog.CatalogObject or an (OrbitState, Spacecraft"
-        f"[, name]) tuple, got {type(item).__name__}"
-    )
-
-
-def _radial_ranges(
-    objs: Sequence[_Object],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Osculating perigee and apogee radii, semi-major axis and semi-latus rectum (m) of
-    the objects' states (apogee inf for an unbound orbit)."""
-    r = np.array([o.state.position for o in objs])
-    v = np.array([o.state.velocity for o in objs])
-    rn = np.linalg.norm(r, axis=1)
-    inv_a = 2.0 / rn - np.einsum("ij,ij->i", v, v) / MU
-    h = np.cross(r, v)
-    p = np.einsum("ij,ij->i", h, h) / MU
-    e_vec = np.cross(v, h) / MU - r / rn[:, None]
-    e = np.linalg.norm(e_vec, axis=1)
-    with np.errstate(divide="ignore"):
-        a = np.where(inv_a > 0, 1.0 / np.where(inv_a > 0, inv_a, 1.0), np.inf)
-    perigee = p / (1.0 + e)
-    apogee = np.where(e < 1.0, p / np.maximum(1.0 - e, 1e-300), np.inf)
-    return perigee, apogee, a, p
-
-
-def _drag_decay(
-    model: Any,
-    objs: Sequence[_Object],
-    perigee: np.ndarray,
-    a: np.ndarray,
-    spans: np.ndarray,
-    first: np.datetime64,
-    end: np.datetime64,
-) -> np.ndarray:
-    """Bound on the drop of each object's perigee radius over its span (m): the decay of a
-    circular orbit da = rho B sqrt(mu a) T times :data:`DRAG_SAFETY`, with rho the model's
-    mean + 3 sigma at the perigee altitude, the largest over 12 places (latitudes -60, 0,
-    60 deg x 4 longitudes) and 5 times from ``first`` to ``end``. The density comes from a
-    table every :data:`DRAG_TABLE_STEP` m of altitude up to :data:`DRAG_TABLE_TOP`, read at
-    the node at or below the perigee (density falls with altitude, so that bounds it);
-    inf where the model cannot say (no ``mean_std``, or an error)."""
-    out = np.full(len(objs), np.inf)
-    if not len(objs) or not callable(getattr(model, "mean_std", None)):
-        return out
-    span = seconds_between(first, end)
-    times = np.array(
-        [add_seconds(first, f * span) for f in np.linspace(0.0, 1.0, 5)], dtype="datetime64[ns]"
-    )
-    lat = np.array([-60.0, 0.0, 60.0])
-    lon = np.array([0.0, 90.0, 180.0, 270.0])
-    alt = np.clip(perigee - R_EARTH, 0.0, DRAG_TABLE_TOP)
-    bottom = DRAG_TABLE_STEP * np.floor(alt.min() / DRAG_TABLE_STEP)
-    nodes = np.arange(bottom, alt.max() + DRAG_TABLE_STEP, DRAG_TABLE_STEP)
-    try:
-        mean, std = model.mean_std(
-            times[None, :, None, None],
-            lat[None, None, :, None],
-            lon[None, None, None, :],
-            nodes[:, None, None, None],
-        )
-    except ValueError:
-        return out
-    table = np.asarray(mean + 3.0 * std, dtype=float).reshape(len(nodes), -1).max(axis=1)
-    rho = table[np.clip(((alt - bottom) // DRAG_TABLE_STEP).astype(int), 0, len(nodes) - 1)]
-    drag = np.array([o.craft.drag_parameter for o in objs])
-    decay = DRAG_SAFETY * rho * drag * np.sqrt(MU * np.where(np.isfinite(a), a, perigee)) * spans
-    return np.where(np.isfinite(decay), decay, np.inf)
-
-
-def _coarse_track(
-    obj: _Object, dyn: _Dynamics, start: np.datetime64, span: float, grid_step: float
-) -> tuple[_Track, float | None]:
-    """The object on the common grid start + k grid_step (s from ``start``): propagated
-    from its epoch to ``start`` (backwards when its epoch is later), then over the window.
-    The decay time (s from ``start``) or None; a track of < 2 samples if it decayed
-    before ``start`` or right after."""
-    lead = seconds_between(obj.state.epoch, start)
-    state0 = obj.state
-    if lead > 1e-9:
-        tr = dyn.forward(obj.state, obj.craft, obj.model, lead, None)
-        if tr.decayed_at is not None:
-            empty = np.empty((0, 3))
-            gone = _Track(obj.name, obj.object_id, obj.craft, np.empty(0), empty, empty)
-            return gone, tr.decayed_at - lead
-        state0 = OrbitState(start, tr.positions[-1], tr.velocities[-1], "TEME")
-    elif lead < -1e-9:
-        atmosphere = as_atmosphere(obj.model, obj.state, lead)  # backwards: lead < 0
-        # The core integrates backwards with the fixed-step RK8 only (as the debiasing's
-        # backward orbit does); 30 s steps keep it at the millimetre level over days.
-        _t, states, _d, _e, _c = core_propagate(
-            atmosphere,
-            obj.state,
-            obj.craft.drag_parameter,
-            np.array([0.0, lead]),
-            integrator="rk8",
-            step=BACKWARD_STEP,
-            floor_altitude=dyn.floor,
-            zonal_degree=dyn.degree,
-        )
-        state0 = OrbitState(start, states[-1, :3], states[-1, 3:], "TEME")
-    tr = dyn.forward(state0, obj.craft, obj.model, span, grid_step)
-    track = _Track(
-        obj.name, obj.object_id, obj.craft, tr.times, tr.positions, tr.velocities, obj.model
-    )
-    return track, tr.decayed_at
-
-
-def _lower_bounds(a: _Track, b: _Track, n: int) -> tuple[np.ndarray, np.ndarray]:
+def _lower_bounds(a: SampledTrack, b: SampledTrack, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Distances at the first ``n`` samples and a lower bound of the distance over each
     interval: (d_k + d_k+1)/2 - (V + A h/2) h/2 with V the larger relative speed at the
     ends, A = 2 x :data:`MAX_ACCELERATION` and h the interval length."""
@@ -318,14 +181,14 @@ def _lower_bounds(a: _Track, b: _Track, n: int) -> tuple[np.ndarray, np.ndarray]
     return d, 0.5 * (d[:-1] + d[1:]) - 0.5 * speed * h
 
 
-def _hermite_bounds(a: _Track, b: _Track, k: np.ndarray) -> np.ndarray:
+def _hermite_bounds(a: SampledTrack, b: SampledTrack, k: np.ndarray) -> np.ndarray:
     """Lower bound of the distance on the cubic Hermite interpolant over intervals ``k``:
     the same Lipschitz bound on :data:`HERMITE_SAMPLES` sub-intervals."""
     n = len(b.t)  # b may end early (decay)
     r, v = b.pos - a.pos[:n], b.vel - a.vel[:n]
     s = np.linspace(0.0, 1.0, HERMITE_SAMPLES + 1)
     h = a.t[k + 1] - a.t[k]
-    p, q = _hermite(
+    p, q = hermite(
         r[k][:, None], v[k][:, None], r[k + 1][:, None], v[k + 1][:, None], h[:, None], s[None]
     )
     d = np.linalg.norm(p, axis=2)
@@ -336,32 +199,16 @@ def _hermite_bounds(a: _Track, b: _Track, k: np.ndarray) -> np.ndarray:
     return np.asarray(low.min(axis=1))
 
 
-def _interpolation_margin(a: _Track, b: _Track, h: float) -> float:
+def _interpolation_margin(a: SampledTrack, b: SampledTrack, h: float) -> float:
     """Margin for the cubic Hermite error over intervals of ``h`` s: ten times
     h^4/384 |r''''| with |r''''| ~ (v/r)^4 r for each object (two-body), plus 100 m."""
 
-    def fourth(track: _Track) -> float:
+    def fourth(track: SampledTrack) -> float:
         rn = np.linalg.norm(track.pos, axis=1)
         vn = np.linalg.norm(track.vel, axis=1)
         return float(np.max((vn / rn) ** 4 * rn)) if len(rn) else 0.0
 
     return 10.0 * h**4 / 384.0 * (fourth(a) + fourth(b)) + 100.0
-
-
-def _secondaries_list(secondaries: Any, name: str = "secondaries") -> list[Any]:
-    """``secondaries`` as a list; TypeError naming the parameter ``name`` for a single
-    object or something that is not a collection of objects."""
-    if isinstance(secondaries, (CatalogObject, tuple)):
-        raise TypeError(
-            f"{name} must be a Catalog or a list of objects, not a single object: wrap it in a list"
-        )
-    try:
-        return list(secondaries)
-    except TypeError as err:
-        raise TypeError(
-            f"{name} must be a rhoprop.catalog.Catalog or a list of CatalogObjects or "
-            f"(OrbitState, Spacecraft[, name]) tuples, got {type(secondaries).__name__}"
-        ) from err
 
 
 def screen(
@@ -399,7 +246,7 @@ def screen(
        for sampling) is dropped.
     2. **Propagation**: the others are propagated with rhoprop's dynamics through
        ``model`` (a sampled model through its density atlas: day tiles over every
-       altitude, shared by all objects, see :func:`_models_for`)
+       altitude, shared by all objects, see :func:`models_for`)
        from their epochs to ``start`` (backwards when later) and then over the window
        with outputs every ``grid_step`` s (adaptive DOP853), on threads.
     3. **Coarse grid**: on each grid interval the distance is at least
@@ -453,7 +300,7 @@ def screen(
     settings = resolve_automatic(
         "screen", dynamics, Dynamics(), floor_altitude=floor_altitude, zonal_degree=zonal_degree
     )
-    w = _window(
+    w = make_window(
         prim,
         start,
         end,
@@ -487,7 +334,7 @@ def screen(
         t0 = time.perf_counter()
         earliest = min([w.start, *(o.state.epoch for o in survivors)])
         latest = max([w.end, *(o.state.epoch for o in survivors)])
-        models = _models_for(model, [o.state for o in survivors], earliest, latest, w.floor)
+        models = models_for(model, [o.state for o in survivors], earliest, latest, w.floor)
         for obj, own in zip(survivors, models, strict=True):
             obj.model = own
         timings["field"] = time.perf_counter() - t0
@@ -523,39 +370,16 @@ def screen(
     )
 
 
-@dataclass(frozen=True)
-class _Window:
-    """The checked window and settings of a screen: UTC start and end, span (s), distance
-    (m), grid and fine steps (s) and the checked :class:`Dynamics` (floor altitude m,
-    zonal degree, the tracks' integrator, step and rtol)."""
-
-    start: np.datetime64
-    end: np.datetime64
-    span: float
-    limit: float
-    step: float
-    fine: float
-    dynamics: Dynamics
-
-    @property
-    def floor(self) -> float:
-        """The floor altitude, m."""
-        return self.dynamics.floor_altitude
-
-    @property
-    def degree(self) -> int:
-        """The zonal degree."""
-        return self.dynamics.zonal_degree
-
-
-def _objects(primary: Any, secondaries: Any) -> tuple[_Object, list[_Object], list[_Object]]:
+def _objects(
+    primary: Any, secondaries: Any
+) -> tuple[ScreenedObject, list[ScreenedObject], list[ScreenedObject]]:
     """The primary, the secondaries without the primary itself, and those left out as
     being the primary (same epoch and state)."""
-    prim = _as_object(primary, "primary", 0)
-    items = _secondaries_list(secondaries)
+    prim = as_object(primary, "primary", 0)
+    items = secondaries_list(secondaries)
     if not items:
         raise ValueError("secondaries is empty: nothing to screen the primary against")
-    objs = [_as_object(item, f"secondaries[{i}]", i) for i, item in enumerate(items)]
+    objs = [as_object(item, f"secondaries[{i}]", i) for i, item in enumerate(items)]
     itself = [
         o
         for o in objs
@@ -567,59 +391,16 @@ def _objects(primary: Any, secondaries: Any) -> tuple[_Object, list[_Object], li
     return prim, objs, itself
 
 
-def window_span(start: EpochLike, end: EpochLike) -> tuple[np.datetime64, np.datetime64, float]:
-    """UTC start and end of a screening window and its span (s), checked: ValueError
-    unless end is after start."""
-    t_start = to_datetime64(start, "start")
-    t_end = to_datetime64(end, "end")
-    span = seconds_between(t_start, t_end)
-    if not span > 0:
-        raise ValueError(f"end ({t_end}) must be after start ({t_start})")
-    return t_start, t_end, span
-
-
-def _window(
-    prim: _Object,
-    start: EpochLike,
-    end: EpochLike,
-    distance: float,
-    grid_step: float,
-    fine_step: float,
-    dynamics: Dynamics,
-) -> _Window:
-    """The screen's window and settings, checked (ValueError naming the argument)."""
-    t_start, t_end, span = window_span(start, end)
-    limit = _validate.positive("distance", distance)
-    step = _validate.positive("grid_step", grid_step)
-    period = orbital_period(prim.state)
-    if step > MAX_STEP_FRACTION * period:
-        raise ValueError(
-            f"grid_step = {step:g} s is too coarse for the primary's orbit (period "
-            f"{period:.0f} s): at most 1/{round(1 / MAX_STEP_FRACTION)} of it, "
-            f"{MAX_STEP_FRACTION * period:.0f} s, keeps the cubic Hermite interpolant of the "
-            "relative motion meaningful"
-        )
-    return _Window(
-        t_start,
-        t_end,
-        span,
-        limit,
-        step,
-        _validate.positive("fine_step", fine_step),
-        dynamics,
-    )
-
-
 def _primary_track(
-    prim: _Object, model: Any, w: _Window
-) -> tuple[_Dynamics, _Track, tuple[float, float]]:
+    prim: ScreenedObject, model: Any, w: Window
+) -> tuple[TrackDynamics, SampledTrack, tuple[float, float]]:
     """The dynamics of the screen, the primary's track over the window and its radial
     range (m, padded for sampling); DecayError if it decays before the end."""
-    (prim.model,) = _models_for(
+    (prim.model,) = models_for(
         model, [prim.state], min(w.start, prim.state.epoch), max(w.end, prim.state.epoch), w.floor
     )
-    dyn = _Dynamics(w.start, True, w.dynamics, w.fine)
-    ptrack, pdecay = _coarse_track(prim, dyn, w.start, w.span, w.step)
+    dyn = TrackDynamics(w.start, True, w.dynamics, w.fine)
+    ptrack, pdecay = coarse_track(prim, dyn, w.start, w.span, w.step)
     if len(ptrack.t) < 2 or pdecay is not None:
         at = add_seconds(w.start, pdecay) if pdecay is not None else w.start
         raise DecayError(
@@ -633,12 +414,12 @@ def _primary_track(
 
 
 def _radial_survivors(
-    objs: list[_Object], model: Any, w: _Window, p_range: tuple[float, float]
-) -> list[_Object]:
+    objs: list[ScreenedObject], model: Any, w: Window, p_range: tuple[float, float]
+) -> list[ScreenedObject]:
     """Stage 1: the secondaries whose padded radial range (with a bound on their drag
     decay) comes within the distance of the primary's."""
     p_low, p_high = p_range
-    perigee, apogee, a, p = _radial_ranges(objs)
+    perigee, apogee, a, p = radial_ranges(objs)
     pad = ZONAL_PAD[2 if w.degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
     # Each object's span: from the earlier of its epoch and start to the later of it and end.
     epochs = np.array([o.state.epoch for o in objs], dtype="datetime64[ns]")
@@ -651,7 +432,7 @@ def _radial_survivors(
     if above.any():
         idx = np.flatnonzero(above)
         first = min(w.start, epochs[idx].min())
-        decay[idx] = _drag_decay(
+        decay[idx] = drag_decay(
             model, [objs[i] for i in idx], perigee[idx], a[idx], spans[idx], first, w.end
         )
     keep = ~((low_no_drag - decay > p_high + w.limit) | (high < p_low - w.limit))
@@ -659,9 +440,9 @@ def _radial_survivors(
 
 
 def _screen_one(
-    obj: _Object,
-    dyn: _Dynamics,
-    prim: _Track,
+    obj: ScreenedObject,
+    dyn: TrackDynamics,
+    prim: SampledTrack,
     start: np.datetime64,
     span: float,
     step: float,
@@ -670,7 +451,7 @@ def _screen_one(
     """Stages 2-5 for one secondary."""
     tm: dict[str, float] = {}
     t0 = time.perf_counter()
-    track, decay = _coarse_track(obj, dyn, start, span, step)
+    track, decay = coarse_track(obj, dyn, start, span, step)
     tm["propagation"] = time.perf_counter() - t0
     if len(track.t) < 2:
         when = add_seconds(start, decay) if decay is not None else start
@@ -694,27 +475,18 @@ def _screen_one(
     t0 = time.perf_counter()
     last = float(track.t[-1])
     found: list[tuple[float, np.ndarray, np.ndarray]] = []
-    for lo, hi in _merge((float(track.t[j]), float(track.t[j + 1])) for j in k):
-        found += _refine(dyn, prim, track, lo, hi, 0.0, last)
-    events = [_event(dyn, prim, track, *item) for item in _dedupe(found)]
+    for lo, hi in merge_brackets((float(track.t[j]), float(track.t[j + 1])) for j in k):
+        found += refine(dyn, prim, track, lo, hi, 0.0, last)
+    events = [make_event(dyn, prim, track, *item) for item in dedupe(found)]
     tm["refinement"] = time.perf_counter() - t0
     near = tuple(ev for ev in events if ev.miss_distance <= limit)
     return _Outcome(Reached.INTERPOLATED, note, near, timings=tm)
 
 
-def _object_error(err: Exception, obj: _Object, role: str = "secondary") -> Exception:
-    """``err`` again with the object named (the same type), or ``err`` itself when its
-    type cannot be built from a message."""
-    try:
-        return type(err)(f"{role} {obj.name} (id {obj.object_id}): {err}")
-    except Exception:  # an exception type with a different constructor
-        return err
-
-
 def _run_threads(
-    objs: list[_Object],
-    dyn: _Dynamics,
-    prim: _Track,
+    objs: list[ScreenedObject],
+    dyn: TrackDynamics,
+    prim: SampledTrack,
     start: np.datetime64,
     span: float,
     step: float,
@@ -727,7 +499,7 @@ def _run_threads(
     an error) cancels the objects not started; the running ones end within ~1 ms."""
     stop = threading.Event()
 
-    def one(obj: _Object) -> _Outcome:
+    def one(obj: ScreenedObject) -> _Outcome:
         if stop.is_set():
             raise KeyboardInterrupt("screening interrupted")
         try:
@@ -735,7 +507,7 @@ def _run_threads(
         except Exception as err:
             if errors == "record":
                 return _Outcome(Reached.SKIPPED, f"{type(err).__name__}: {err}", error=err)
-            named = _object_error(err, obj)
+            named = object_error(err, obj)
             if named is err:
                 raise
             raise named from err
