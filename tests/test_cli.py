@@ -184,7 +184,7 @@ def test_paper_quick_writes_its_own_folder(monkeypatch):
 
 
 def test_drag_files(tmp_path):
-    from rhoprop.catalog.job import read_drag_file
+    from rhoprop.jobs.catalog import read_drag_file
 
     path = tmp_path / "drag.csv"
     path.write_text("norad_id,area_to_mass\n25544,0.005\n1,0.02\n")

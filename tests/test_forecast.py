@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import rhoprop as rp
-from rhoprop.catalog import job
 from rhoprop.cli import main
 from rhoprop.density import Msis
 from rhoprop.errors import OutsideRecordError, PredictedDriversWarning
+from rhoprop.jobs import models as job
 from rhoprop.spaceweather import forecast_sigma
 
 

@@ -342,8 +342,8 @@ def test_overwrite_only_ever_deletes_files_a_manifest_lists(
 def test_user_csvs_take_a_byte_order_mark_and_name_bad_bytes_and_repeats(tmp_path):
     # A spreadsheet's UTF-8 byte-order mark made "norad_id" unknown; a Latin-1 byte gave
     # a UnicodeDecodeError naming no file; a NORAD id twice in --radii took the later row.
-    from rhoprop.catalog.job import read_drag_file
-    from rhoprop.conjunction.screen_job import read_radii
+    from rhoprop.jobs.catalog import read_drag_file
+    from rhoprop.jobs.screen import read_radii
 
     radii = tmp_path / "radii.csv"
     radii.write_bytes(b"\xef\xbb\xbfnorad_id,radius_m\n25544,10\n1,2.5\n")
@@ -434,8 +434,8 @@ SAMPLE = Path(__file__).parent / "data" / "sample.tle"
 @example("norad_id,radius_m\n1,nan\n", "radii")
 @example("norad_id,drag_parameter\n1,-0.01\n", "drag")
 def test_user_csvs_of_any_text_read_or_raise_value_error(tmp_path_factory, text, kind):
-    from rhoprop.catalog.job import read_drag_file
-    from rhoprop.conjunction.screen_job import read_radii
+    from rhoprop.jobs.catalog import read_drag_file
+    from rhoprop.jobs.screen import read_radii
 
     path = tmp_path_factory.mktemp("csv") / f"{kind}.csv"
     path.write_text(text, encoding="utf-8")

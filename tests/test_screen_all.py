@@ -23,6 +23,7 @@ from rhoprop.conjunction.all_on_all import ALL_ON_ALL_STAGES, radial_pair_count
 from rhoprop.conjunction.event_pc import RADII, object_radius
 from rhoprop.conjunction.kernel import as_object
 from rhoprop.constants import MU
+from rhoprop.jobs.models import model_by_name
 from rhoprop.time import add_seconds, seconds_between
 
 MODEL = rp.density.Exponential.benchmark()
@@ -537,7 +538,7 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
     # The same run from Python gives the same events.
     res = screen_all(
         objs,
-        rp.catalog.job.model_by_name("exponential"),
+        model_by_name("exponential"),
         start=start,
         end=end,
         distance=30e3,
@@ -551,7 +552,7 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
     from astropy.time import Time
 
     from rhoprop.conjunction.cdm import cdm_text
-    from rhoprop.conjunction.screen_job import _message
+    from rhoprop.jobs.screen import _message
 
     ev = res.events[0]
     path = tmp_path / "one.cdm"
@@ -570,7 +571,7 @@ def test_default_start_is_not_moved_by_one_element_set_dated_ahead(shell):
     # start the window three days late. The default is the 99 % quantile of the epochs.
     import dataclasses
 
-    from rhoprop.conjunction.screen_job import default_start
+    from rhoprop.jobs.screen import default_start
 
     objs, _ = shell
     newest = max(o.state.epoch for o in objs)

@@ -218,11 +218,11 @@ def test_the_cli_offers_the_degree(capsys, monkeypatch):
     assert "--zonal-degree" in capsys.readouterr().err
     seen = {}
 
-    def fake(*_args, **kwargs):
-        seen.update(kwargs)
+    def fake(job):
+        seen.update(vars(job))
 
-    import rhoprop.catalog.job as job
+    from rhoprop.jobs import CatalogJob
 
-    monkeypatch.setattr(job, "run_catalog_file", fake)
+    monkeypatch.setattr(CatalogJob, "run", fake)
     main(["catalog", "x.tle", "--end", "2002-09-08T00:00", "--zonal-degree", "6"])
     assert seen["zonal_degree"] == 6

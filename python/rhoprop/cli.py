@@ -14,37 +14,33 @@ from collections.abc import Sequence
 from typing import Any
 
 from ._version import __version__
-from .catalog.job import MODEL_NAMES
-from .io.tables import FORMATS as TABLE_FORMATS
-from .propagation.methods import NAMES as METHOD_NAMES
+from .jobs.models import METHOD_NAMES, MODEL_NAMES, SCREEN_MODEL_NAMES, TABLE_FORMATS
 
 
 def _paper(args: argparse.Namespace) -> int:
-    from .catalog.job import atlas_line
-    from .studies.report import run_paper
+    from .jobs import PaperJob
 
     out = args.out or ("rhoprop-paper-quick" if args.quick else "rhoprop-paper")
-    run_paper(
+    PaperJob(
         out,
         quick=args.quick,
         members=args.members,
         seed=args.seed,
         overwrite=args.overwrite,
         command=args.command_line,
-    )
-    print(atlas_line())
+    ).run()
     return 0
 
 
 def _catalog(args: argparse.Namespace) -> int:
-    from .catalog.job import run_catalog_file
-    from .propagation.methods import from_name
+    from .jobs import CatalogJob
+    from .jobs.models import method_by_name
 
-    run_catalog_file(
+    CatalogJob(
         args.file,
         args.end,
         args.out,
-        method=from_name(
+        method=method_by_name(
             args.method, n=args.members, seed=args.seed, update_interval=args.update_interval
         ),
         model=args.model,
@@ -65,7 +61,7 @@ def _catalog(args: argparse.Namespace) -> int:
         start=args.start,
         oem=args.oem,
         table_format=args.format,
-    )
+    ).run()
     return 0
 
 
@@ -101,9 +97,9 @@ def _probability(text: str) -> float:
 
 
 def _reentry(args: argparse.Namespace) -> int:
-    from .catalog.job import run_reentry_file
+    from .jobs import ReentryJob
 
-    run_reentry_file(
+    ReentryJob(
         args.file,
         args.out,
         horizon_days=args.horizon,
@@ -116,28 +112,20 @@ def _reentry(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         command=args.command_line,
         table_format=args.format,
-    )
+    ).run()
     return 0
 
 
 def _screen(args: argparse.Namespace) -> int:
-    from .catalog.job import model_by_name
-    from .conjunction.screen_job import run_screen_file
+    from .jobs import ScreenJob
 
-    if args.model == "families":
-        from .spaceweather import SpaceWeather
-        from .studies.scenarios import default_models
-
-        models = default_models(SpaceWeather.cached().with_forecast())
-    else:
-        models = {args.model: model_by_name(args.model)}
-    run_screen_file(
+    ScreenJob(
         args.file,
         args.out,
         end=args.end,
         start=args.start,
         distance=args.distance,
-        models=models,
+        model=args.model,
         pc=args.pc,
         hard_body_radius=args.hbr,
         radii_file=args.radii,
@@ -150,12 +138,12 @@ def _screen(args: argparse.Namespace) -> int:
         cdm_min_pc=None if args.no_cdm else args.cdm_min_pc,
         scheduler=args.scheduler,
         table_format=args.format,
-    )
+    ).run()
     return 0
 
 
 def _data_refresh(args: argparse.Namespace) -> int:
-    from .catalog.job import refresh_data
+    from .jobs.catalog import refresh_data
 
     for line in refresh_data(timeout=args.timeout):
         print(line)
@@ -163,29 +151,29 @@ def _data_refresh(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .studies.scenario_file import run_scenario_file
+    from .jobs import ScenarioJob
 
-    return run_scenario_file(
+    return ScenarioJob(
         args.scenario,
         out=args.out,
         overwrite=args.overwrite,
         command=args.command_line,
         seed=args.seed,
-    )
+    ).run()
 
 
 def _conjunction(args: argparse.Namespace) -> int:
-    from .propagation.methods import from_name
-    from .studies.conjunction import assess_cdm
+    from .jobs import ConjunctionJob
+    from .jobs.models import method_by_name
 
-    assess_cdm(
+    ConjunctionJob(
         args.file,
         hard_body_radius=args.hbr,
         lead_time=args.lead,
-        method=from_name(args.method, n=args.members or 200, progress=False, output_step=None),
+        method=method_by_name(args.method, n=args.members or 200, progress=False, output_step=None),
         drag_parameters=tuple(args.drag) if args.drag else (None, None),
         json_path=args.json,
-    )
+    ).run()
     return 0
 
 
@@ -600,7 +588,7 @@ def build_parser() -> argparse.ArgumentParser:
     scr.add_argument(
         "--model",
         default="families",
-        choices=("families", *MODEL_NAMES),
+        choices=SCREEN_MODEL_NAMES,
         help="'families' (default: NRLMSIS 2.1, JB2008 or NRLMSISE-00, Jacchia-Roberts "
         "1971, Cd debiased per model) or one model",
     )

@@ -20,8 +20,7 @@ import numpy as np
 from ..conjunction import pc_2d, pc_monte_carlo
 from ..ensemble import EnsembleResult
 from ..frames import rtn_basis
-from ..propagation import Ccsp, MonteCarloResult
-from ..propagation.methods import Method
+from ..propagation import MonteCarloResult
 
 
 @dataclass(frozen=True)
@@ -253,71 +252,3 @@ def most_disputed(ensembles: dict[str, EnsembleResult]) -> str:
         return float(np.ptp(m) / np.mean(s))
 
     return max(ensembles, key=lambda c: score(ensembles[c]))
-
-
-def assess_cdm(
-    path: str | Path,
-    *,
-    hard_body_radius: float | None = None,
-    lead_time: float | None = None,
-    method: Method = Ccsp(),
-    drag_parameters: tuple[float | None, float | None] = (None, None),
-    json_path: str | Path | None = None,
-) -> Any:
-    """The ``rhoprop conjunction`` job: a CDM's Pc with the default density-model families
-    added (:func:`rhoprop.conjunction.density_pc`), printed as a table and optionally
-    written as JSON. Space weather: the cached record (``rhoprop data refresh``) with its
-    predictions as forecast drivers, else the bundled one."""
-    import json
-
-    from ..conjunction import density_pc, read_cdm
-    from ..spaceweather import SpaceWeather
-    from .scenarios import REFERENCE_MODEL, default_models, model_choice
-
-    message = read_cdm(path)
-    names, reason, _ = model_choice()
-    print(f"{message.object1.name} x {message.object2.name}, TCA {str(message.tca)[:23]} UTC")
-    print(f"models: {', '.join(names)}: {reason}")
-    models = default_models(SpaceWeather.cached().with_forecast())
-    result = density_pc(
-        message,
-        models,
-        REFERENCE_MODEL,
-        hard_body_radius=hard_body_radius,
-        lead_time=lead_time,
-        drag_parameters=drag_parameters,
-        method=method,
-    )
-    if message.collision_probability is not None:
-        print(f"Pc stated in the message: {message.collision_probability:.4g}")
-    print(
-        f"density uncertainty from {result.lead_time / 3600:g} h before TCA, HBR "
-        f"{result.hard_body_radius:g} m, {method.name}\n"
-    )
-    print(result.table())
-    if result.dilution:
-        print(
-            "\nnote: the Pc with density uncertainty lies in the dilution region (a smaller "
-            "covariance would raise it): a low Pc here says the states are too uncertain to "
-            f"tell, not that the objects miss; the largest Pc any covariance gives is "
-            f"{float(max(result.pc_max_models)):.4g}"
-        )
-    if json_path is not None:
-        summary = {
-            "tca": str(message.tca),
-            "objects": [message.object1.name, message.object2.name],
-            "pc_stated": message.collision_probability,
-            "pc_message": result.pc_message,
-            "pc_models": dict(zip(result.names, map(float, result.pc_models), strict=True)),
-            "weights": dict(zip(result.names, map(float, result.weights), strict=True)),
-            "pc_mixture": result.pc,
-            "pc_max_message": result.pc_max_message,
-            "pc_max_models": dict(zip(result.names, map(float, result.pc_max_models), strict=True)),
-            "dilution": result.dilution,
-            "lead_time_s": result.lead_time,
-            "hard_body_radius_m": result.hard_body_radius,
-            "method": method.name,
-        }
-        Path(json_path).write_text(json.dumps(summary, indent=2))
-        print(f"\nwrote {json_path}")
-    return result

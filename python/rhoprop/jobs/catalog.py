@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, cast
+from typing import Any, Literal
 
 import numpy as np
 
-from ..density import DensityModel, Exponential, Msis
+from ..catalog.covariance import COVARIANCE_NAMES
+from ..catalog.elements import Catalog, load
+from ..catalog.run import MAX_SPAN, STATUSES, CatalogResult, propagate_catalog
 from ..io import (
     OutputFolder,
     command_line,
@@ -26,27 +29,10 @@ from ..options import Duplicates, TableFormat
 from ..propagation.methods import Ccsp, Method
 from ..spaceweather import SpaceWeather
 from ..time import to_datetime64
-from .covariance import COVARIANCE_NAMES
-from .elements import Catalog, load
-from .run import MAX_SPAN, STATUSES, CatalogResult, propagate_catalog
+from .models import model_by_name
+
 
 #: Density models by the names the command line accepts.
-MODEL_NAMES = ("2.1", "2.0", "00", "exponential")
-
-
-def model_by_name(name: str) -> DensityModel:
-    """An NRLMSIS version ("2.1", "2.0", "00") or the benchmark exponential atmosphere with
-    20 % relative sigma ("exponential")."""
-    if name == "exponential":
-        return Exponential.benchmark(0.2)
-    if name not in MODEL_NAMES:
-        raise ValueError(f"unknown model {name!r}; expected one of {', '.join(MODEL_NAMES)}")
-    # The last refreshed record (else the bundled one), with its predictions usable as
-    # forecast drivers (uncertainty growing with lead time, PredictedDriversWarning).
-    version = cast(Literal["2.1", "2.0", "00"], name)  # checked against MODEL_NAMES above
-    return Msis(version, space_weather=SpaceWeather.cached().with_forecast())
-
-
 def initial_covariance_option(value: str | None) -> Any:
     """The ``--initial-covariance`` value: None, a name (``object``, ``tle``, ``paper``)
     or the path of a text file with a 6x6 inertial covariance (m^2, m^2/s, m^2/s^2)."""
@@ -193,31 +179,8 @@ def default_start(cat: Catalog) -> np.datetime64:
     return np.datetime64(epochs[int(START_QUANTILE * (len(epochs) - 1))], "ns")
 
 
-def run_catalog_file(
-    file: str | Path,
-    end: str,
-    out: str | Path,
-    *,
-    method: Method = Ccsp(),
-    model: str = "2.1",
-    output_step: float = 3600.0,
-    scheduler: str | None = None,
-    skip_bad: bool = False,
-    overwrite: bool = False,
-    duplicates: Duplicates | Literal["newest"] = "newest",
-    command: str | None = None,
-    fit: bool | Literal["auto"] = "auto",
-    initial_covariance: str | None = None,
-    zonal_degree: int = 4,
-    drag_file: str | Path | None = None,
-    cd: float | None = None,
-    drag_sigma: str | float = "auto",
-    max_span_days: float | None = MAX_SPAN / 86400.0,
-    frame: str = "TEME",
-    start: str | None = None,
-    oem: bool = False,
-    table_format: TableFormat = "parquet",
-) -> list[Path]:
+@dataclass(frozen=True)
+class CatalogJob:
     """Propagates every element set of ``file`` to ``end`` (UTC ISO) and writes the
     catalog's ephemeris to ``out/ephemeris.parquet`` (:func:`~rhoprop.io.write_ephemeris`:
     every object's mean and covariance, one row per object and epoch), with ``oem`` also
@@ -248,76 +211,108 @@ def run_catalog_file(
     ``"parquet"`` (default) or ``"csv"``, the format of the ephemeris and the summary
     (``ephemeris.csv``, ``summary.csv``; the ephemeris's metadata then in
     ``ephemeris.meta.json``). Returns the paths written."""
-    table_format = format_argument(table_format)
-    covariance = initial_covariance_option(initial_covariance or "object")
-    sigma = _drag_sigma_option(drag_sigma)
-    drag = read_drag_file(drag_file, cd) if drag_file is not None else None
-    if drag_file is None and cd is not None:
-        raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
-    if scheduler:
-        need_dask()
-    atmosphere = model_by_name(model)
-    cat = _load(
-        file,
-        skip_bad,
-        fit=fit is True,
-        model=atmosphere if fit is True else None,
-        drag_parameters=drag,
-        zonal_degree=zonal_degree,
-        history="newest" if duplicates == "newest" else "each",
-    )
-    for where, message in cat.skipped:
-        print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
-    if not len(cat):
-        raise ValueError(f"{file}: no element set could be read ({len(cat.skipped)} skipped)")
-    kind: Duplicates = "error" if duplicates == "newest" else duplicates  # none left
-    oem_names(cat.objects, kind)  # repeated ids fail here, before any work
-    folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
-    client = connect(scheduler)
-    t0 = time.perf_counter()
-    result = propagate_catalog(
-        cat,
-        atmosphere,
-        end,
-        method=method,
-        client=client,
-        output_step=output_step,
-        errors="record" if skip_bad else "raise",
-        initial_covariance=covariance,
-        zonal_degree=zonal_degree,
-        drag_sigma=sigma,
-        fit="auto" if fit == "auto" else False,
-        max_span=max_span_option(max_span_days),
-        start=to_datetime64(start, "--start") if start else default_start(cat),
-    )
-    wall = time.perf_counter() - t0
-    ephemeris, meta, paths, summary = _write_catalog_tables(
-        result, folder, frame, table_format, kind if oem else None
-    )
-    manifest = folder.finish()
-    counts = {s: int(np.count_nonzero(result.status == s)) for s in STATUSES}
-    for obj, status, reason in zip(result.objects, result.status, result.reason, strict=True):
-        if status not in ("propagated", "non_gaussian"):  # those two: counted below
-            print(
-                f"{obj.norad_id} {sanitise(obj.name)}: {status}: {sanitise(reason, 300)}",
-                file=sys.stderr,
+
+    file: str | Path
+    end: str
+    out: str | Path
+    method: Method = Ccsp()
+    model: str = "2.1"
+    output_step: float = 3600.0
+    scheduler: str | None = None
+    skip_bad: bool = False
+    overwrite: bool = False
+    duplicates: Duplicates | Literal["newest"] = "newest"
+    command: str | None = None
+    fit: bool | Literal["auto"] = "auto"
+    initial_covariance: str | None = None
+    zonal_degree: int = 4
+    drag_file: str | Path | None = None
+    cd: float | None = None
+    drag_sigma: str | float = "auto"
+    max_span_days: float | None = MAX_SPAN / 86400.0
+    frame: str = "TEME"
+    start: str | None = None
+    oem: bool = False
+    table_format: TableFormat = "parquet"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "table_format", format_argument(self.table_format))
+
+    def run(self) -> list[Path]:
+        """Runs the job (see the class). Returns the paths written."""
+        covariance = initial_covariance_option(self.initial_covariance or "object")
+        sigma = _drag_sigma_option(self.drag_sigma)
+        drag = read_drag_file(self.drag_file, self.cd) if self.drag_file is not None else None
+        if self.drag_file is None and self.cd is not None:
+            raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
+        if self.scheduler:
+            need_dask()
+        atmosphere = model_by_name(self.model)
+        cat = _load(
+            self.file,
+            self.skip_bad,
+            fit=self.fit is True,
+            model=atmosphere if self.fit is True else None,
+            drag_parameters=drag,
+            zonal_degree=self.zonal_degree,
+            history="newest" if self.duplicates == "newest" else "each",
+        )
+        for where, message in cat.skipped:
+            print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
+        if not len(cat):
+            raise ValueError(
+                f"{self.file}: no element set could be read ({len(cat.skipped)} skipped)"
             )
-    print(
-        f"{len(cat)} objects ({len(cat.skipped)} skipped), {method.name}, "
-        f"{_iso(result.epochs[0])} to {_iso(result.epochs[-1])}: "
-        f"{wall:.1f} s ({len(cat) / wall:.1f} objects/s); "
-        + ", ".join(f"{v} {k}" for k, v in counts.items())
-    )
-    no_data = len(cat) - int(np.count_nonzero(np.asarray(result.valid).any(axis=1)))
-    print(
-        f"wrote {ephemeris}"
-        + (f" (its metadata in {meta[0].name})" if meta else "")
-        + (f", {len(paths)} OEM files to {folder.directory / 'oem'}" if oem else "")
-        + (f" ({no_data} objects without a valid epoch have no ephemeris)" if no_data else "")
-        + f", {summary} and {manifest}"
-    )
-    print(atlas_line())
-    return [ephemeris, *meta, *paths, summary, manifest]
+        kind: Duplicates = "error" if self.duplicates == "newest" else self.duplicates  # none left
+        oem_names(cat.objects, kind)  # repeated ids fail here, before any work
+        folder = OutputFolder(
+            self.out, command=self.command or command_line(), overwrite=self.overwrite
+        )
+        client = connect(self.scheduler)
+        t0 = time.perf_counter()
+        result = propagate_catalog(
+            cat,
+            atmosphere,
+            self.end,
+            method=self.method,
+            client=client,
+            output_step=self.output_step,
+            errors="record" if self.skip_bad else "raise",
+            initial_covariance=covariance,
+            zonal_degree=self.zonal_degree,
+            drag_sigma=sigma,
+            fit="auto" if self.fit == "auto" else False,
+            max_span=max_span_option(self.max_span_days),
+            start=to_datetime64(self.start, "--start") if self.start else default_start(cat),
+        )
+        wall = time.perf_counter() - t0
+        ephemeris, meta, paths, summary = _write_catalog_tables(
+            result, folder, self.frame, self.table_format, kind if self.oem else None
+        )
+        manifest = folder.finish()
+        counts = {s: int(np.count_nonzero(result.status == s)) for s in STATUSES}
+        for obj, status, reason in zip(result.objects, result.status, result.reason, strict=True):
+            if status not in ("propagated", "non_gaussian"):  # those two: counted below
+                print(
+                    f"{obj.norad_id} {sanitise(obj.name)}: {status}: {sanitise(reason, 300)}",
+                    file=sys.stderr,
+                )
+        print(
+            f"{len(cat)} objects ({len(cat.skipped)} skipped), {self.method.name}, "
+            f"{_iso(result.epochs[0])} to {_iso(result.epochs[-1])}: "
+            f"{wall:.1f} s ({len(cat) / wall:.1f} objects/s); "
+            + ", ".join(f"{v} {k}" for k, v in counts.items())
+        )
+        no_data = len(cat) - int(np.count_nonzero(np.asarray(result.valid).any(axis=1)))
+        print(
+            f"wrote {ephemeris}"
+            + (f" (its metadata in {meta[0].name})" if meta else "")
+            + (f", {len(paths)} OEM files to {folder.directory / 'oem'}" if self.oem else "")
+            + (f" ({no_data} objects without a valid epoch have no ephemeris)" if no_data else "")
+            + f", {summary} and {manifest}"
+        )
+        print(atlas_line())
+        return [ephemeris, *meta, *paths, summary, manifest]
 
 
 def _write_catalog_tables(
@@ -379,21 +374,8 @@ def atlas_line() -> str:
     )
 
 
-def run_reentry_file(
-    file: str | Path,
-    out: str | Path,
-    *,
-    horizon_days: float = 30.0,
-    members: int = 100,
-    model: str = "2.1",
-    fit: bool = True,
-    history: str = "auto",
-    drag_sigma: float | None = None,
-    skip_bad: bool = False,
-    overwrite: bool = False,
-    command: str | None = None,
-    table_format: TableFormat = "csv",
-) -> list[Path]:
+@dataclass(frozen=True)
+class ReentryJob:
     """Reentry windows (:func:`~rhoprop.catalog.reentry.reentry`) of every element set of
     ``file`` within ``horizon_days`` of its epoch: printed as a table and written to
     ``out/reentry.csv`` (one row per object: NORAD id, name, 2.5 %, median and 97.5 %
@@ -407,63 +389,85 @@ def run_reentry_file(
     as ISO text) or ``"parquet"`` (``out/reentry.parquet``, the columns of
     :meth:`~rhoprop.catalog.ReentryResult.table`: epochs typed, NaT beyond the horizon).
     Returns the paths written."""
-    import csv
-    import io
 
-    from .reentry_windows import reentry, resolved_history
+    file: str | Path
+    out: str | Path
+    horizon_days: float = 30.0
+    members: int = 100
+    model: str = "2.1"
+    fit: bool = True
+    history: str = "auto"
+    drag_sigma: float | None = None
+    skip_bad: bool = False
+    overwrite: bool = False
+    command: str | None = None
+    table_format: TableFormat = "csv"
 
-    table_format = format_argument(table_format)
-    atmosphere = model_by_name(model)
-    # reentry() itself predicts a history once (history="newest") or each element set
-    cat = _load(file, skip_bad, history="each")
-    for where, message in cat.skipped:
-        print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
-    if not len(cat):
-        raise ValueError(f"{file}: no element set could be read ({len(cat.skipped)} skipped)")
-    folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
-    t0 = time.perf_counter()
-    result = reentry(
-        cat,
-        atmosphere,
-        n=members,
-        duration=horizon_days * 86400.0,
-        drag_sigma=drag_sigma,
-        fit=fit,
-        history=history,
-    )
-    wall = time.perf_counter() - t0
-    rows = result.rows()
-    if table_format == "csv":
-        # The epochs as ISO strings ending in Z, "" beyond the horizon (as printed).
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]))
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({**row, "name": sanitise(row["name"])})
-        path = folder.write_text("reentry.csv", buffer.getvalue())
-    else:  # typed columns: datetime64 UTC epochs, NaT beyond the horizon
-        path = write_folder_table(result.table(), folder, "reentry.parquet", table_format)
-    manifest = folder.finish()
-    print(f"{'NORAD':>6} {'name':24} {'2.5 %':20} {'median':20} {'97.5 %':20} decayed  state")
-    for row in rows:
-        how = f"fitted ({row['fit_rms_m']:.0f} m RMS)" if row["fitted"] else "B*"
-        print(
-            f"{row['norad_id']:>6} {sanitise(row['name'], 24):24} "
-            f"{row['epoch_q025'] or '-':20} {row['epoch_median'] or '-':20} "
-            f"{row['epoch_q975'] or '-':20} {100 * row['decayed_fraction']:5.1f} %  {how}"
-        )
-        if row["fit_note"]:
-            print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
-        if row["element_sets"] > 1:
-            which = {"newest": "the newest predicted", "fit": "fitted together"}.get(
-                resolved_history(history, fit), "each predicted"
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "table_format", format_argument(self.table_format))
+
+    def run(self) -> list[Path]:
+        """Runs the job (see the class). Returns the paths written."""
+        import csv
+        import io
+
+        from ..catalog.reentry_windows import reentry, resolved_history
+
+        atmosphere = model_by_name(self.model)
+        # reentry() itself predicts a self.history once (history="newest") or each element set
+        cat = _load(self.file, self.skip_bad, history="each")
+        for where, message in cat.skipped:
+            print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
+        if not len(cat):
+            raise ValueError(
+                f"{self.file}: no element set could be read ({len(cat.skipped)} skipped)"
             )
-            print(f"       {row['element_sets']} element sets of this object: {which}")
-    sets = f" ({len(cat)} element sets)" if len(cat) != len(rows) else ""
-    print(
-        f"{len(rows)} objects{sets}, {result.members} members each, "
-        f"horizon {horizon_days:g} days: "
-        f"{wall:.1f} s; wrote {path} and {manifest}"
-    )
-    print(atlas_line())
-    return [path, manifest]
+        folder = OutputFolder(
+            self.out, command=self.command or command_line(), overwrite=self.overwrite
+        )
+        t0 = time.perf_counter()
+        result = reentry(
+            cat,
+            atmosphere,
+            n=self.members,
+            duration=self.horizon_days * 86400.0,
+            drag_sigma=self.drag_sigma,
+            fit=self.fit,
+            history=self.history,
+        )
+        wall = time.perf_counter() - t0
+        rows = result.rows()
+        if self.table_format == "csv":
+            # The epochs as ISO strings ending in Z, "" beyond the horizon (as printed).
+            buffer = io.StringIO()
+            writer = csv.DictWriter(buffer, fieldnames=list(rows[0]))
+            writer.writeheader()
+            for row in rows:
+                writer.writerow({**row, "name": sanitise(row["name"])})
+            path = folder.write_text("reentry.csv", buffer.getvalue())
+        else:  # typed columns: datetime64 UTC epochs, NaT beyond the horizon
+            path = write_folder_table(result.table(), folder, "reentry.parquet", self.table_format)
+        manifest = folder.finish()
+        print(f"{'NORAD':>6} {'name':24} {'2.5 %':20} {'median':20} {'97.5 %':20} decayed  state")
+        for row in rows:
+            how = f"fitted ({row['fit_rms_m']:.0f} m RMS)" if row["fitted"] else "B*"
+            print(
+                f"{row['norad_id']:>6} {sanitise(row['name'], 24):24} "
+                f"{row['epoch_q025'] or '-':20} {row['epoch_median'] or '-':20} "
+                f"{row['epoch_q975'] or '-':20} {100 * row['decayed_fraction']:5.1f} %  {how}"
+            )
+            if row["fit_note"]:
+                print(f"       {sanitise(row['fit_note'], 200)}", file=sys.stderr)
+            if row["element_sets"] > 1:
+                which = {"newest": "the newest predicted", "fit": "fitted together"}.get(
+                    resolved_history(self.history, self.fit), "each predicted"
+                )
+                print(f"       {row['element_sets']} element sets of this object: {which}")
+        sets = f" ({len(cat)} element sets)" if len(cat) != len(rows) else ""
+        print(
+            f"{len(rows)} objects{sets}, {result.members} members each, "
+            f"horizon {self.horizon_days:g} days: "
+            f"{wall:.1f} s; wrote {path} and {manifest}"
+        )
+        print(atlas_line())
+        return [path, manifest]

@@ -5,31 +5,32 @@ from __future__ import annotations
 
 import csv
 import sys
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from .. import frames
 from ..catalog.elements import Catalog, load
-from ..catalog.job import connect, default_start, max_span_option, need_dask
 from ..catalog.run import MAX_SPAN
+from ..conjunction.all_on_all import AllOnAllResult, screen_all
+from ..conjunction.cdm import CdmObject, ConjunctionMessage
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
 from ..io.tables import format_argument, table_name
 from ..options import TableFormat
 from ..progress import ProgressBar
 from ..time import to_datetime64
-from .all_on_all import AllOnAllResult, screen_all
-from .cdm import CdmObject, ConjunctionMessage
+from .catalog import connect, default_start, max_span_option, need_dask
+from .models import FAMILIES, models_by_name
 
 __all__ = [
     "CDM_MIN_PC",
+    "ScreenJob",
     "cdm_events",
     "default_start",
     "output_events",
     "read_radii",
-    "run_screen_file",
 ]
 
 #: Events printed by ``rhoprop screen`` (all are written).
@@ -143,7 +144,7 @@ def output_events(
     if not chosen:
         return written
     try:
-        from .cdm import cdm_text
+        from ..conjunction.cdm import cdm_text
 
         created = np.datetime64("now", "ns")
         (folder.directory / "cdm").mkdir(exist_ok=True)
@@ -176,27 +177,8 @@ def _catalog(file: str | Path, skip_bad: bool) -> Catalog:
     return cat
 
 
-def run_screen_file(
-    file: str | Path,
-    out: str | Path,
-    *,
-    end: str,
-    start: str | None = None,
-    distance: float = 5e3,
-    models: dict[str, Any],
-    pc: bool = True,
-    hard_body_radius: float | None = None,
-    radii_file: str | Path | None = None,
-    monte_carlo_events: int = 0,
-    members: int = 200,
-    skip_bad: bool = True,
-    overwrite: bool = False,
-    command: str | None = None,
-    max_span_days: float | None = MAX_SPAN / 86400.0,
-    cdm_min_pc: float | None = CDM_MIN_PC,
-    scheduler: str | None = None,
-    table_format: TableFormat = "parquet",
-) -> list[Path]:
+@dataclass(frozen=True)
+class ScreenJob:
     """Every element set of ``file`` screened against every other from ``start`` (default
     :func:`default_start`: the epoch 99 % of the element sets are not after) to ``end``
     (UTC ISO) within ``distance`` m through ``models`` (reference first); B* <= 0 objects
@@ -210,41 +192,67 @@ def run_screen_file(
     Dask scheduler address, every stage runs there (:func:`screen_all`'s ``client``; the
     same events). ``table_format``: ``"parquet"`` (default) or ``"csv"``, the format of
     the event table. Returns the paths written."""
-    table_format = format_argument(table_format)
-    if scheduler:
-        need_dask()
-    span = max_span_option(max_span_days)
-    _check_threshold(cdm_min_pc)  # before any work
-    cat = _catalog(file, skip_bad)
-    radii = read_radii(radii_file) if radii_file else None
-    t0 = to_datetime64(start, "start") if start else default_start(cat)
-    folder = OutputFolder(out, command=command or command_line(), overwrite=overwrite)
-    client = connect(scheduler)
-    try:
-        res = screen_all(
-            cat,
-            models,
-            start=t0,
-            end=to_datetime64(end, "end"),
-            distance=distance,
-            pc=pc,
-            hard_body_radius=hard_body_radius,
-            radii=radii,
-            monte_carlo_events=monte_carlo_events,
-            members=members,
-            errors="record" if skip_bad else "raise",
-            max_span=span,
-            client=client,
+
+    file: str | Path
+    out: str | Path
+    end: str
+    start: str | None = None
+    distance: float = 5e3
+    model: str = FAMILIES
+    pc: bool = True
+    hard_body_radius: float | None = None
+    radii_file: str | Path | None = None
+    monte_carlo_events: int = 0
+    members: int = 200
+    skip_bad: bool = True
+    overwrite: bool = False
+    command: str | None = None
+    max_span_days: float | None = MAX_SPAN / 86400.0
+    cdm_min_pc: float | None = CDM_MIN_PC
+    scheduler: str | None = None
+    table_format: TableFormat = "parquet"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "table_format", format_argument(self.table_format))
+
+    def run(self) -> list[Path]:
+        """Runs the job (see the class). Returns the paths written."""
+        if self.scheduler:
+            need_dask()
+        span = max_span_option(self.max_span_days)
+        _check_threshold(self.cdm_min_pc)  # before any work
+        cat = _catalog(self.file, self.skip_bad)
+        radii = read_radii(self.radii_file) if self.radii_file else None
+        t0 = to_datetime64(self.start, "start") if self.start else default_start(cat)
+        folder = OutputFolder(
+            self.out, command=self.command or command_line(), overwrite=self.overwrite
         )
-    finally:
-        if client is not None:
-            client.close()
-    written = output_events(res, folder, cdm_min_pc, table_format)
-    manifest = folder.finish()
-    _report(res)
-    rule = "none asked" if cdm_min_pc is None else f"events with Pc >= {cdm_min_pc:g}"
-    print(f"wrote {written[0]}, {len(written) - 1} CDM file(s) ({rule}) and {manifest}")
-    return [*written, manifest]
+        client = connect(self.scheduler)
+        try:
+            res = screen_all(
+                cat,
+                models_by_name(self.model),
+                start=t0,
+                end=to_datetime64(self.end, "end"),
+                distance=self.distance,
+                pc=self.pc,
+                hard_body_radius=self.hard_body_radius,
+                radii=radii,
+                monte_carlo_events=self.monte_carlo_events,
+                members=self.members,
+                errors="record" if self.skip_bad else "raise",
+                max_span=span,
+                client=client,
+            )
+        finally:
+            if client is not None:
+                client.close()
+        written = output_events(res, folder, self.cdm_min_pc, self.table_format)
+        manifest = folder.finish()
+        _report(res)
+        rule = "none asked" if self.cdm_min_pc is None else f"events with Pc >= {self.cdm_min_pc:g}"
+        print(f"wrote {written[0]}, {len(written) - 1} CDM file(s) ({rule}) and {manifest}")
+        return [*written, manifest]
 
 
 def _report(res: AllOnAllResult) -> None:
