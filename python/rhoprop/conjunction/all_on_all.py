@@ -33,19 +33,20 @@ from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
 from .approach import DEFAULT_FINE_STEP, event_columns
 from .event_mc import event_monte_carlo
-from .event_pc import check_coverage, check_options, event_probabilities
+from .event_pc import EventPcs, check_coverage, check_options, event_probabilities
 from .kernel import (
     CloseApproach,
+    EventPlan,
     ScreenedObject,
     TrackDynamics,
     Window,
     as_object,
     make_event,
+    models_for,
     radial_ranges,
     secondaries_list,
     window_span,
 )
-from .kernel import models_for as models_for
 from .screen_stages import DaskStages, Track, refine_slice, track_one
 from .screening import (
     DEFAULT_GRID_STEP,
@@ -364,14 +365,10 @@ def screen_all(
     run = _Run(objs, cfg, workers, errors, _reporter(progress), client)
     try:
         events, pairs, counts, notes, gone, chunks = run.screen(budget, timings)
+        plan = EventPlan(events, pairs, objs, models, ref_name, cfg)
         pcs = event_probabilities(
-            events,
-            pairs,
-            objs,
-            models,
-            ref_name,
+            plan,
             weights,
-            cfg,
             pc,
             hard_body_radius,
             radii,
@@ -384,9 +381,7 @@ def screen_all(
         run.close()
     skipped += gone
     counts["objects"] = given
-    mc_models, mc = _monte_carlo(
-        events, pairs, objs, models, pcs, n_mc if pc else 0, members, seed, cfg, timings
-    )
+    mc_models, mc = _monte_carlo(plan, pcs, n_mc if pc else 0, members, seed, timings)
     order = _by_pc(events, pcs.pc)
     return AllOnAllResult(
         events=[events[i] for i in order],
@@ -426,38 +421,18 @@ def _by_pc(events: list[CloseApproach], pc: np.ndarray) -> np.ndarray:
 
 
 def _monte_carlo(
-    events: list[CloseApproach],
-    pairs: list[tuple[int, int]],
-    objs: list[ScreenedObject],
-    models: dict[str, Any],
-    pcs: Any,
+    plan: EventPlan,
+    pcs: EventPcs,
     chosen: int,
     members: int,
     seed: int,
-    cfg: Window,
     timings: dict[str, float],
 ) -> tuple[np.ndarray, np.ndarray]:
     """The member Monte Carlo's Pc (per model, mixed) of the ``chosen`` events of
     largest mixture Pc (:mod:`.event_mc`), timed in ``timings["pc_monte_carlo"]``."""
     t0 = time.perf_counter()
-    top = sorted(range(len(events)), key=lambda i: -np.nan_to_num(pcs.pc[i], nan=-1.0))
-    out = event_monte_carlo(
-        events,
-        pairs,
-        objs,
-        models,
-        pcs.drag,
-        pcs.index,
-        pcs.weights,
-        pcs.hard_body_radius,
-        top[:chosen],
-        members,
-        _validate.seed(seed, limit=2**63),
-        cfg.degree,
-        cfg.floor,
-        cfg.dynamics.step,
-        pcs.spread,
-    )
+    top = sorted(range(len(plan.events)), key=lambda i: -np.nan_to_num(pcs.pc[i], nan=-1.0))
+    out = event_monte_carlo(plan, pcs, top[:chosen], members, _validate.seed(seed, limit=2**63))
     timings["pc_monte_carlo"] = time.perf_counter() - t0
     return out
 

@@ -11,8 +11,6 @@ seeded with ``seed + i`` for every model (common random numbers across models)."
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from ..catalog.objects import object_drag_sigma
@@ -20,33 +18,31 @@ from ..density.scaled import SigmaScaled
 from ..propagation import Spacecraft
 from ..propagation.montecarlo import monte_carlo
 from ..time import seconds_between
-from .kernel import CloseApproach, catalog_object
+from .event_pc import EventPcs
+from .kernel import EventPlan, catalog_object
 from .probability import pc_monte_carlo
 
 __all__ = ["event_monte_carlo"]
 
 
 def event_monte_carlo(
-    events: list[CloseApproach],
-    pairs: list[tuple[int, int]],
-    objs: list[Any],
-    models: dict[str, Any],
-    drag: dict[str, np.ndarray],
-    index: dict[int, int],
-    weights: np.ndarray,
-    hbr: np.ndarray,
-    chosen: list[int],
-    members: int,
-    seed: int,
-    degree: int,
-    floor: float,
-    step: float | None = None,
-    spread: float = 1.0,
+    plan: EventPlan, pcs: EventPcs, chosen: list[int], members: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Monte Carlo Pc per model (events, models) and the mixture's (events,) for the
-    events ``chosen`` (NaN elsewhere, and where an object's epoch is after TCA).
-    ``drag[k][index[i]]`` is object i's Cd*A/m for model k; each model's density sigma
-    times ``spread`` (the mixture's, as the CCSP Pc)."""
+    events ``chosen`` of ``plan`` (NaN elsewhere, and where an object's epoch is after
+    TCA), ``members`` members per object, object i seeded ``seed + i``. From ``pcs`` (the
+    CCSP Pc stage's result): each object's debiased Cd*A/m per model
+    (``pcs.drag[k][pcs.index[i]]``), the weights, the hard-body radii and the spread
+    (each model's density sigma times it, as in the CCSP Pc)."""
+    events, pairs, objs, models = plan.events, plan.pairs, plan.objects, plan.models
+    drag, index, weights, hbr, spread = (
+        pcs.drag,
+        pcs.index,
+        pcs.weights,
+        pcs.hard_body_radius,
+        pcs.spread,
+    )
+    degree, floor, step = plan.window.degree, plan.window.floor, plan.window.dynamics.step
     per_model = np.full((len(events), len(models)), np.nan)
     for e in chosen:
         ev, (i, j) = events[e], pairs[e]

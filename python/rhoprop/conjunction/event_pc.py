@@ -39,7 +39,7 @@ from ..propagation import Spacecraft
 from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
 from ..time import seconds_between
 from .encounter import encounter_check, pc_interval
-from .kernel import CloseApproach, Window, catalog_object
+from .kernel import CloseApproach, EventPlan, catalog_object
 from .probability import PcResult, pc_2d
 
 __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "RADII", "object_radius"]
@@ -239,13 +239,8 @@ def _rtn_moments(mean: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> tuple[An
 
 
 def event_probabilities(
-    events: list[CloseApproach],
-    pairs: list[tuple[int, int]],
-    objs: list[Any],
-    models: dict[str, Any],
-    ref: str,
+    plan: EventPlan,
     weights: Mapping[str, float] | None,
-    cfg: Window,
     enabled: bool,
     hbr: float | None,
     radii: Mapping[int, float] | None,
@@ -260,6 +255,8 @@ def event_probabilities(
     the objects done; an encounter too slow for the 2-D Pc gets
     :func:`~rhoprop.conjunction.encounter.pc_interval`, its draws seeded with ``seed``
     and the event's index."""
+    events, pairs, objs, models = plan.events, plan.pairs, plan.objects, plan.models
+    ref, cfg = plan.reference, plan.window
     w = _weights(models, weights)
     # The calibrated families with their calibrated weights mix as rp.ensemble does: each
     # model's density sigma times the calibrated spread.

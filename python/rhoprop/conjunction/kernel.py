@@ -617,3 +617,18 @@ def catalog_object(obj: ScreenedObject) -> CatalogObject:
         covariance=tle_covariance(obj.state),
         covariance_note="TLE accuracy of its regime (no covariance given)",
     )
+
+
+@dataclass(frozen=True)
+class EventPlan:
+    """What the Pc stages of a screen take of its events (one record instead of a dozen
+    arguments): the ``events``, each one's ``pairs`` of indices into ``objects``, the
+    density ``models`` (by name) with the ``reference`` model's name, and the screen's
+    ``window`` (its span, dynamics, floor and zonal degree)."""
+
+    events: list[CloseApproach]
+    pairs: list[tuple[int, int]]
+    objects: list[ScreenedObject]
+    models: dict[str, Any]  # density models as screen_all checked them
+    reference: str
+    window: Window
