@@ -274,16 +274,23 @@ def _family(model: object) -> str | None:
     return name if model.correction == expected else None
 
 
+def _calibrated_weights(models: Mapping[str, object]) -> np.ndarray | None:
+    """The calibrated weights of ``models`` (by log score on observed densities) when
+    every model is a calibrated family and they give a positive total, else None: the
+    one rule behind both :func:`default_weights` and :func:`default_spread`."""
+    families = [_family(m) for m in models.values()]
+    if not all(f is not None for f in families):
+        return None
+    w = np.array([calibrated.ENSEMBLE_WEIGHTS[str(f)] for f in families])
+    return w if w.sum() > 0 else None
+
+
 def default_weights(models: Mapping[str, object]) -> np.ndarray:
     """Mixture weights of ``models``: :data:`rhoprop.density.calibrated.ENSEMBLE_WEIGHTS`
     (by log score on observed orbit-averaged densities) when every model is a calibrated
     family and they give a positive total, else equal."""
-    families = [_family(m) for m in models.values()]
-    if all(f is not None for f in families):
-        w = np.array([calibrated.ENSEMBLE_WEIGHTS[f] for f in families if f is not None])
-        if w.sum() > 0:
-            return w
-    return np.ones(len(families))
+    w = _calibrated_weights(models)
+    return np.ones(len(models)) if w is None else w
 
 
 def default_spread(models: Mapping[str, object]) -> float:
@@ -292,11 +299,7 @@ def default_spread(models: Mapping[str, object]) -> float:
     the calibrated families' (fitted together with them by log score on observed
     densities: a pool of calibrated models is over-dispersed where their means differ),
     else 1."""
-    if all(_family(m) is not None for m in models.values()):
-        w = np.array([calibrated.ENSEMBLE_WEIGHTS[str(_family(m))] for m in models.values()])
-        if w.sum() > 0:
-            return calibrated.ENSEMBLE_SPREAD
-    return 1.0
+    return 1.0 if _calibrated_weights(models) is None else calibrated.ENSEMBLE_SPREAD
 
 
 def ensemble(
