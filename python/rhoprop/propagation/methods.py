@@ -169,23 +169,8 @@ class MonteCarlo:
         """:meth:`run` of each request in turn (object i with ``seed + i``, as in a
         catalog); a request that fails gives its exception in its place (KeyboardInterrupt
         stops the loop)."""
-        out: list[MonteCarloResult | CcspResult | Exception] = []
-        for i, req in enumerate(_requests(requests)):
-            member = replace(self, seed=self.seed + i)
-            try:
-                out.append(
-                    member.run(
-                        req.state,
-                        req.spacecraft,
-                        model,
-                        req.duration,
-                        initial_covariance=req.initial_covariance,
-                        dynamics=dynamics,
-                    )
-                )
-            except Exception as err:
-                out.append(err)
-        return out
+        reqs = _requests(requests)
+        return _one_by_one(lambda i: replace(self, seed=self.seed + i), reqs, model, dynamics)
 
 
 @dataclass(frozen=True)
@@ -275,24 +260,9 @@ class Ccsp:
             and dyn.rtol is None
         )
         if not batched:
-            out: list[MonteCarloResult | CcspResult | Exception] = []
-            for req in reqs:
-                try:
-                    out.append(
-                        self.run(
-                            req.state,
-                            req.spacecraft,
-                            model,
-                            req.duration,
-                            initial_covariance=req.initial_covariance,
-                            dynamics=dynamics,
-                        )
-                    )
-                except Exception as err:
-                    out.append(err)
-            return out
+            return _one_by_one(lambda _i: self, reqs, model, dynamics)
         assert self.update_interval is not None
-        out = []
+        out: list[MonteCarloResult | CcspResult | Exception] = []
         runs, where = [], []
         for k, req in enumerate(reqs):
             try:
@@ -340,6 +310,32 @@ def _requests(requests: Sequence[Request]) -> list[Request]:
             raise TypeError(
                 f"requests[{k}] must be a rhoprop.propagation.Request, got {type(req).__name__}"
             )
+    return out
+
+
+def _one_by_one(
+    method: Callable[[int], MonteCarlo | Ccsp],
+    requests: list[Request],
+    model: ModelLike,
+    dynamics: Dynamics | None,
+) -> list[MonteCarloResult | CcspResult | Exception]:
+    """Request i run alone by ``method(i)``; a request that fails gives its exception in
+    its place (KeyboardInterrupt stops the loop)."""
+    out: list[MonteCarloResult | CcspResult | Exception] = []
+    for i, req in enumerate(requests):
+        try:
+            out.append(
+                method(i).run(
+                    req.state,
+                    req.spacecraft,
+                    model,
+                    req.duration,
+                    initial_covariance=req.initial_covariance,
+                    dynamics=dynamics,
+                )
+            )
+        except Exception as err:
+            out.append(err)
     return out
 
 
