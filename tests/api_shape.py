@@ -1,4 +1,5 @@
-"""Counts of the API's shape: public parameters typed ``Any``, functions over
+"""Counts of the API's shape: public parameters typed ``Any``, public functions with
+more than 10 parameters, functions over
 80 lines (docstring excluded) in ``catalog/`` and ``conjunction/``, regular expressions
 applied to exception messages, and ``_core`` functions typed to return ``dict[str, Any]``.
 ``tests/test_architecture.py`` keeps them at their limits.
@@ -35,6 +36,25 @@ def any_parameters() -> list[str]:
                     if p.annotation is not None and ast.unparse(p.annotation) == "Any":
                         rel = path.relative_to(PACKAGE)
                         out.append(f"{rel}:{p.lineno} {node.name}({p.arg})")
+    return out
+
+
+def wide_functions(limit: int = 10) -> list[str]:
+    """``module function: n`` of every public function (methods included, ``self``
+    not counted) with more than ``limit`` parameters (``*args``/``**kwargs`` count one)."""
+    out = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if not _public_module(path):
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef) and not node.name.startswith("_"):
+                a = node.args
+                n = len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
+                n += (a.vararg is not None) + (a.kwarg is not None)
+                if a.args and a.args[0].arg in ("self", "cls"):
+                    n -= 1
+                if n > limit:
+                    out.append(f"{path.relative_to(PACKAGE)} {node.name}: {n}")
     return out
 
 
@@ -93,6 +113,7 @@ def dict_returns() -> list[str]:
 if __name__ == "__main__":
     for title, found in (
         ("public parameters typed Any", any_parameters()),
+        ("public functions with more than 10 parameters", wide_functions()),
         ("functions over 80 lines in catalog/ and conjunction/", long_functions()),
         ("regular expressions on exception messages", message_regexes()),
         ("_core functions returning dict[str, Any]", dict_returns()),
