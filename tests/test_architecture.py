@@ -254,12 +254,15 @@ def test_models_that_travel_pickle_themselves(model):
 
 
 def test_api_shape_stays_within_its_limits():
-    # The API shape's bars: at most 8 public parameters typed Any (each commented where a value
-    # is truly arbitrary), no function over 80 lines in catalog/ and conjunction/, no
+    # The API shape's bars: no public parameter typed Any but the documented few, no
+    # function over 80 lines in catalog/ and conjunction/, no
     # regular expression over an exception's message, no _core function returning a dict.
     import api_shape
 
-    assert len(api_shape.any_parameters()) <= 8, api_shape.any_parameters()
+    # Any only where a value is truly foreign: sgp4's Satrec (sat, sats) and a Dask
+    # client (distributed stays optional); 10 public parameters were Any at 734df99.
+    found = api_shape.any_parameters()
+    assert {f.split("(")[1].rstrip(")") for f in found} <= {"sat", "sats", "client"}, found
     # More than 10 parameters: 15 functions before the method objects, the jobs and the
     # event plans; never more again (the goal is none).
     assert len(api_shape.wide_functions()) <= 10, api_shape.wide_functions()

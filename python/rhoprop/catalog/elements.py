@@ -637,7 +637,7 @@ MAX_PRIOR_FACTOR = 10.0
 
 def fit_objects(
     objects: list[CatalogObject],
-    model: Any,
+    model: ModelLike,
     *,
     span: tuple[float, float] | None = None,
     threads: int | None = None,

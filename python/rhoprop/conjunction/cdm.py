@@ -14,12 +14,16 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from ..io.files import sanitise
+from ..options import HardBodyShape, NpdPolicy
 from ..time import to_datetime64
+
+if TYPE_CHECKING:
+    from .probability import PcResult
 
 #: Inertial reference frames a CDM may use for its states (all treated as one inertial
 #: frame: their differences are far below a Pc's sensitivity).
@@ -126,11 +130,14 @@ class ConjunctionMessage:
     def pc(
         self,
         hard_body_radius: float | None = None,
-        **options: Any,  # pc_2d's keywords, passed on as they are
-    ) -> Any:
-        """The 2-D Pc of the message's own Gaussians (covariances in each object's RTN);
-        ``hard_body_radius`` in m (default: the message's HBR comment); ``options`` go to
-        :func:`~rhoprop.conjunction.pc_2d`."""
+        *,
+        shape: HardBodyShape = "circle",
+        npd: NpdPolicy = "repair",
+    ) -> PcResult:
+        """The 2-D Pc (:func:`~rhoprop.conjunction.pc_2d`) of the message's own Gaussians
+        (covariances in each object's RTN); ``hard_body_radius`` in m (default: the
+        message's HBR comment); ``shape`` of the hard body and the ``npd`` policy as
+        :func:`~rhoprop.conjunction.pc_2d` takes them."""
         from .probability import pc_2d
 
         hbr = self._hbr(hard_body_radius)
@@ -144,7 +151,8 @@ class ConjunctionMessage:
             b.covariance,
             hbr,
             frame="rtn",
-            **options,
+            shape=shape,
+            npd=npd,
         )
 
     def _hbr(self, hard_body_radius: float | None) -> float:

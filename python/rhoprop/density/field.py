@@ -272,7 +272,7 @@ def check_grid_size(points: float, resolution: FieldResolution, what: str) -> No
 
 
 def sample_grid(
-    model: Any,
+    model: SampledModel,
     epochs: np.ndarray,
     left: np.ndarray,
     alt: np.ndarray,

@@ -69,7 +69,7 @@ def iso_utc(epoch: np.datetime64) -> str:
 def dataset_attrs(
     result_type: str,
     frame: str,
-    **extra: Any,  # further attributes of any JSON-able type
+    **extra: object,  # further attributes of any JSON-able type
 ) -> dict[str, Any]:
     """The attributes every rhoprop dataset carries (netCDF-safe: str, int, float) plus
     ``extra`` (None values left out)."""
