@@ -265,7 +265,7 @@ def test_api_shape_stays_within_its_limits():
     assert {f.split("(")[1].rstrip(")") for f in found} <= {"sat", "sats", "client"}, found
     # More than 10 parameters: 15 functions before the method objects, the jobs and the
     # event plans; never more again (the goal is none).
-    assert len(api_shape.wide_functions()) <= 10, api_shape.wide_functions()
+    assert len(api_shape.wide_functions()) <= 9, api_shape.wide_functions()
     assert not api_shape.long_functions(), api_shape.long_functions()
     assert not api_shape.message_regexes(), api_shape.message_regexes()
     assert not api_shape.dict_returns(), api_shape.dict_returns()

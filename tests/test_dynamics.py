@@ -260,3 +260,27 @@ def test_screens_and_closest_approach_propagate_with_the_integration_settings(mo
         ta, tb, model=MODEL, spacecraft=CRAFT, dynamics=rp.Dynamics(rtol=1e-11)
     )
     assert seen and set(seen) == {(None, None, 1e-11)}
+
+
+def test_closest_approach_takes_its_dynamics_whole_and_the_loose_keywords_warn():
+    # floor_altitude= and zonal_degree= beside dynamics= were a second path to the same
+    # settings; they are folded into dynamics with a DeprecationWarning, same numbers.
+    from test_screening import CRAFT, MODEL, encounter
+
+    from rhoprop.conjunction import closest_approach
+
+    s1, s2 = encounter()
+    dur = 2 * 3600.0
+    tr1 = rp.propagate(s1, CRAFT, MODEL, dur, output_step=60.0, zonal_degree=4)
+    tr2 = rp.propagate(s2, CRAFT, MODEL, dur, output_step=60.0, zonal_degree=4)
+    kw = dict(model=MODEL, spacecraft=CRAFT)
+    new = closest_approach(tr1, tr2, dynamics=rp.Dynamics(zonal_degree=4), **kw)
+    with pytest.warns(DeprecationWarning, match=r"closest_approach\(zonal_degree=\)"):
+        old = closest_approach(tr1, tr2, zonal_degree=4, **kw)
+    assert [e.tca for e in old] == [e.tca for e in new] and len(new) >= 1
+    assert [e.miss_distance for e in old] == [e.miss_distance for e in new]
+    with pytest.raises(TypeError, match="unexpected keyword argument 'zonal'"):
+        closest_approach(tr1, tr2, zonal=4, **kw)
+    with pytest.raises(TypeError, match="got dynamics= and zonal_degree="):
+        with pytest.warns(DeprecationWarning):
+            closest_approach(tr1, tr2, dynamics=rp.Dynamics(), zonal_degree=4, **kw)

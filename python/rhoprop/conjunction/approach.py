@@ -21,17 +21,20 @@ before this: radial ranges and a coarse-grid distance filter.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .. import _validate, frames
-from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import ModelLike
 from ..propagation import Spacecraft, Trajectory
-from ..propagation.dynamics import Dynamics, resolve
+from ..propagation.dynamics import Dynamics, LooseDynamics, deprecated_keywords
 from ..propagation.propagate import check_model
 from ..time import add_seconds, to_seconds
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
 from .kernel import (
     CloseApproach,
     SampledTrack,
@@ -113,9 +116,8 @@ def closest_approach(
     ids: tuple[int | None, int | None] = (None, None),
     max_distance: float | None = None,
     fine_step: float = DEFAULT_FINE_STEP,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    zonal_degree: int = 2,
     dynamics: Dynamics | None = None,
+    **deprecated: Unpack[LooseDynamics],
 ) -> list[CloseApproach]:
     """Close approaches of two trajectories: every local minimum of their distance over
     the absolute times both cover, with the time of closest approach refined to well under
@@ -141,12 +143,13 @@ def closest_approach(
         names, ids: names and ids of the two objects, carried into the events.
         max_distance: keep only approaches at most this far, m (None: all minima).
         fine_step: output step of the re-propagation, s (default 1 s).
-        floor_altitude, zonal_degree: as the trajectories were propagated with.
-        dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
-            ``zonal_degree`` at once (then leave those keywords at their defaults), and
-            the ``field_degree`` and ``third_bodies`` the trajectories were propagated
-            with (e.g. :meth:`~rhoprop.Dynamics.precise`), which the refinement uses
-            with its ``integrator``, ``step`` and ``rtol`` (as ``propagate`` does).
+        dynamics: the :class:`~rhoprop.Dynamics` the trajectories were propagated with
+            (its ``floor_altitude``, ``zonal_degree``, ``field_degree`` and
+            ``third_bodies``, e.g. :meth:`~rhoprop.Dynamics.precise`), which the
+            refinement uses with its ``integrator``, ``step`` and ``rtol`` (as
+            ``propagate`` does). Default: ``rp.Dynamics()``.
+        **deprecated: ``floor_altitude`` and ``zonal_degree`` as keywords of their own
+            (folded into ``dynamics`` with a DeprecationWarning; give them there).
 
     Returns:
         The :class:`CloseApproach` events sorted by TCA (object 1 = ``traj1``), states at
@@ -178,12 +181,8 @@ def closest_approach(
             )
     step = _validate.positive("fine_step", fine_step)
     limit = None if max_distance is None else _validate.positive("max_distance", max_distance)
-    settings = resolve(
-        "closest_approach",
-        dynamics,
-        Dynamics(),
-        floor_altitude=floor_altitude,
-        zonal_degree=zonal_degree,
+    settings = deprecated_keywords(
+        "closest_approach", dynamics, ("floor_altitude", "zonal_degree"), dict(deprecated)
     )
     floor = settings.floor_altitude
     ref = traj1.epoch

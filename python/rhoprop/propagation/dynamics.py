@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import TypedDict
 
 import numpy as np
 
@@ -217,6 +218,36 @@ def resolve_automatic(
     if integrators is not None:
         dyn.require_integrator(function, integrators)
     return dyn
+
+
+class LooseDynamics(TypedDict, total=False):
+    """Attributes of :class:`Dynamics` that some functions still take as keywords of their
+    own, deprecated (``**deprecated``): give them in ``dynamics=``."""
+
+    floor_altitude: float
+    zonal_degree: int
+
+
+def deprecated_keywords(
+    function: str, dynamics: Dynamics | None, names: tuple[str, ...], given: dict[str, object]
+) -> Dynamics:
+    """The :class:`Dynamics` of a call whose loose keywords ``names`` (some of the
+    attributes: ``floor_altitude``, ``zonal_degree``, ...) are deprecated in favour of
+    ``dynamics=``: those ``given`` are folded in with a DeprecationWarning (giving both is a
+    TypeError, as :func:`resolve`); a keyword not among ``names`` is a TypeError naming it,
+    as Python's own."""
+    wrong = sorted(set(given) - set(names))
+    if wrong:
+        raise TypeError(f"{function}() got an unexpected keyword argument {wrong[0]!r}")
+    if not given:
+        return Dynamics() if dynamics is None else resolve(function, dynamics, Dynamics())
+    warnings.warn(
+        f"{function}({', '.join(f'{k}=' for k in given)}) is deprecated; give them in "
+        f"dynamics=rp.Dynamics({', '.join(f'{k}=...' for k in given)})",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    return resolve(function, dynamics, Dynamics(), **given)
 
 
 def integrator_argument(function: str, method: str | None, integrator: str | None) -> str | None:
