@@ -10,6 +10,7 @@ Run:  python tests/api_shape.py
 from __future__ import annotations
 
 import ast
+from collections.abc import Iterator
 from pathlib import Path
 
 PACKAGE = Path(__file__).parents[1] / "python" / "rhoprop"
@@ -20,10 +21,9 @@ def _public_module(path: Path) -> bool:
     return not any(p.startswith("_") and p != "__init__.py" for p in parts)
 
 
-def any_parameters() -> list[str]:
-    """``module:line function(parameter)`` of every public function's parameter typed
-    ``Any`` (``*args``/``**kwargs`` included)."""
-    out = []
+def _public_parameters() -> Iterator[tuple[Path, ast.FunctionDef, list[ast.arg]]]:
+    """(module, function, its parameters with ``*args``/``**kwargs``) of every public
+    function of a public module."""
     for path in sorted(PACKAGE.rglob("*.py")):
         if not _public_module(path):
             continue
@@ -31,30 +31,28 @@ def any_parameters() -> list[str]:
             if isinstance(node, ast.FunctionDef) and not node.name.startswith("_"):
                 a = node.args
                 params = [*a.posonlyargs, *a.args, *a.kwonlyargs]
-                params += [p for p in (a.vararg, a.kwarg) if p is not None]
-                for p in params:
-                    if p.annotation is not None and ast.unparse(p.annotation) == "Any":
-                        rel = path.relative_to(PACKAGE)
-                        out.append(f"{rel}:{p.lineno} {node.name}({p.arg})")
-    return out
+                yield path, node, params + [p for p in (a.vararg, a.kwarg) if p is not None]
+
+
+def any_parameters() -> list[str]:
+    """``module:line function(parameter)`` of every public function's parameter typed
+    ``Any`` (``*args``/``**kwargs`` included)."""
+    return [
+        f"{path.relative_to(PACKAGE)}:{p.lineno} {node.name}({p.arg})"
+        for path, node, params in _public_parameters()
+        for p in params
+        if p.annotation is not None and ast.unparse(p.annotation) == "Any"
+    ]
 
 
 def wide_functions(limit: int = 10) -> list[str]:
     """``module function: n`` of every public function (methods included, ``self``
     not counted) with more than ``limit`` parameters (``*args``/``**kwargs`` count one)."""
     out = []
-    for path in sorted(PACKAGE.rglob("*.py")):
-        if not _public_module(path):
-            continue
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.FunctionDef) and not node.name.startswith("_"):
-                a = node.args
-                n = len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
-                n += (a.vararg is not None) + (a.kwarg is not None)
-                if a.args and a.args[0].arg in ("self", "cls"):
-                    n -= 1
-                if n > limit:
-                    out.append(f"{path.relative_to(PACKAGE)} {node.name}: {n}")
+    for path, node, params in _public_parameters():
+        n = len([p for p in params if p.arg not in ("self", "cls")])
+        if n > limit:
+            out.append(f"{path.relative_to(PACKAGE)} {node.name}: {n}")
     return out
 
 

@@ -358,7 +358,9 @@ def screen_all(
         check_coverage(models, earliest, latest)
     timings = dict.fromkeys(("field", "propagation", "sieve", "refinement"), 0.0)
     t0 = time.perf_counter()
-    atlases = models_for(models[ref_name], [o.state for o in objs], earliest, latest, cfg.floor)
+    atlases = models_for(
+        models[ref_name], [o.state for o in objs], earliest, latest, cfg.dynamics.floor_altitude
+    )
     for obj, own in zip(objs, atlases, strict=True):
         obj.model = own
     timings["field"] = time.perf_counter() - t0
@@ -654,7 +656,9 @@ class _Run:
         kept = [o for o, s in zip(self.objs, screened, strict=True) if s]
         counts["screened"] = len(kept)
         counts["pairs"] = len(kept) * (len(kept) - 1) // 2
-        counts["radial_pairs"] = radial_pair_count(kept, cfg.limit, cfg.degree) if kept else 0
+        counts["radial_pairs"] = (
+            radial_pair_count(kept, cfg.limit, cfg.dynamics.zonal_degree) if kept else 0
+        )
         counts["refined_pairs"] = len(refined)
         per_pair = [
             (pair, e) for pair in sorted(found) for e in _joined(_one_per_minimum(found[pair]))
@@ -774,7 +778,7 @@ class _Run:
             "vel": chunk.vel,
             "samples": chunk.samples,
         }
-        settings = (self.cfg.degree, self.cfg.limit, self.cfg.span)
+        settings = (self.cfg.dynamics.zonal_degree, self.cfg.limit, self.cfg.span)
         if self.dask is None:
             found = refine_slice(arrays, cand, *settings, tick if self.report else None)
         else:

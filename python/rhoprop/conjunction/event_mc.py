@@ -42,7 +42,8 @@ def event_monte_carlo(
         pcs.hard_body_radius,
         pcs.spread,
     )
-    degree, floor, step = plan.window.degree, plan.window.floor, plan.window.dynamics.step
+    dyn = plan.window.dynamics
+    degree, floor, step = dyn.zonal_degree, dyn.floor_altitude, dyn.step
     per_model = np.full((len(events), len(models)), np.nan)
     for e in chosen:
         ev, (i, j) = events[e], pairs[e]

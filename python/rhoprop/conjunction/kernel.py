@@ -539,16 +539,6 @@ class Window:
     fine: float
     dynamics: Dynamics
 
-    @property
-    def floor(self) -> float:
-        """The floor altitude, m."""
-        return self.dynamics.floor_altitude
-
-    @property
-    def degree(self) -> int:
-        """The zonal degree."""
-        return self.dynamics.zonal_degree
-
 
 def window_span(start: EpochLike, end: EpochLike) -> tuple[np.datetime64, np.datetime64, float]:
     """UTC start and end of a screening window and its span (s), checked: ValueError

@@ -334,7 +334,9 @@ def screen(
         t0 = time.perf_counter()
         earliest = min([w.start, *(o.state.epoch for o in survivors)])
         latest = max([w.end, *(o.state.epoch for o in survivors)])
-        models = models_for(model, [o.state for o in survivors], earliest, latest, w.floor)
+        models = models_for(
+            model, [o.state for o in survivors], earliest, latest, w.dynamics.floor_altitude
+        )
         for obj, own in zip(survivors, models, strict=True):
             obj.model = own
         timings["field"] = time.perf_counter() - t0
@@ -397,7 +399,11 @@ def _primary_track(
     """The dynamics of the screen, the primary's track over the window and its radial
     range (m, padded for sampling); DecayError if it decays before the end."""
     (prim.model,) = models_for(
-        model, [prim.state], min(w.start, prim.state.epoch), max(w.end, prim.state.epoch), w.floor
+        model,
+        [prim.state],
+        min(w.start, prim.state.epoch),
+        max(w.end, prim.state.epoch),
+        w.dynamics.floor_altitude,
     )
     dyn = TrackDynamics(w.start, True, w.dynamics, w.fine)
     ptrack, pdecay = coarse_track(prim, dyn, w.start, w.span, w.step)
@@ -420,7 +426,7 @@ def _radial_survivors(
     decay) comes within the distance of the primary's."""
     p_low, p_high = p_range
     perigee, apogee, a, p = radial_ranges(objs)
-    pad = ZONAL_PAD[2 if w.degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
+    pad = ZONAL_PAD[2 if w.dynamics.zonal_degree == 2 else 6] * J2 * R_EARTH**2 / p + RADIAL_MARGIN
     # Each object's span: from the earlier of its epoch and start to the later of it and end.
     epochs = np.array([o.state.epoch for o in objs], dtype="datetime64[ns]")
     offsets = to_seconds(epochs, w.start)

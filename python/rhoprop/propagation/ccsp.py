@@ -275,19 +275,13 @@ def _arguments(
     check_model(model)
     scheduled = np.empty(0)
     if update_times is None and update_interval is None:
-        span = span_of(duration, None, "update_times")
-        check_steps(span, DEFAULT_UPDATE_INTERVAL, "update_interval")
-        n = int(np.ceil(span / DEFAULT_UPDATE_INTERVAL * (1 - 1e-12)))
-        hourly = np.minimum(np.arange(1, n + 1) * DEFAULT_UPDATE_INTERVAL, span)
+        span, hourly = interval_times(duration, DEFAULT_UPDATE_INTERVAL)
         times, between = update_schedule(state, hourly, DEFAULT_UPDATE_INTERVAL)
         if between is not None:
             scheduled = between
     elif update_times is None:
-        span = span_of(duration, None, "update_times")
         dt = _validate.positive("update_interval", update_interval)
-        check_steps(span, dt, "update_interval")
-        n = int(np.ceil(span / dt * (1 - 1e-12)))
-        times = np.minimum(np.arange(1, n + 1) * dt, span)
+        span, times = interval_times(duration, dt)
     else:
         times = explicit_times("update_times", update_times, allow_zero=False)
         span = span_of(duration, times, "update_times")
@@ -325,6 +319,15 @@ def _arguments(
         slow=slow,
     )
     return args, span
+
+
+def interval_times(duration: DurationLike | None, interval: float) -> tuple[float, np.ndarray]:
+    """The span of ``duration`` (s, checked) and update times every ``interval`` s to its
+    end, the last at the end (a shorter last interval where they do not divide)."""
+    span = span_of(duration, None, "update_times")
+    check_steps(span, interval, "update_interval")
+    n = int(np.ceil(span / interval * (1 - 1e-12)))
+    return span, np.minimum(np.arange(1, n + 1) * interval, span)
 
 
 def scaling_argument(scaling: object, kappa: KappaProcess | None) -> tuple[float, float] | None:

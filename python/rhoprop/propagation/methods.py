@@ -16,7 +16,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, replace
 from typing import ClassVar, Protocol, TypeAlias, runtime_checkable
 
-import numpy as np
 import numpy.typing as npt
 
 from .. import _validate
@@ -24,7 +23,15 @@ from ..density.model import ModelLike
 from ..options import Perturbation
 from ..options import UncertaintyMethod as MethodName
 from ..time import DurationLike
-from .ccsp import CcspRun, Coordinates, ccsp, ccsp_many, coordinates_argument, scaling_argument
+from .ccsp import (
+    CcspRun,
+    Coordinates,
+    ccsp,
+    ccsp_many,
+    coordinates_argument,
+    interval_times,
+    scaling_argument,
+)
 from .dynamics import Dynamics
 from .kappa import KappaProcess
 from .montecarlo import drag_sigma_argument, members_argument, monte_carlo, threads_argument
@@ -266,7 +273,7 @@ class Ccsp:
         runs, where = [], []
         for k, req in enumerate(reqs):
             try:
-                times = _update_times(req.duration, self.update_interval)
+                _span, times = interval_times(req.duration, self.update_interval)
             except (ValueError, TypeError) as err:
                 out.append(err)
                 continue
@@ -337,17 +344,6 @@ def _one_by_one(
         except Exception as err:
             out.append(err)
     return out
-
-
-def _update_times(duration: DurationLike, interval: float) -> np.ndarray:
-    """Update times every ``interval`` s to the end of ``duration``, the last at the end."""
-    from .propagate import check_steps, span_of
-
-    span = span_of(duration, None, "update_times")
-    check_steps(span, interval, "update_interval")
-    n = int(np.ceil(span / interval * (1 - 1e-12)))
-    times: np.ndarray = np.minimum(np.arange(1, n + 1) * interval, span)
-    return times
 
 
 def method_argument(value: object, function: str, default: Method) -> Method:
