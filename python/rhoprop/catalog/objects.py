@@ -685,7 +685,7 @@ def _gaussian_status(
     said = (
         f"from {_iso(epochs[bad])} the Cartesian covariance does not hold the spread's "
         "shape: it curves along the orbit (its moments stay right; for the shape use "
-        "method='monte_carlo' or rhoprop.ccsp's element_covariance)"
+        "method=rp.MonteCarlo(...) or rhoprop.ccsp's element_covariance)"
     )
     return (
         Status.NON_GAUSSIAN if status is Status.PROPAGATED else status,
@@ -821,7 +821,7 @@ def _why_indefinite(state: OrbitState) -> str:
         return "near decay"
     return (
         "its spread outgrew one Gaussian, perigee above "
-        f"{NEAR_DECAY_PERIGEE / 1e3:.0f} km: method='monte_carlo' gives its shape"
+        f"{NEAR_DECAY_PERIGEE / 1e3:.0f} km: method=rp.MonteCarlo(...) gives its shape"
     )
 
 
