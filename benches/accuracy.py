@@ -40,7 +40,9 @@ def main() -> None:
     )[-1, :3]
     print(f"{'method':<8} {'setting':<14} {'RHS evals':>10} {'final error [m]':>16}")
     for method, options in SETTINGS:
-        tr = rp.propagate(state, craft, model, duration, integrator=method, **options)
+        tr = rp.propagate(
+            state, craft, model, duration, dynamics=rp.Dynamics(integrator=method), **options
+        )
         err = np.linalg.norm(tr.positions[-1] - ref)
         setting = ", ".join(f"{k}={v:g}" for k, v in options.items())
         print(f"{method:<8} {setting:<14} {tr.evaluations:>10} {err:>16.4f}")

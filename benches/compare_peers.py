@@ -54,7 +54,13 @@ def run_rhoprop(state, craft, n: int, repeat: int, ref: np.ndarray, method: str 
     # Cheapest steps meeting 1 m (benches/accuracy.py): RK8 at 240 s ends 0.88 m off,
     # Adams-Bashforth-Moulton at 80 s 0.34 m (90 s: 1.15 m).
     step = {"rk8": 240.0, "abm": 80.0}[method]
-    det = rp.propagate(state, craft, model, T_END, integrator=method, step=step)
+    det = rp.propagate(
+        state,
+        craft,
+        model,
+        T_END,
+        dynamics=rp.Dynamics(integrator=method, step=step),
+    )
     err = float(np.linalg.norm(det.positions[-1] - ref))
 
     def go():
@@ -68,8 +74,7 @@ def run_rhoprop(state, craft, n: int, repeat: int, ref: np.ndarray, method: str 
             seed=1,
             output_step=None,
             progress=False,
-            integrator=method,
-            step=step,
+            dynamics=rp.Dynamics(integrator=method, step=step),
         )
 
     wall, _ = median_wall(go, repeat)

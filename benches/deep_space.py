@@ -88,9 +88,7 @@ def deep_space_classes(
                 rp.Spacecraft(1.0, obj.drag_parameter),
                 rp.scenarios.benchmark_exponential(0.0),
                 span,
-                integrator="rk8",
-                step=600.0,
-                zonal_degree=4,
+                dynamics=rp.Dynamics(zonal_degree=4, integrator="rk8", step=600.0),
             )
             errors.append(np.linalg.norm(run.positions[-1] - np.array(r) * 1e3) / 1e3)
             sgp4.append(sgp4_error_km(entry[3], later))

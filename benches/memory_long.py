@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from machine import describe
+from rhoprop import MonteCarlo
 
 
 def peak_mb() -> float:
@@ -78,7 +79,12 @@ def reentry() -> str:
             best, lead = obj, float(days)
     assert best is not None
     t0 = time.perf_counter()
-    result = rp.catalog.reentry([best], rp.density.Msis("2.1"), duration=90 * 86400.0, n=100)
+    result = rp.catalog.reentry(
+        [best],
+        rp.density.Msis("2.1"),
+        duration=90 * 86400.0,
+        method=MonteCarlo(n=100),
+    )
     return (
         f"reentry: NORAD {best.norad_id}, SATCAT decay {lead:.0f} days after its epoch, "
         f"100 members over 90 days, {time.perf_counter() - t0:.0f} s, median decay "

@@ -189,7 +189,7 @@ def main() -> None:
         result = rp.catalog.reentry(
             with_history if setting == "history" else objects,
             model,
-            n=args.members,
+            method=rp.MonteCarlo(n=args.members),
             duration=args.horizon_days * 86400.0,
             **options[setting],
         )

@@ -92,7 +92,13 @@ def main() -> None:
         actual = float((day.astype("datetime64[ns]") + DAY / 2 - obj.state.epoch) / DAY)
         craft = rp.Spacecraft(1.0, use.drag_parameter)
         msis = rp.propagate(use.state, craft, model, SPAN).decayed_at
-        lower = rp.propagate(use.state, craft, model, SPAN, floor_altitude=80e3).decayed_at
+        lower = rp.propagate(
+            use.state,
+            craft,
+            model,
+            SPAN,
+            dynamics=rp.Dynamics(floor_altitude=80e3),
+        ).decayed_at
         sat = obj.satrec()
         profile = rp.propagate(
             use.state, rp.Spacecraft(1.0, obj.drag_parameter), sgp4_profile(_perigee_km(sat)), SPAN

@@ -147,7 +147,7 @@ def run_case(
     res = rp.catalog.reentry(
         objects,
         model,
-        n=args.members,
+        method=rp.MonteCarlo(n=args.members),
         duration=args.horizon_days * 86400.0,
         history="fit" if setting == "history" else "newest",
     )

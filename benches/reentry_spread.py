@@ -67,7 +67,11 @@ def main() -> None:
     model = rp.density.Msis("2.1")
     t0 = time.perf_counter()
     res = rp.catalog.reentry(
-        cat, model, n=args.members, duration=args.horizon_days * 86400.0, groups=4
+        cat,
+        model,
+        method=rp.MonteCarlo(n=args.members),
+        duration=args.horizon_days * 86400.0,
+        groups=4,
     )
     wall = time.perf_counter() - t0
     predicted = int(np.count_nonzero(~np.isnat(res.epoch_median)))

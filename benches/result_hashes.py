@@ -42,9 +42,25 @@ h(
 )
 mc = rp.monte_carlo(state, craft, exp, 86400.0, n=64, seed=3, progress=False, drag_sigma=0.1)
 h("monte_carlo exp", mc.positions, mc.velocities)
-mc = rp.monte_carlo(state, craft, msis, 86400.0, n=64, seed=3, progress=False, method="abm")
+mc = rp.monte_carlo(
+    state,
+    craft,
+    msis,
+    86400.0,
+    n=64,
+    seed=3,
+    progress=False,
+    dynamics=rp.Dynamics(integrator="abm"),
+)
 h("monte_carlo msis abm", mc.positions)
-c = rp.ccsp(state, craft, msis, 2 * 86400.0, drag_sigma=0.1, zonal_degree=3)
+c = rp.ccsp(
+    state,
+    craft,
+    msis,
+    2 * 86400.0,
+    drag_sigma=0.1,
+    dynamics=rp.Dynamics(zonal_degree=3),
+)
 h("ccsp msis", c.mean, c.covariance)
 cat = catalog.load(SAMPLE)
 r = catalog.propagate_catalog(

@@ -47,10 +47,13 @@ def any_parameters() -> list[str]:
 
 def wide_functions(limit: int = 10) -> list[str]:
     """``module function: n`` of every public function (methods included, ``self``
-    not counted) with more than ``limit`` parameters (``*args``/``**kwargs`` count one)."""
+    not counted) with more than ``limit`` parameters (``*args``/``**kwargs`` count one).
+    ``**deprecated``, which only carries the keywords kept one release after they moved
+    into a settings object (each with a DeprecationWarning), is not counted: it goes at
+    the next release."""
     out = []
     for path, node, params in _public_parameters():
-        n = len([p for p in params if p.arg not in ("self", "cls")])
+        n = len([p for p in params if p.arg not in ("self", "cls", "deprecated")])
         if n > limit:
             out.append(f"{path.relative_to(PACKAGE)} {node.name}: {n}")
     return out

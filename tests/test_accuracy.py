@@ -40,7 +40,7 @@ def test_default_settings_end_within_a_metre(
         benchmark_atmosphere,
         DURATION,
         output_step=21600.0,
-        integrator=method,
+        dynamics=rp.Dynamics(integrator=method),
     )
     np.testing.assert_array_equal(tr.times, TIMES)
     errors = np.linalg.norm(tr.positions - reference[:, :3], axis=1)
@@ -56,7 +56,11 @@ def test_rk8_step_accuracy_matches_published_figures(
     # 180 s and 0.9 m off at 240 s.
     def final_error(step: float) -> float:
         tr = rp.propagate(
-            paper_state, paper_craft, benchmark_atmosphere, DURATION, integrator="rk8", step=step
+            paper_state,
+            paper_craft,
+            benchmark_atmosphere,
+            DURATION,
+            dynamics=rp.Dynamics(integrator="rk8", step=step),
         )
         return float(np.linalg.norm(tr.positions[-1] - reference[-1, :3]))
 
@@ -68,7 +72,12 @@ def test_tight_adaptive_agrees_with_scipy_to_millimetres(
     reference, paper_state, paper_craft, benchmark_atmosphere
 ):
     tr = rp.propagate(
-        paper_state, paper_craft, benchmark_atmosphere, DURATION, output_step=21600.0, rtol=1e-13
+        paper_state,
+        paper_craft,
+        benchmark_atmosphere,
+        DURATION,
+        output_step=21600.0,
+        dynamics=rp.Dynamics(rtol=1e-13),
     )
     assert np.linalg.norm(tr.positions - reference[:, :3], axis=1).max() < 1e-3
 

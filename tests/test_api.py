@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 
 import numpy as np
 import pytest
 
 import rhoprop as rp
+
+#: The attributes of rp.Dynamics (given to a run whole, as dynamics=).
+DYNAMICS = {f.name for f in dataclasses.fields(rp.Dynamics)}
 
 
 def test_trajectory_shapes_and_epochs(paper_state, paper_craft, benchmark_atmosphere):
@@ -118,12 +122,15 @@ def test_bad_input_raises_clearly(kwargs, error, message):
                 break
         else:
             options[key] = value
+    dynamics = {k: options.pop(k) for k in list(options) if k in DYNAMICS}
     with pytest.raises(error, match=message):
+        # Inside the check: a bad integrator, step or rtol is refused by rp.Dynamics itself.
         rp.propagate(
             rp.OrbitState(**state),
             rp.Spacecraft(**craft),
             call["model"],
             call["duration"],
+            dynamics=rp.Dynamics(**dynamics),
             **options,
         )
 
@@ -164,6 +171,18 @@ def test_model_is_the_argument_name_and_density_a_deprecated_alias(
 def test_fixed_step_defaults_meet_one_metre(paper_state, paper_craft, benchmark_atmosphere, method):
     # The per-method default step (RK8 180 s, RK4 5 s) ends 3 days within 1 m of the
     # adaptive DOP853 at rtol 1e-12 (measured 0.06 m and 0.12 m).
-    tr = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 259200.0, integrator=method)
-    ref = rp.propagate(paper_state, paper_craft, benchmark_atmosphere, 259200.0, rtol=1e-12)
+    tr = rp.propagate(
+        paper_state,
+        paper_craft,
+        benchmark_atmosphere,
+        259200.0,
+        dynamics=rp.Dynamics(integrator=method),
+    )
+    ref = rp.propagate(
+        paper_state,
+        paper_craft,
+        benchmark_atmosphere,
+        259200.0,
+        dynamics=rp.Dynamics(rtol=1e-12),
+    )
     assert np.linalg.norm(tr.positions[-1] - ref.positions[-1]) < 1.0

@@ -234,7 +234,13 @@ def test_a_floor_below_the_atlas_is_refused_and_stages_below_the_bottom_read_it(
     model = rp.density.FromFunction(exp_function, name="analytic")  # lowest 50 km
     state = rp.scenarios.paper_state()
     with pytest.raises(ValueError, match="lowest altitude"):
-        rp.propagate(state, rp.Spacecraft(2.2, 0.01), model, 3600.0, floor_altitude=30e3)
+        rp.propagate(
+            state,
+            rp.Spacecraft(2.2, 0.01),
+            model,
+            3600.0,
+            dynamics=rp.Dynamics(floor_altitude=30e3),
+        )
     field = model.atlas.field("2002-09-07T00:00", "2002-09-07T06:00")
     t = np.full(2, np.datetime64("2002-09-07T03:00", "ns"))
     mean, _ = field.mean_sigma(

@@ -324,7 +324,7 @@ def test_monte_carlo_catalog_goes_through_the_public_wrapper():
         progress=False,
         drag_sigma=0.15,  # drag_sigma="auto": 0.15 for an object without a fit
         initial_covariance=obj.covariance,  # the catalog default, "object"
-        zonal_degree=4,  # the catalog default
+        dynamics=rp.Dynamics(zonal_degree=4),  # the catalog default
     )
     np.testing.assert_array_equal(r.covariance[2], mc.moments().covariance)
     np.testing.assert_array_equal(r.drag_sigma, 0.15)
@@ -645,7 +645,13 @@ def test_high_orbits_take_longer_steps_at_no_cost_in_accuracy(test_data):
         h = catalog_step(state)
         assert low < h < high
         runs = [
-            rp.propagate(state, craft, atmosphere, 7 * 86400.0, integrator="rk8", step=s)
+            rp.propagate(
+                state,
+                craft,
+                atmosphere,
+                7 * 86400.0,
+                dynamics=rp.Dynamics(integrator="rk8", step=s),
+            )
             for s in (h, 180.0)
         ]
         assert np.linalg.norm(runs[0].positions[-1] - runs[1].positions[-1]) < 0.01

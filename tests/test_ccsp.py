@@ -3,10 +3,15 @@ piecewise-constant kappa process of docs/conventions.md, "CCSP filter" when it i
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import rhoprop as rp
+
+#: The attributes of rp.Dynamics (given to a run whole, as dynamics=).
+DYNAMICS = {f.name for f in dataclasses.fields(rp.Dynamics)}
 
 DAY3 = 259200.0
 
@@ -38,7 +43,11 @@ def test_single_interval_is_the_unscented_transform(setup):
     ends = []
     for p in points:
         tr = rp.propagate(
-            rp.OrbitState(state.epoch, p[:3], p[3:]), craft, model, 21600.0, integrator="rk8"
+            rp.OrbitState(state.epoch, p[:3], p[3:]),
+            craft,
+            model,
+            21600.0,
+            dynamics=rp.Dynamics(integrator="rk8"),
         )
         ends.append(tr.states[-1])
     ends = np.array(ends)
@@ -137,8 +146,16 @@ def test_ccsp_equals_the_equivalent_kappa_process(uncertain):
 )
 def test_bad_input(setup, kwargs, match):
     state, craft = setup
+    dynamics = {k: kwargs.pop(k) for k in list(kwargs) if k in DYNAMICS}
     with pytest.raises(ValueError, match=match):
-        rp.ccsp(state, craft, rp.scenarios.benchmark_exponential(0.2), 7200.0, **kwargs)
+        rp.ccsp(
+            state,
+            craft,
+            rp.scenarios.benchmark_exponential(0.2),
+            7200.0,
+            dynamics=rp.Dynamics(**dynamics),
+            **kwargs,
+        )
 
 
 def test_step_default_meets_the_documented_accuracy(setup):
@@ -147,7 +164,13 @@ def test_step_default_meets_the_documented_accuracy(setup):
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.0)
     r = rp.ccsp(state, craft, model, DAY3)
-    reference = rp.propagate(state, craft, model, DAY3, rtol=1e-12).positions[-1]
+    reference = rp.propagate(
+        state,
+        craft,
+        model,
+        DAY3,
+        dynamics=rp.Dynamics(rtol=1e-12),
+    ).positions[-1]
     assert np.linalg.norm(r.mean[-1, :3] - reference) < 1.0
 
 

@@ -217,7 +217,13 @@ def test_shooting_finds_the_state_that_reaches_tca():
     for lead in (3600.0, 2 * 86400.0):
         start = state_before(target, craft, model, lead)
         assert start.epoch == msg.tca - np.timedelta64(int(lead), "s")
-        end = rp.propagate(start, craft, model, lead, integrator="dop853", rtol=1e-12)
+        end = rp.propagate(
+            start,
+            craft,
+            model,
+            lead,
+            dynamics=rp.Dynamics(integrator="dop853", rtol=1e-12),
+        )
         # The shooting used RK8 at 180 s; DOP853 at 1e-12 is the independent check.
         assert np.linalg.norm(end.positions[-1] - target.position) < 0.5
 

@@ -198,7 +198,7 @@ def test_catalog_monte_carlo_moments_use_the_survivors():
         progress=False,
         drag_sigma=0.15,  # the catalog's drag_sigma="auto" for an object without a fit
         initial_covariance=obj.covariance,  # the catalog's default, "object"
-        zonal_degree=4,  # the catalog's default
+        dynamics=rp.Dynamics(zonal_degree=4),  # the catalog's default
     )
     m = mc.moments()
     ok = m.count >= 2

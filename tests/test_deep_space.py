@@ -73,9 +73,7 @@ def test_fitted_deep_space_orbits_reach_their_next_element_sets(
             rp.Spacecraft(1.0, obj.drag_parameter),
             rp.scenarios.benchmark_exponential(0.0),
             span,
-            integrator="rk8",
-            step=600.0,
-            zonal_degree=4,
+            dynamics=rp.Dynamics(zonal_degree=4, integrator="rk8", step=600.0),
         )
         errors.append(np.linalg.norm(run.positions[-1] - np.array(r) * 1e3) / 1e3)
     assert np.median(errors) < limit_km, np.median(errors)

@@ -77,7 +77,14 @@ def _sensitivity(state, craft, model, days: int, eps: float = 1e-3) -> np.ndarra
 
     def run(f: float):
         c = rp.Spacecraft(craft.cd * f, craft.area_to_mass)
-        return rp.propagate(state, c, model, days * DAY, output_step=DAY, integrator="rk8")
+        return rp.propagate(
+            state,
+            c,
+            model,
+            days * DAY,
+            output_step=DAY,
+            dynamics=rp.Dynamics(integrator="rk8"),
+        )
 
     nominal, plus, minus = run(1.0), run(np.exp(eps)), run(np.exp(-eps))
     diff = (plus.positions[1:] - minus.positions[1:]) / (2 * eps)
@@ -199,7 +206,14 @@ def test_member_equals_a_deterministic_run_with_its_drag(setup):
     mc = rp.monte_carlo(state, craft, model, DAY, n=4, seed=2, drag_sigma=0.3, progress=False)
     for i in (0, 3):
         c = rp.Spacecraft(craft.cd * mc.drag_factors[i], craft.area_to_mass)
-        det = rp.propagate(state, c, model, DAY, output_step=3600.0, integrator="rk8")
+        det = rp.propagate(
+            state,
+            c,
+            model,
+            DAY,
+            output_step=3600.0,
+            dynamics=rp.Dynamics(integrator="rk8"),
+        )
         np.testing.assert_allclose(mc.positions[i], det.positions, rtol=0, atol=1e-6)
 
 
@@ -229,7 +243,7 @@ def test_catalog_drag_sigma_per_object():
         update_times=auto_update_times(auto, obj),
         drag_sigma=0.15,
         initial_covariance=obj.covariance,  # the catalog's default, "object"
-        zonal_degree=4,  # the catalog's default
+        dynamics=rp.Dynamics(zonal_degree=4),  # the catalog's default
     )
     np.testing.assert_array_equal(auto.covariance[1, -1], direct.covariance[-1])
     grow = [np.trace(r.covariance[:, -1, :3, :3], axis1=1, axis2=2) for r in (none, auto, fixed)]

@@ -24,10 +24,7 @@ def test_dynamics_gives_the_bits_of_the_keywords(setup):
         craft,
         model,
         86400.0,
-        integrator="rk8",
-        step=120.0,
-        zonal_degree=4,
-        floor_altitude=110e3,
+        dynamics=rp.Dynamics(zonal_degree=4, floor_altitude=110e3, integrator="rk8", step=120.0),
     )
     np.testing.assert_array_equal(a.positions, b.positions)
     mc = rp.monte_carlo(state, craft, model, 86400.0, n=8, dynamics=dyn, progress=False)
@@ -37,21 +34,27 @@ def test_dynamics_gives_the_bits_of_the_keywords(setup):
         model,
         86400.0,
         n=8,
-        integrator="rk8",
-        step=120.0,
-        zonal_degree=4,
-        floor_altitude=110e3,
+        dynamics=rp.Dynamics(zonal_degree=4, floor_altitude=110e3, integrator="rk8", step=120.0),
         progress=False,
     )
     np.testing.assert_array_equal(mc.positions, mk.positions)
     c1 = rp.ccsp(state, craft, model, 86400.0, dynamics=rp.Dynamics(zonal_degree=4))
-    c2 = rp.ccsp(state, craft, model, 86400.0, zonal_degree=4)
+    c2 = rp.ccsp(
+        state,
+        craft,
+        model,
+        86400.0,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
     np.testing.assert_array_equal(c1.covariance, c2.covariance)
 
 
 def test_dynamics_and_keywords_together_is_an_error(setup):
     state, craft, model = setup
-    with pytest.raises(TypeError, match=r"propagate\(\) got dynamics= and zonal_degree="):
+    with (
+        pytest.warns(DeprecationWarning, match=r"propagate\(zonal_degree=\) is deprecated"),
+        pytest.raises(TypeError, match=r"propagate\(\) got dynamics= and zonal_degree="),
+    ):
         rp.propagate(state, craft, model, 3600.0, dynamics=rp.Dynamics(), zonal_degree=3)
     with pytest.raises(TypeError, match=r"dynamics must be a rhoprop\.Dynamics"):
         rp.ccsp(state, craft, model, 3600.0, dynamics={"zonal_degree": 3})
@@ -67,7 +70,13 @@ def test_method_of_propagate_is_deprecated_for_integrator(setup):
     state, craft, model = setup
     with pytest.warns(DeprecationWarning, match=r"integrator="):
         old = rp.propagate(state, craft, model, 3600.0, method="rk8")
-    new = rp.propagate(state, craft, model, 3600.0, integrator="rk8")
+    new = rp.propagate(
+        state,
+        craft,
+        model,
+        3600.0,
+        dynamics=rp.Dynamics(integrator="rk8"),
+    )
     np.testing.assert_array_equal(old.positions, new.positions)
     with (
         pytest.warns(DeprecationWarning),
@@ -141,8 +150,7 @@ def test_catalog_runs_honour_the_integration_settings():
         update_times=updates,
         output_times=outputs,
         drag_sigma=0.15,  # "auto" without a fit
-        zonal_degree=4,
-        step=60.0,
+        dynamics=rp.Dynamics(zonal_degree=4, step=60.0),
     )
     at = np.searchsorted(alone.times, offsets)
     np.testing.assert_array_equal(fine.mean[1], alone.mean[at])
@@ -271,8 +279,22 @@ def test_closest_approach_takes_its_dynamics_whole_and_the_loose_keywords_warn()
 
     s1, s2 = encounter()
     dur = 2 * 3600.0
-    tr1 = rp.propagate(s1, CRAFT, MODEL, dur, output_step=60.0, zonal_degree=4)
-    tr2 = rp.propagate(s2, CRAFT, MODEL, dur, output_step=60.0, zonal_degree=4)
+    tr1 = rp.propagate(
+        s1,
+        CRAFT,
+        MODEL,
+        dur,
+        output_step=60.0,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
+    tr2 = rp.propagate(
+        s2,
+        CRAFT,
+        MODEL,
+        dur,
+        output_step=60.0,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
     kw = dict(model=MODEL, spacecraft=CRAFT)
     new = closest_approach(tr1, tr2, dynamics=rp.Dynamics(zonal_degree=4), **kw)
     with pytest.warns(DeprecationWarning, match=r"closest_approach\(zonal_degree=\)"):

@@ -88,7 +88,7 @@ def test_eccentric_catalog_run_follows_a_monte_carlo_of_its_initial_covariance()
     obj = CatalogObject("MOLNIYA-LIKE", 99001, state, 0.01, 0.0, "test", cov, "element model")
     atm = rp.scenarios.benchmark_exponential(0.2)
     end = EPOCH + np.timedelta64(3 * 86400, "s")
-    res = propagate_catalog([obj], atm, end, zonal_degree=4, progress=False)
+    res = propagate_catalog([obj], atm, end, dynamics=rp.Dynamics(zonal_degree=4), progress=False)
     assert list(res.status) == ["propagated"]
     mean = res.mean[0, -1]
     basis = rtn_basis(mean[:3], mean[3:])
@@ -100,7 +100,13 @@ def test_eccentric_catalog_run_follows_a_monte_carlo_of_its_initial_covariance()
     for _ in range(300):
         dx = chol @ rng.standard_normal(6)
         sample = rp.OrbitState(EPOCH, state.position + dx[:3], state.velocity + dx[3:])
-        tr = rp.propagate(sample, rp.Spacecraft(1.0, 0.01), atm, 3 * 86400.0, zonal_degree=4)
+        tr = rp.propagate(
+            sample,
+            rp.Spacecraft(1.0, 0.01),
+            atm,
+            3 * 86400.0,
+            dynamics=rp.Dynamics(zonal_degree=4),
+        )
         finals.append(tr.positions[-1])
     d = (np.array(finals) - np.mean(finals, axis=0)) @ basis.T
     mc_sigma = d.std(axis=0, ddof=1)

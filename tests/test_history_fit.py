@@ -79,7 +79,11 @@ def _along_track_errors(objects, truth, model):
         end = rp.time.from_jd(sat.jdsatepoch, sat.jdsatepochF)
         span = (end - obj.state.epoch) / np.timedelta64(1, "ns") / 1e9
         tr = rp.propagate(
-            obj.state, rp.Spacecraft(1.0, obj.drag_parameter), model, span, zonal_degree=4
+            obj.state,
+            rp.Spacecraft(1.0, obj.drag_parameter),
+            model,
+            span,
+            dynamics=rp.Dynamics(zonal_degree=4),
         )
         r, v = np.array(r) * 1e3, np.array(v) * 1e3
         out.append(abs((rtn_basis(r, v) @ (tr.positions[-1] - r))[1]))

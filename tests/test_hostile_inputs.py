@@ -193,7 +193,13 @@ def test_space_weather_argument_takes_a_path_or_says_what_it_takes(tmp_path):
 
 def test_messages_name_the_argument():
     with pytest.raises(ValueError, match=r"rtol = 1e-20 is outside \[1e-14, 0\.01\]"):
-        rp.propagate(PAPER, CRAFT, MODEL, 86400.0, rtol=1e-20)
+        rp.propagate(
+            PAPER,
+            CRAFT,
+            MODEL,
+            86400.0,
+            dynamics=rp.Dynamics(rtol=1e-20),
+        )
 
     def huge(t, lat, lon, alt):
         return lat * 0 + 1e300, lat * 0 + 1e299
@@ -384,7 +390,13 @@ def test_a_ten_year_run_is_not_too_many_steps_and_the_limit_names_the_run():
     out = rp.propagate(state, light, model, ten_years, output_step=365 * 86400.0)
     assert out.times[-1] == ten_years and np.isfinite(out.positions).all()
     with pytest.raises(rp.errors.TooManyStepsError, match="of a run to 86400") as err:
-        rp.propagate(state, light, model, 86400.0, step=1e-3)
+        rp.propagate(
+            state,
+            light,
+            model,
+            86400.0,
+            dynamics=rp.Dynamics(step=1e-3),
+        )
     assert err.value.end == 86400.0 and err.value.max_steps == 1_000_000
 
 
@@ -541,7 +553,13 @@ def test_reentry_of_any_settings_runs_or_is_refused(drag_sigma, n, groups):
     objs = rp.catalog.load(SAMPLE, fit=False).objects[:1]
     try:
         out = rp.catalog.reentry(
-            objs, MODEL, n=n, groups=groups, drag_sigma=drag_sigma, duration=3600.0, fit=False
+            objs,
+            MODEL,
+            method=rp.MonteCarlo(n=n),
+            groups=groups,
+            drag_sigma=drag_sigma,
+            duration=3600.0,
+            fit=False,
         )
     except GOOD:
         return

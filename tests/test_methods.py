@@ -5,6 +5,8 @@ the same numbers, and a setting a catalog cannot use is refused."""
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import warnings
 from pathlib import Path
 
@@ -43,7 +45,13 @@ def test_a_ccsp_object_runs_what_ccsp_runs():
     method = rp.Ccsp(update_interval=1800.0, drag_sigma=0.1)
     got = method.run(PAPER, CRAFT, MODEL, 7200.0, dynamics=rp.Dynamics(zonal_degree=4))
     want = rp.ccsp(
-        PAPER, CRAFT, MODEL, 7200.0, update_interval=1800.0, drag_sigma=0.1, zonal_degree=4
+        PAPER,
+        CRAFT,
+        MODEL,
+        7200.0,
+        update_interval=1800.0,
+        drag_sigma=0.1,
+        dynamics=rp.Dynamics(zonal_degree=4),
     )
     np.testing.assert_array_equal(got.covariance, want.covariance)
     assert isinstance(method, rp.propagation.UncertaintyPropagation)
@@ -149,3 +157,53 @@ def test_a_catalog_takes_its_method_whole():
 def test_a_catalog_refuses_a_method_setting_it_cannot_use(method, match):
     with pytest.raises(ValueError, match=match):
         catalog.propagate_catalog(catalog.load(SAMPLE), MODEL, END, method=method, progress=False)
+
+
+def test_the_functions_keywords_are_the_method_objects_fields():
+    # monte_carlo(**settings) and ccsp(**settings) spell the object's fields loose: the
+    # two lists cannot drift apart, and the defaults are the object's.
+    for cls, name in ((rp.MonteCarlo, "montecarlo"), (rp.Ccsp, "ccsp")):
+        module = importlib.import_module(f"rhoprop.propagation.{name}")
+        assert set(module.SETTINGS) == {f.name for f in dataclasses.fields(cls)}
+    default = rp.monte_carlo(PAPER, CRAFT, MODEL, 7200.0, n=4, progress=False)
+    same = rp.MonteCarlo(n=4, progress=False).run(PAPER, CRAFT, MODEL, 7200.0)
+    np.testing.assert_array_equal(default.positions, same.positions)
+    assert len(default.times) == len(same.times) == 3  # output_step 3600 s, both
+    with pytest.raises(TypeError, match="unexpected keyword argument 'members'"):
+        rp.monte_carlo(PAPER, CRAFT, MODEL, 7200.0, members=4)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'seed'"):
+        rp.ccsp(PAPER, CRAFT, MODEL, 7200.0, seed=4)
+
+
+def test_loose_dynamics_keywords_warn_and_give_the_same_numbers():
+    dyn = rp.Dynamics(zonal_degree=4, integrator="rk4", step=30.0)
+    new = rp.monte_carlo(PAPER, CRAFT, MODEL, 3600.0, n=4, progress=False, dynamics=dyn)
+    with pytest.warns(DeprecationWarning, match=r"monte_carlo\(zonal_degree=, integrator="):
+        old = rp.monte_carlo(
+            PAPER, CRAFT, MODEL, 3600.0, n=4, progress=False, zonal_degree=4,
+            integrator="rk4", step=30.0,
+        )  # fmt: skip
+    np.testing.assert_array_equal(old.positions, new.positions)
+    new = rp.ccsp(PAPER, CRAFT, MODEL, 3600.0, dynamics=rp.Dynamics(floor_altitude=100e3))
+    with pytest.warns(DeprecationWarning, match=r"ccsp\(floor_altitude=\)"):
+        old = rp.ccsp(PAPER, CRAFT, MODEL, 3600.0, floor_altitude=100e3)
+    np.testing.assert_array_equal(old.covariance, new.covariance)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'rtol'"):
+        rp.ccsp(PAPER, CRAFT, MODEL, 3600.0, rtol=1e-9)  # the filter never took it
+
+
+def test_reentry_takes_its_monte_carlo_whole():
+    state = rp.OrbitState("2002-09-07T00:00:00", [6378137.0 + 200e3, 0.0, 0.0], [0.0, 7784.0, 0.0])
+    obj = catalog.CatalogObject("LOW 1", 1, state, 0.02, 1e-3, "test")
+    air = rp.scenarios.benchmark_exponential(0.2)
+    new = catalog.reentry(
+        [obj], air, method=rp.MonteCarlo(n=8, seed=3), duration=10 * 86400.0, groups=2, fit=False
+    )
+    with pytest.warns(DeprecationWarning, match=r"reentry\(n=, seed=\) is deprecated"):
+        old = catalog.reentry([obj], air, n=8, seed=3, duration=10 * 86400.0, groups=2, fit=False)
+    np.testing.assert_array_equal(old.decay_times, new.decay_times)
+    assert np.isfinite(new.decay_times).all()  # every member came down: a real check
+    with pytest.raises(TypeError, match=r"method must be rp\.MonteCarlo"):
+        catalog.reentry([obj], air, method=rp.Ccsp())
+    with pytest.raises(ValueError, match=r"does not use rp\.MonteCarlo's drag_sigma"):
+        catalog.reentry([obj], air, method=rp.MonteCarlo(drag_sigma=0.1))

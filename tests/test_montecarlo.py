@@ -5,10 +5,15 @@ sample sizes."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import rhoprop as rp
+
+#: The attributes of rp.Dynamics (given to a run whole, as dynamics=).
+DYNAMICS = {f.name for f in dataclasses.fields(rp.Dynamics)}
 
 DAY3 = 259200.0
 
@@ -151,7 +156,13 @@ def test_initial_covariance_matches_linearised_propagation(setup):
 
     def end(y):
         s = rp.OrbitState(state.epoch, y[:3], y[3:])
-        tr = rp.propagate(s, craft, model, 3600.0, integrator="rk8")
+        tr = rp.propagate(
+            s,
+            craft,
+            model,
+            3600.0,
+            dynamics=rp.Dynamics(integrator="rk8"),
+        )
         return tr.states[-1]
 
     y0 = state.state
@@ -220,10 +231,23 @@ def test_step_default_per_method(setup, method, step):
     state, craft = setup
     model = rp.scenarios.benchmark_exponential(0.0)
     r = rp.monte_carlo(
-        state, craft, model, DAY3, n=2, output_step=None, integrator=method, progress=False
+        state,
+        craft,
+        model,
+        DAY3,
+        n=2,
+        output_step=None,
+        dynamics=rp.Dynamics(integrator=method),
+        progress=False,
     )
     assert r.step == step
-    reference = rp.propagate(state, craft, model, DAY3, rtol=1e-12).positions[-1]
+    reference = rp.propagate(
+        state,
+        craft,
+        model,
+        DAY3,
+        dynamics=rp.Dynamics(rtol=1e-12),
+    ).positions[-1]
     assert np.linalg.norm(r.positions[0, -1] - reference) < 1.0
     assert np.linalg.norm(r.mean_orbit.positions[-1] - reference) < 1.0
 
@@ -273,9 +297,16 @@ def test_output_times_equal_the_output_grid(setup):
 )
 def test_bad_input(setup, kwargs, match):
     state, craft = setup
+    dynamics = {k: kwargs.pop(k) for k in list(kwargs) if k in DYNAMICS}
     with pytest.raises(ValueError, match=match):
         rp.monte_carlo(
-            state, craft, rp.scenarios.benchmark_exponential(0.2), 7200.0, progress=False, **kwargs
+            state,
+            craft,
+            rp.scenarios.benchmark_exponential(0.2),
+            7200.0,
+            progress=False,
+            dynamics=rp.Dynamics(**dynamics),
+            **kwargs,
         )
 
 
@@ -306,11 +337,23 @@ def test_multistep_members_equal_the_deterministic_multistep_orbit(paper_state, 
         kappa=rp.kappa.Constant(),
         output_step=None,
         progress=False,
-        integrator="abm",
+        dynamics=rp.Dynamics(integrator="abm"),
     )
-    det = rp.propagate(paper_state, paper_craft, atmosphere, 3 * 86400.0, integrator="abm")
+    det = rp.propagate(
+        paper_state,
+        paper_craft,
+        atmosphere,
+        3 * 86400.0,
+        dynamics=rp.Dynamics(integrator="abm"),
+    )
     np.testing.assert_array_equal(mc.positions[:, -1], np.broadcast_to(det.positions[-1], (5, 3)))
-    rk8 = rp.propagate(paper_state, paper_craft, atmosphere, 3 * 86400.0, integrator="rk8")
+    rk8 = rp.propagate(
+        paper_state,
+        paper_craft,
+        atmosphere,
+        3 * 86400.0,
+        dynamics=rp.Dynamics(integrator="rk8"),
+    )
     assert np.linalg.norm(det.positions[-1] - rk8.positions[-1]) < 1.0
     # Two evaluations a step (80 s) after the RK8 start: about half RK8's (180 s) count.
     assert det.evaluations < 0.6 * rk8.evaluations
@@ -340,7 +383,15 @@ def test_kappa_paths_do_not_depend_on_the_integrator(setup, process):
     model = rp.scenarios.benchmark_exponential(0.2)
     runs = {
         m: rp.monte_carlo(
-            state, craft, model, DAY3, n=8, kappa=process, integrator=m, seed=5, progress=False
+            state,
+            craft,
+            model,
+            DAY3,
+            n=8,
+            kappa=process,
+            dynamics=rp.Dynamics(integrator=m),
+            seed=5,
+            progress=False,
         ).positions
         for m in ("rk8", "rk4", "abm")
     }

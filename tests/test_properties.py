@@ -394,7 +394,12 @@ def test_propagate_exponential(rv, duration, method, step, output_step, rel_sigm
     model = rp.density.Exponential(3.725e-12, 400e3, 58.515e3, rel_sigma=rel_sigma)
     tr = contract(
         lambda: rp.propagate(
-            state, craft, model, duration, output_step=output_step, integrator=method, step=step
+            state,
+            craft,
+            model,
+            duration,
+            output_step=output_step,
+            dynamics=rp.Dynamics(integrator=method, step=step),
         )
     )
     if tr is not None:
@@ -419,10 +424,7 @@ def test_propagate_odd_arguments(duration, method, step, output_step, rtol, floo
             model,
             duration,
             output_step=output_step,
-            integrator=method,
-            step=step,
-            rtol=rtol,
-            floor_altitude=floor,
+            dynamics=rp.Dynamics(floor_altitude=floor, integrator=method, step=step, rtol=rtol),
         )
     )
     if tr is not None:
@@ -467,10 +469,9 @@ def test_monte_carlo_exponential(rv, duration, n, kappa, step, output_step, pert
             duration,
             n=n,
             kappa=kappa,
-            step=step,
+            dynamics=rp.Dynamics(integrator=method, step=step),
             output_step=output_step,
             perturbation=perturbation,
-            integrator=method,
             progress=False,
             threads=2,
         )
@@ -506,7 +507,7 @@ def test_monte_carlo_odd_arguments(
             duration,
             n=n,
             kappa=kappa,
-            step=step,
+            dynamics=rp.Dynamics(step=step),
             output_step=output_step,
             perturbation=perturbation,
             progress=False,

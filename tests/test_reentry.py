@@ -33,7 +33,9 @@ def atmosphere():
 
 def test_windows_are_ordered_and_count_every_member(atmosphere):
     objs = [_low(1, 200e3), _low(2, 220e3)]
-    r = catalog.reentry(objs, atmosphere, n=20, duration=dt.timedelta(days=10), groups=4)
+    r = catalog.reentry(
+        objs, atmosphere, method=rp.MonteCarlo(n=20), duration=dt.timedelta(days=10), groups=4
+    )
     assert r.members == 20 and r.groups == 4
     assert (r.decayed_fraction == 1).all()
     assert (r.epoch_q025 <= r.epoch_median).all() and (r.epoch_median <= r.epoch_q975).all()
@@ -71,14 +73,20 @@ def test_windows_are_ordered_and_count_every_member(atmosphere):
 
 def test_drag_uncertainty_widens_the_window(atmosphere):
     obj = [_low(1, 200e3)]
-    narrow = catalog.reentry(obj, atmosphere, n=20, duration=10 * 86400.0, groups=1)
-    wide = catalog.reentry(obj, atmosphere, n=20, duration=10 * 86400.0, drag_sigma=0.4)
+    narrow = catalog.reentry(
+        obj, atmosphere, method=rp.MonteCarlo(n=20), duration=10 * 86400.0, groups=1
+    )
+    wide = catalog.reentry(
+        obj, atmosphere, method=rp.MonteCarlo(n=20), duration=10 * 86400.0, drag_sigma=0.4
+    )
     span = lambda r: r.epoch_q975[0] - r.epoch_q025[0]  # noqa: E731
     assert span(wide) > span(narrow)
 
 
 def test_nat_beyond_the_horizon(atmosphere):
-    r = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, duration=3600.0, groups=2)
+    r = catalog.reentry(
+        [_low(1, 200e3)], atmosphere, method=rp.MonteCarlo(n=10), duration=3600.0, groups=2
+    )
     assert r.decayed_fraction[0] == 0
     assert np.isnat(r.epoch_median[0]) and np.isnat(r.epoch_q025[0]) and np.isnat(r.epoch_q975[0])
     assert np.isinf(r.decay_times).all() and np.isnat(r.window(0.5)[0][0])
@@ -111,16 +119,22 @@ def test_reentry_fits_element_sets_by_default(atmosphere):
     (benches/reentry.py). The default fits every object that carries an element set and
     says so; an object without one keeps its values, with the reason."""
     objs = catalog.load(SAMPLE).objects[:2]
-    fitted = catalog.reentry([*objs, _low(9, 200e3)], atmosphere, n=10, duration=86400.0)
+    fitted = catalog.reentry(
+        [*objs, _low(9, 200e3)], atmosphere, method=rp.MonteCarlo(n=10), duration=86400.0
+    )
     assert list(fitted.fitted) == [True, True, False]
     assert np.isfinite(fitted.fit_rms[:2]).all() and np.isnan(fitted.fit_rms[2])
     assert fitted.fit_note[:2] == ["", ""] and "no element set" in fitted.fit_note[2]
     # The windows use the fitted Cd*A/m (not B*'s).
     assert fitted.drag_parameter[0] == fitted.objects[0].fit.drag_parameter
-    plain = catalog.reentry(objs, atmosphere, n=10, duration=86400.0, fit=False)
+    plain = catalog.reentry(
+        objs, atmosphere, method=rp.MonteCarlo(n=10), duration=86400.0, fit=False
+    )
     assert not plain.fitted.any() and plain.drag_parameter[0] == objs[0].drag_parameter
     # An object fitted before (load(fit=True)) is used as it is.
-    again = catalog.reentry(fitted.objects[:1], atmosphere, n=10, duration=86400.0)
+    again = catalog.reentry(
+        fitted.objects[:1], atmosphere, method=rp.MonteCarlo(n=10), duration=86400.0
+    )
     assert again.objects[0] is fitted.objects[0]
     with pytest.raises(TypeError, match="fit must be True or False"):
         catalog.reentry(objs, atmosphere, fit="yes")
@@ -128,8 +142,12 @@ def test_reentry_fits_element_sets_by_default(atmosphere):
 
 def test_horizon_is_the_deprecated_name_of_duration(atmosphere):
     with pytest.warns(DeprecationWarning, match="duration="):
-        old = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, horizon=3600.0, groups=2)
-    new = catalog.reentry([_low(1, 200e3)], atmosphere, n=10, duration=3600.0, groups=2)
+        old = catalog.reentry(
+            [_low(1, 200e3)], atmosphere, method=rp.MonteCarlo(n=10), horizon=3600.0, groups=2
+        )
+    new = catalog.reentry(
+        [_low(1, 200e3)], atmosphere, method=rp.MonteCarlo(n=10), duration=3600.0, groups=2
+    )
     assert old.horizon == new.horizon == 3600.0
 
 
@@ -157,7 +175,7 @@ def test_catalog_and_reentry_runs_of_one_element_set_agree(test_data):
         picked += lines[k - 1 : k + 2]
     objs = _load_text("\n".join(picked))
     model = rp.density.Msis("2.1")
-    windows = catalog.reentry(objs, model, n=100, duration=6 * 86400.0)
+    windows = catalog.reentry(objs, model, method=rp.MonteCarlo(n=100), duration=6 * 86400.0)
     assert not windows.fitted.any()  # both fits fail (diverge), as measured
     for k, obj in enumerate(windows.objects):
         end = add_seconds(obj.state.epoch, 6 * 86400.0)
@@ -186,11 +204,18 @@ def test_several_element_sets_of_one_object_are_one_history(atmosphere):
     )
     later = dataclasses.replace(obj, state=later_state)
     other = catalog.load(SAMPLE).objects[1]
-    one = catalog.reentry([obj, later, other], atmosphere, n=10, duration=86400.0, fit=False)
+    one = catalog.reentry(
+        [obj, later, other], atmosphere, method=rp.MonteCarlo(n=10), duration=86400.0, fit=False
+    )
     assert [o.norad_id for o in one.objects] == [obj.norad_id, other.norad_id]
     assert one.objects[0] is later and list(one.element_sets) == [2, 1]
     each = catalog.reentry(
-        [obj, later, other], atmosphere, n=10, duration=86400.0, fit=False, history="each"
+        [obj, later, other],
+        atmosphere,
+        method=rp.MonteCarlo(n=10),
+        duration=86400.0,
+        fit=False,
+        history="each",
     )
     assert len(each.objects) == 3 and list(each.element_sets) == [2, 2, 1]
     with pytest.raises(ValueError, match="history must be 'auto', 'newest', 'fit' or 'each'"):
@@ -205,7 +230,9 @@ def test_the_object_whose_time_nodes_aborted_runs(test_data):
     lines = (test_data / "reentry" / "reentry_tles_2022_2023.txt").read_text().splitlines()
     k = next(i for i, line in enumerate(lines) if line.startswith("1 50038"))
     objs = _load_text("\n".join(lines[k - 1 : k + 2]))
-    r = catalog.reentry(objs, rp.density.Msis("2.1"), n=10, duration=6 * 86400.0, groups=2)
+    r = catalog.reentry(
+        objs, rp.density.Msis("2.1"), method=rp.MonteCarlo(n=10), duration=6 * 86400.0, groups=2
+    )
     assert r.decayed_fraction[0] == 1.0 and not np.isnat(r.epoch_q975[0])
 
 
@@ -223,12 +250,20 @@ def test_the_density_error_is_held_over_each_members_run(atmosphere):
     obj = _low(1, 200e3)
     span = 20 * 86400.0
     assert catalog.reentry_windows.DEFAULT_KAPPA == rp.kappa.Constant()
-    wide = catalog.reentry([obj], atmosphere, n=4000, duration=span, groups=1, seed=1)
+    wide = catalog.reentry(
+        [obj],
+        atmosphere,
+        method=rp.MonteCarlo(n=4000, seed=1),
+        duration=span,
+        groups=1,
+    )
     still = rp.scenarios.benchmark_exponential(0.0)
 
     def decay(factor: float) -> np.datetime64:
         scaled = dataclasses.replace(obj, drag_parameter=obj.drag_parameter * factor)
-        return catalog.reentry([scaled], still, n=2, duration=span, groups=1).epoch_median[0]
+        return catalog.reentry(
+            [scaled], still, method=rp.MonteCarlo(n=2), duration=span, groups=1
+        ).epoch_median[0]
 
     def days(t: np.datetime64) -> float:
         return float((t - obj.state.epoch) / np.timedelta64(1, "s")) / 86400.0
@@ -238,7 +273,11 @@ def test_the_density_error_is_held_over_each_members_run(atmosphere):
     assert days(wide.epoch_median[0]) == pytest.approx(days(decay(1.0)), rel=0.05)
     # The paper's 18-minute process averages the same 20 % away over the 4-day decay.
     brief = catalog.reentry(
-        [obj], atmosphere, n=400, duration=span, groups=1, seed=1, kappa=rp.kappa.GaussMarkov()
+        [obj],
+        atmosphere,
+        method=rp.MonteCarlo(n=400, kappa=rp.kappa.GaussMarkov(), seed=1),
+        duration=span,
+        groups=1,
     )
     assert days(brief.epoch_q975[0]) < 1.1 * days(decay(1.0))
 
@@ -266,13 +305,19 @@ def test_history_fit_takes_the_earlier_element_sets(test_data):
         and np.linalg.norm(o.state.position) < 6378137.0 + 330e3
         and o.bstar > 1e-4
     )
-    r = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2, history="fit")
+    r = catalog.reentry(
+        list(pair), model, method=rp.MonteCarlo(n=10), duration=86400.0, groups=2, history="fit"
+    )
     assert len(r.objects) == 1 and r.element_sets[0] == 2 and r.fitted[0]
     assert len(r.objects[0].fit.element_sets) == 2
-    alone = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2, history="newest")
+    alone = catalog.reentry(
+        list(pair), model, method=rp.MonteCarlo(n=10), duration=86400.0, groups=2, history="newest"
+    )
     assert len(alone.objects[0].fit.element_sets) == 1
     # The default ("auto") fits the history when it fits at all.
-    default = catalog.reentry(list(pair), model, n=10, duration=86400.0, groups=2)
+    default = catalog.reentry(
+        list(pair), model, method=rp.MonteCarlo(n=10), duration=86400.0, groups=2
+    )
     assert len(default.objects[0].fit.element_sets) == 2
     np.testing.assert_array_equal(default.decay_times, r.decay_times)
     with pytest.raises(ValueError, match="needs fit=True"):
@@ -310,7 +355,9 @@ def test_default_windows_hold_real_decays(test_data):
     fits (73 % / 69 % with the LEO radial TLE accuracy at 200 / 300 m)."""
     objs, days = _earliest_within_a_week(test_data)
     assert len(objs) == 49
-    r = catalog.reentry(objs, rp.density.Msis("2.1"), n=200, duration=12 * 86400.0)
+    r = catalog.reentry(
+        objs, rp.density.Msis("2.1"), method=rp.MonteCarlo(n=200), duration=12 * 86400.0
+    )
     day = np.array([days[o.norad_id] for o in r.objects])
     top = np.where(np.isnat(r.epoch_q975), np.datetime64("2100-01-01", "ns"), r.epoch_q975)
     held = (r.epoch_q025 < day + np.timedelta64(1, "D")) & (top >= day)
@@ -332,4 +379,9 @@ def test_an_element_set_below_the_floor_is_named():
     state = rp.OrbitState("2024-03-01T00:00", [r, 0.0, 0.0], [0.0, 0.6 * v, 0.8 * v])
     low = CatalogObject("DOWN 99077", 99077, state, 0.02, 1e-3, "test")
     with pytest.raises(ValueError, match=r"object 99077 \(DOWN 99077, test\).*floor"):
-        rp.catalog.reentry([low], rp.density.Exponential.benchmark(), duration=86400.0, n=10)
+        rp.catalog.reentry(
+            [low],
+            rp.density.Exponential.benchmark(),
+            duration=86400.0,
+            method=rp.MonteCarlo(n=10),
+        )

@@ -75,8 +75,21 @@ def _brute_force(objs, start, end, distance):
     for o in objs:
         craft = rp.Spacecraft(1.0, o.drag_parameter)
         lead = seconds_between(o.state.epoch, start)
-        s0 = rp.propagate(o.state, craft, MODEL, lead, rtol=1e-12, zonal_degree=4).state_at(-1)
-        tr = rp.propagate(s0, craft, MODEL, span, output_step=1.0, rtol=1e-12, zonal_degree=4)
+        s0 = rp.propagate(
+            o.state,
+            craft,
+            MODEL,
+            lead,
+            dynamics=rp.Dynamics(zonal_degree=4, rtol=1e-12),
+        ).state_at(-1)
+        tr = rp.propagate(
+            s0,
+            craft,
+            MODEL,
+            span,
+            output_step=1.0,
+            dynamics=rp.Dynamics(zonal_degree=4, rtol=1e-12),
+        )
         assert tr.decayed_at is None
         pos.append(tr.positions)
         vel.append(tr.velocities)
@@ -432,13 +445,25 @@ def _twin(obj: catalog.CatalogObject, start: np.datetime64) -> tuple:
     to an epoch of start + 1 h."""
     craft = rp.Spacecraft(1.0, obj.drag_parameter)
     lead = seconds_between(obj.state.epoch, start) + 5400.0
-    at = rp.propagate(obj.state, craft, MODEL, lead, zonal_degree=4)
+    at = rp.propagate(
+        obj.state,
+        craft,
+        MODEL,
+        lead,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
     r, v = at.positions[-1], at.velocities[-1]
     u = r / np.linalg.norm(r)
     c, s = np.cos(np.radians(2.0)), np.sin(np.radians(2.0))
     v2 = v * c + np.cross(u, v) * s + u * (u @ v) * (1 - c)
     flipped = rp.OrbitState(add_seconds(start, 5400.0), r + 30.0 * u, -v2, at.frame)
-    back = rp.propagate(flipped, rp.Spacecraft(1.0, 1e-12), MODEL, 1800.0, zonal_degree=4)
+    back = rp.propagate(
+        flipped,
+        rp.Spacecraft(1.0, 1e-12),
+        MODEL,
+        1800.0,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
     epoch = add_seconds(start, 3600.0)
     state = rp.OrbitState(epoch, back.positions[-1], -back.velocities[-1], back.frame)
     return (state, craft, "TWIN")

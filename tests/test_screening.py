@@ -71,12 +71,31 @@ def brute_force_tca(s1, s2, guess, half=120.0):
     end = add_seconds(guess, half)
 
     def grid(state, start, span, step):
-        tr = rp.propagate(state, CRAFT, MODEL, span, output_step=step, rtol=1e-12)
+        tr = rp.propagate(
+            state,
+            CRAFT,
+            MODEL,
+            span,
+            output_step=step,
+            dynamics=rp.Dynamics(rtol=1e-12),
+        )
         return tr
 
     t0 = add_seconds(guess, -half)
-    a0 = rp.propagate(s1, CRAFT, MODEL, seconds_between(s1.epoch, t0), rtol=1e-12).state_at(-1)
-    b0 = rp.propagate(s2, CRAFT, MODEL, seconds_between(s2.epoch, t0), rtol=1e-12).state_at(-1)
+    a0 = rp.propagate(
+        s1,
+        CRAFT,
+        MODEL,
+        seconds_between(s1.epoch, t0),
+        dynamics=rp.Dynamics(rtol=1e-12),
+    ).state_at(-1)
+    b0 = rp.propagate(
+        s2,
+        CRAFT,
+        MODEL,
+        seconds_between(s2.epoch, t0),
+        dynamics=rp.Dynamics(rtol=1e-12),
+    ).state_at(-1)
     span = seconds_between(t0, end)
     ta, tb = grid(a0, t0, span, 1.0), grid(b0, t0, span, 1.0)
     d = np.linalg.norm(tb.positions - ta.positions, axis=1)
@@ -125,8 +144,22 @@ def test_closest_approach_matches_known_encounter_and_brute_force():
 
 def test_closest_approach_interpolation_only_for_fine_outputs():
     s1, s2 = encounter(lead1=600.0, lead2=600.0)
-    tr1 = rp.propagate(s1, CRAFT, MODEL, 1200.0, output_step=5.0, rtol=1e-12)
-    tr2 = rp.propagate(s2, CRAFT, MODEL, 1200.0, output_step=5.0, rtol=1e-12)
+    tr1 = rp.propagate(
+        s1,
+        CRAFT,
+        MODEL,
+        1200.0,
+        output_step=5.0,
+        dynamics=rp.Dynamics(rtol=1e-12),
+    )
+    tr2 = rp.propagate(
+        s2,
+        CRAFT,
+        MODEL,
+        1200.0,
+        output_step=5.0,
+        dynamics=rp.Dynamics(rtol=1e-12),
+    )
     (event,) = closest_approach(tr1, tr2, max_distance=1e3)
     ref_tca, ref_miss = brute_force_tca(s1, s2, T, half=30.0)
     assert abs((event.tca - ref_tca) / np.timedelta64(1, "ns")) * 1e-9 < 1e-3
@@ -454,8 +487,21 @@ def _brute_force_screen(prim, objs, start, end, distance):
     def track(obj):
         craft = rp.Spacecraft(1.0, obj.drag_parameter)
         lead = seconds_between(obj.state.epoch, start)
-        s0 = rp.propagate(obj.state, craft, MODEL, lead, rtol=1e-12).state_at(-1)
-        return rp.propagate(s0, craft, MODEL, span, output_step=1.0, rtol=1e-12)
+        s0 = rp.propagate(
+            obj.state,
+            craft,
+            MODEL,
+            lead,
+            dynamics=rp.Dynamics(rtol=1e-12),
+        ).state_at(-1)
+        return rp.propagate(
+            s0,
+            craft,
+            MODEL,
+            span,
+            output_step=1.0,
+            dynamics=rp.Dynamics(rtol=1e-12),
+        )
 
     p = track(prim)
     found = []

@@ -93,9 +93,7 @@ def rhoprop_end(degree: int, state: rp.OrbitState, span: float) -> np.ndarray:
         rp.scenarios.paper_spacecraft(),
         no_drag(),
         span,
-        integrator="dop853",
-        rtol=1e-12,
-        zonal_degree=degree,
+        dynamics=rp.Dynamics(zonal_degree=degree, integrator="dop853", rtol=1e-12),
     )
     return tr.positions[-1]
 
@@ -132,20 +130,39 @@ def test_monte_carlo_and_ccsp_honour_the_degree():
     model = rp.scenarios.benchmark_exponential(0.1)
     span = 6 * 3600.0
     prop = {
-        n: rp.propagate(state, craft, model, span, integrator="rk8", zonal_degree=n).positions[-1]
+        n: rp.propagate(
+            state,
+            craft,
+            model,
+            span,
+            dynamics=rp.Dynamics(zonal_degree=n, integrator="rk8"),
+        ).positions[-1]
         for n in (2, 6)
     }
     assert np.linalg.norm(prop[6] - prop[2]) > 100.0
     for n in (2, 6):
         mc = rp.monte_carlo(
-            state, craft, model, span, n=4, output_step=None, progress=False, zonal_degree=n
+            state,
+            craft,
+            model,
+            span,
+            n=4,
+            output_step=None,
+            progress=False,
+            dynamics=rp.Dynamics(zonal_degree=n),
         )
         assert np.linalg.norm(mc.mean_orbit.positions[-1] - prop[n]) < 1e-3
         # Members differ from the mean orbit by density only (metres in 6 h), not by the
         # kilometre-scale J3..J6 effect.
         members = mc.positions[:, -1]
         assert np.linalg.norm(members - prop[n], axis=1).max() < 100.0
-        cc = rp.ccsp(state, craft, model, span, zonal_degree=n)
+        cc = rp.ccsp(
+            state,
+            craft,
+            model,
+            span,
+            dynamics=rp.Dynamics(zonal_degree=n),
+        )
         assert np.linalg.norm(cc.moments().mean[-1, :3] - prop[n]) < 100.0
 
 
@@ -155,11 +172,31 @@ def test_degree_out_of_range_is_a_clear_value_error(bad):
     craft = rp.scenarios.paper_spacecraft()
     model = rp.scenarios.benchmark_exponential()
     with pytest.raises(ValueError, match=r"zonal_degree = .* 2 \(J2 only"):
-        rp.propagate(state, craft, model, 600.0, zonal_degree=bad)
+        rp.propagate(
+            state,
+            craft,
+            model,
+            600.0,
+            dynamics=rp.Dynamics(zonal_degree=bad),
+        )
     with pytest.raises(ValueError, match="zonal_degree"):
-        rp.ccsp(state, craft, model, 3600.0, zonal_degree=bad)
+        rp.ccsp(
+            state,
+            craft,
+            model,
+            3600.0,
+            dynamics=rp.Dynamics(zonal_degree=bad),
+        )
     with pytest.raises(ValueError, match="zonal_degree"):
-        rp.monte_carlo(state, craft, model, 3600.0, n=2, progress=False, zonal_degree=bad)
+        rp.monte_carlo(
+            state,
+            craft,
+            model,
+            3600.0,
+            n=2,
+            progress=False,
+            dynamics=rp.Dynamics(zonal_degree=bad),
+        )
 
 
 def test_degree_must_be_an_integer():
@@ -170,7 +207,7 @@ def test_degree_must_be_an_integer():
             rp.scenarios.paper_spacecraft(),
             rp.scenarios.benchmark_exponential(),
             600.0,
-            zonal_degree=6.0,  # type: ignore[arg-type]
+            dynamics=rp.Dynamics(zonal_degree=6.0),  # type: ignore[arg-type]
         )
 
 
@@ -200,14 +237,23 @@ def test_the_catalog_passes_the_degree_on():
     model = rp.scenarios.benchmark_exponential(0.2)
     runs = {
         n: catalog.propagate_catalog(
-            sample, model, "2002-09-07T06:00:00", progress=False, zonal_degree=n
+            sample,
+            model,
+            "2002-09-07T06:00:00",
+            progress=False,
+            dynamics=rp.Dynamics(zonal_degree=n),
         )
         for n in (2, 6)
     }
     shift = np.linalg.norm(runs[6].mean[:, -1, :3] - runs[2].mean[:, -1, :3], axis=1)
     assert (shift > 10.0).all(), shift
     with pytest.raises(ValueError, match="zonal_degree"):
-        catalog.propagate_catalog(sample, model, "2002-09-07T06:00:00", zonal_degree=9)
+        catalog.propagate_catalog(
+            sample,
+            model,
+            "2002-09-07T06:00:00",
+            dynamics=rp.Dynamics(zonal_degree=9),
+        )
 
 
 def test_the_cli_offers_the_degree(capsys, monkeypatch):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import enum
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -210,6 +210,16 @@ class RunSettings:
     #: Factor on the model's density sigma in the CCSP and the Monte Carlo (1: the
     #: model's own; a mixture's calibrated spread, :class:`~rhoprop.density.SigmaScaled`).
     sigma_scale: float = 1.0
+
+    @property
+    def dynamics(self) -> Dynamics:
+        """The :class:`~rhoprop.Dynamics` every object's run integrates with."""
+        return Dynamics(
+            zonal_degree=self.zonal_degree,
+            floor_altitude=self.floor_altitude,
+            integrator=self.integrator,
+            step=self.step,
+        )
 
     @classmethod
     def checked(
@@ -642,10 +652,7 @@ def _propagate_object(
             threads=cfg.method.threads,
             max_memory=cfg.method.max_memory,
             progress=check,
-            floor_altitude=cfg.floor_altitude,
-            zonal_degree=cfg.zonal_degree,
-            integrator=cfg.integrator,
-            step=cfg.step,
+            dynamics=cfg.dynamics,
         )
         decay = mc.mean_orbit.decayed_at
         m = mc.moments()
@@ -718,10 +725,7 @@ def _mean_orbit(
             craft,
             model,
             float(offsets[-1]),
-            integrator="rk8",
-            step=step,
-            floor_altitude=cfg.floor_altitude,
-            zonal_degree=cfg.zonal_degree,
+            dynamics=replace(cfg.dynamics, integrator="rk8", step=step),
         )
     decay = done["mean"].decayed_at
     return decay, int(np.count_nonzero(offsets < (np.inf if decay is None else decay)))
@@ -859,10 +863,8 @@ def _ccsp_outputs(
             update_times=updates,
             output_times=outputs,
             initial_covariance=initial,
-            floor_altitude=cfg.floor_altitude,
-            zonal_degree=cfg.zonal_degree,
+            dynamics=replace(cfg.dynamics, step=step),
             drag_sigma=drag_sigma,
-            step=step,
             kappa=cfg.kappa,
         )
 

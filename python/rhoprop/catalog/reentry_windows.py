@@ -24,19 +24,19 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
 from .. import _validate
-from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import ModelLike
 from ..parallel import map_in_threads, worker_count
 from ..propagation import Spacecraft, monte_carlo
-from ..propagation.dynamics import Dynamics, resolve_automatic
+from ..propagation.dynamics import Dynamics, deprecated_keywords
 from ..propagation.kappa import Constant, KappaProcess
+from ..propagation.methods import MonteCarlo, require_defaults, with_keywords
 from ..propagation.montecarlo import METHODS as MONTE_CARLO_INTEGRATORS
-from ..propagation.montecarlo import drag_sigma_argument
+from ..propagation.montecarlo import SETTINGS, drag_sigma_argument
 from ..propagation.results import optional_import
 from ..time import DurationLike, add_seconds
 from .elements import CatalogObject, fit_objects, raise_named
@@ -44,6 +44,7 @@ from .objects import DEFAULT_DRAG_RELATIVE_SIGMA, scaled_bstar_drag
 
 if TYPE_CHECKING:
     import pandas
+    from typing_extensions import Unpack
 
 #: Default density perturbation of a reentry run: one N(0,1) draw per member held over
 #: the whole run (``Constant``), so each member's density is the model's mean + kappa x
@@ -203,22 +204,35 @@ def _relative_sigma(obj: CatalogObject, drag_sigma: float | None) -> float:
     return DEFAULT_DRAG_RELATIVE_SIGMA
 
 
+class ReentryKeywords(TypedDict, total=False):
+    """The deprecated keywords of :func:`reentry`: the Monte Carlo's settings (now in
+    ``method=rp.MonteCarlo(n=, kappa=, seed=, threads=)``), ``floor_altitude`` (now in
+    ``dynamics``) and ``horizon`` (an older name of ``duration``)."""
+
+    n: int
+    kappa: KappaProcess | None
+    seed: int
+    threads: int | None
+    floor_altitude: float
+    horizon: DurationLike
+
+
+#: A reentry run's Monte Carlo: 100 members per object, kappa :data:`DEFAULT_KAPPA`.
+REENTRY_MONTE_CARLO = MonteCarlo(n=100)
+
+
 def reentry(
     objects: Iterable[CatalogObject],
     model: ModelLike,
     *,
-    n: int = 100,
+    method: MonteCarlo = REENTRY_MONTE_CARLO,
     duration: DurationLike = 30 * 86400.0,
     groups: int = 10,
     drag_sigma: float | None = None,
-    kappa: KappaProcess | None = None,
-    seed: int = 0,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    threads: int | None = None,
     dynamics: Dynamics | None = None,
-    horizon: DurationLike | None = None,
     fit: bool = True,
     history: str = "auto",
+    **deprecated: Unpack[ReentryKeywords],
 ) -> ReentryResult:
     """Reentry windows of ``objects`` within ``duration`` of their epochs.
 
@@ -228,24 +242,23 @@ def reentry(
             uncertainty).
         model: density model (a sampled one serves each object the day tiles of its own
             span from its atlas, :mod:`rhoprop.density.atlas`) or a field/atmosphere.
-        n: members per object (a multiple of ``groups`` is used: rounded up).
+        method: the :class:`~rhoprop.MonteCarlo` of every object (default
+            ``rp.MonteCarlo(n=100)``): ``n`` members per object (a multiple of ``groups``
+            is used: rounded up); its ``kappa`` (None: :data:`DEFAULT_KAPPA`, the model's
+            density error held over the whole run); object i group g seeded
+            ``seed + 1000 * i + g``; ``threads`` objects run at once (None: all cores);
+            its ``perturbation`` and ``max_memory`` per run. Its ``drag_sigma``,
+            ``record_density`` and ``progress`` are this function's own (a ValueError
+            away from their defaults); its ``output_step`` is not used (decay times only).
         duration: how far to look, s after each object's epoch, or a ``timedelta``
             (default 30 days).
         groups: Cd*A/m values per object (stratified; 1 turns Cd*A/m uncertainty off).
         drag_sigma: relative (log) 1-sigma of Cd*A/m for every object; default: the
             fit's (at least :data:`DEFAULT_DRAG_RELATIVE_SIGMA`) or that default.
-        kappa: density perturbation process (default :data:`DEFAULT_KAPPA`, the model's
-            density error held over the whole run; ``GaussMarkov()`` was the default
-            until 2026-12-03).
-        seed: object i group g uses seed ``seed + 1000 * i + g``.
-        floor_altitude: the decay altitude, m (default 120 km).
-        threads: objects run at once (default: CPU count).
-        dynamics: a :class:`~rhoprop.Dynamics` for every member's run (then leave
-            ``floor_altitude`` at its default): its zonal degree, floor, integrator
-            (``"rk8"``, ``"rk4"`` or ``"abm"``) and step are the Monte Carlo's;
-            ``rtol``, ``field_degree`` and ``third_bodies`` are refused (ValueError).
-        horizon: deprecated name of ``duration`` (a span after each object's own epoch is
-            ``duration`` everywhere; an absolute end shared by all objects is ``end``).
+        dynamics: a :class:`~rhoprop.Dynamics` for every member's run: its zonal degree,
+            floor (default 120 km), integrator (``"rk8"``, ``"rk4"`` or ``"abm"``) and
+            step are the Monte Carlo's; ``rtol``, ``field_degree`` and ``third_bodies``
+            are refused (ValueError).
         fit: fit each object's state and Cd*A/m to its element set with ``model`` first
             (:func:`~rhoprop.catalog.fit_objects`; default True). Objects already fitted
             (``load(fit=True)``) are used as they are; an object whose fit fails keeps
@@ -263,6 +276,9 @@ def reentry(
             ``benches/reentry_history.py``); ``"each"`` predicts every element set on its
             own (one row each, ``element_sets`` still > 1). They are never silently
             separate objects.
+        **deprecated: ``n=``, ``kappa=``, ``seed=``, ``threads=`` (folded into
+            ``method``), ``floor_altitude=`` (into ``dynamics``) and ``horizon=`` (an
+            older name of ``duration``), each with a DeprecationWarning.
 
     Returns:
         :class:`ReentryResult`.
@@ -270,24 +286,15 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
-    dyn = resolve_automatic(
-        "reentry", dynamics, Dynamics(), MONTE_CARLO_INTEGRATORS, floor_altitude=floor_altitude
-    )
-    n = _validate.count("n", n, minimum=2)
+    method, dyn, duration = _settings(method, dynamics, duration, dict(deprecated))
+    n, seed, threads = method.n, method.seed, method.threads
     groups = _validate.count("groups", groups, minimum=1)
     drag_sigma = None if drag_sigma is None else drag_sigma_argument(drag_sigma)
     per_group = max(int(np.ceil(n / groups)), 2)
     total = per_group * int(groups)
-    if horizon is not None:
-        warnings.warn(
-            "reentry(horizon=...) is deprecated; the span after each epoch is duration=",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        duration = horizon
     span = _seconds(duration)
     objs, notes, counts = _histories_and_fits(objs, model, fit, history, threads)
-    process = kappa or DEFAULT_KAPPA
+    process = method.kappa or DEFAULT_KAPPA
     probabilities = (np.arange(groups) + 0.5) / groups
 
     stop = threading.Event()
@@ -314,6 +321,8 @@ def reentry(
                     kappa=process,
                     seed=seed + 1000 * i + g,
                     output_step=None,
+                    perturbation=method.perturbation,
+                    max_memory=method.max_memory,
                     progress=check,
                     dynamics=dyn,
                     threads=1,
@@ -347,6 +356,37 @@ def reentry(
         element_sets=np.array([counts[o.norad_id] for o in objs]),
         decay_times=decay_times,
     )
+
+
+def _settings(
+    method: MonteCarlo, dynamics: Dynamics | None, duration: DurationLike, loose: dict[str, Any]
+) -> tuple[MonteCarlo, Dynamics, DurationLike]:
+    """:func:`reentry`'s method, dynamics and duration, checked, with its deprecated
+    keywords ``loose`` folded in (each with a DeprecationWarning)."""
+    if "horizon" in loose:
+        warnings.warn(
+            "reentry(horizon=...) is deprecated; the span after each epoch is duration=",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        duration = loose.pop("horizon")
+    if not isinstance(method, MonteCarlo):
+        raise TypeError(
+            "reentry(): method must be rp.MonteCarlo(...) (a reentry window is the spread "
+            f"of members' decay times), got {type(method).__name__}"
+        )
+    own = {k: loose.pop(k) for k in SETTINGS if k in loose}
+    method = with_keywords(method, "reentry", own, stacklevel=4)
+    require_defaults(
+        method,
+        "reentry",
+        ("drag_sigma", "record_density", "progress"),
+        "reentry's drag_sigma= and groups= give each object's Cd*A/m spread",
+    )
+    dyn = deprecated_keywords("reentry", dynamics, loose, names=("floor_altitude",), stacklevel=4)
+    dyn.require_automatic_gravity("reentry")
+    dyn.require_integrator("reentry", MONTE_CARLO_INTEGRATORS)
+    return method, dyn, duration
 
 
 def resolved_history(history: str, fit: bool) -> str:

@@ -21,7 +21,7 @@ from ..density import DensityModel, SampledModel
 from ..options import Errors
 from ..progress import ProgressBar
 from ..propagation import OrbitState
-from ..propagation.dynamics import Dynamics, resolve_automatic
+from ..propagation.dynamics import Dynamics, LooseFloorAndDegree, deprecated_keywords
 from ..propagation.interpolate import DEFAULT_TOLERANCE
 from ..propagation.kappa import KappaProcess
 from ..propagation.methods import (
@@ -67,6 +67,7 @@ from .objects import (  # noqa: F401 - the names tests and older code import fro
 if TYPE_CHECKING:
     import pandas
     import xarray
+    from typing_extensions import Unpack
 
 #: Zonal degree of catalog runs from element sets: J2..J4, the zonal terms SGP4 (which
 #: produced the element sets) carries; J2 alone moves a LEO orbit by km a day from them.
@@ -294,29 +295,35 @@ def common_epochs(
     return offsets_to_epochs(end, offsets)
 
 
+class CatalogKeywords(LooseFloorAndDegree, total=False):
+    """The deprecated keywords of :func:`propagate_catalog`: the method's settings (now in
+    ``method=rp.MonteCarlo(n=, kappa=, seed=)`` or ``rp.Ccsp(update_interval=, kappa=)``)
+    and the loose :class:`~rhoprop.Dynamics` attributes (now in ``dynamics=``)."""
+
+    n: int
+    kappa: KappaProcess
+    seed: int
+    update_interval: float
+
+
 def propagate_catalog(
     objects: Iterable[CatalogObject],
     model: DensityModel,
     end: EpochLike,
     *,
     method: Method | MethodName = Ccsp(),
-    n: int | None = None,
-    kappa: KappaProcess | None = None,
-    seed: int | None = None,
     output_step: float = 3600.0,
-    update_interval: float | None = None,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     client: Any = None,  # a distributed.Client (Any: distributed stays optional)
     chunk_size: int = 50,
     progress: bool | Callable[[int], object] = True,
     errors: Errors = "raise",
     initial_covariance: InitialCovariance = "object",
-    zonal_degree: int = CATALOG_ZONAL_DEGREE,
     drag_sigma: DragSigma = "auto",
     dynamics: Dynamics | None = None,
     fit: FitChoice = "auto",
     max_span: float | None = MAX_SPAN,
     start: EpochLike | None = None,
+    **deprecated: Unpack[CatalogKeywords],
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
 
@@ -363,9 +370,6 @@ def propagate_catalog(
             0.1); a (6, 6) matrix (m^2, m^2/s, m^2/s^2, inertial) for
             every object; or a callable object -> matrix. What it includes is in
             ``covariance_note`` (and the OEM and summary).
-        zonal_degree: highest zonal harmonic of the gravity field: 4 (default, J2..J4,
-            as SGP4 carries, from which the element sets come) up to 6 (J2..J6, EGM2008);
-            2 is the paper's J2-only model (the default until 0.1).
         drag_sigma: relative 1-sigma of each object's Cd*A/m (dimensionless, 0.15 =
             15 %), propagated as the CCSP's second consider parameter or sampled per Monte
             Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
@@ -378,12 +382,14 @@ def propagate_catalog(
             whose Cd*A/m is B*'s plain conversion runs with it scaled to the model's
             density (:func:`~rhoprop.catalog.scaled_bstar_drag`; real-atmosphere models
             only), and ``objects`` of the result carry the value used.
-        dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
-            ``zonal_degree`` at once (then leave those keywords at their defaults). Its
-            ``step`` (s) is every object's fixed step (None: the CCSP's RK8 at each
-            object's :func:`~rhoprop.catalog.objects.catalog_step`, the Monte Carlo's
-            180 s); its ``integrator`` must be ``"rk8"`` for the CCSP and ``"rk8"``,
-            ``"rk4"`` or ``"abm"`` for the Monte Carlo; ``rtol``, ``field_degree`` and
+        dynamics: a :class:`~rhoprop.Dynamics` (None: ``Dynamics(zonal_degree=4)``,
+            J2..J4 as SGP4 carries, from which the element sets come; 2 is the paper's
+            J2-only model, the default until 0.1; up to 6). Its ``floor_altitude`` (m) is
+            every object's decay floor, its ``step`` (s) every object's fixed step
+            (None: the CCSP's RK8 at each object's
+            :func:`~rhoprop.catalog.objects.catalog_step`, the Monte Carlo's 180 s); its
+            ``integrator`` must be ``"rk8"`` for the CCSP and ``"rk8"``, ``"rk4"`` or
+            ``"abm"`` for the Monte Carlo; ``rtol``, ``field_degree`` and
             ``third_bodies`` are refused (ValueError), never ignored. The fit before the
             run (``fit``) keeps its own RK8 grid.
         fit: ``"auto"`` (default): with a model of the real atmosphere, the objects
@@ -401,6 +407,9 @@ def propagate_catalog(
             catalog holding a few months-old element sets runs in bounded memory (the
             density tiles of every day of a run stay in memory while it runs); None: no
             limit.
+        **deprecated: the method's ``n=``, ``kappa=``, ``seed=``, ``update_interval=``
+            (give them in ``method``) and ``floor_altitude=``, ``zonal_degree=`` (in
+            ``dynamics``), folded in with a DeprecationWarning.
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -429,17 +438,20 @@ def propagate_catalog(
         for i, o in enumerate(objs)
         if (reason := beyond_max_span(seconds_between(o.state.epoch, end64), "end", limit))
     }
-    dyn = resolve_automatic(
+    loose = dict(deprecated)
+    own: dict[str, object] = {
+        k: loose.pop(k) for k in ("n", "kappa", "seed", "update_interval") if k in loose
+    }
+    dyn = deprecated_keywords(
         "propagate_catalog",
         dynamics,
+        loose,
         Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
-        floor_altitude=floor_altitude,
-        zonal_degree=zonal_degree,
+        names=("floor_altitude", "zonal_degree"),
     )
+    dyn.require_automatic_gravity("propagate_catalog")
     chosen = method_argument(method, "propagate_catalog", MonteCarlo(n=100))
-    chosen = with_keywords(
-        chosen, "propagate_catalog", n=n, kappa=kappa, seed=seed, update_interval=update_interval
-    )
+    chosen = with_keywords(chosen, "propagate_catalog", own)
     cfg = RunSettings.checked(chosen, dyn, errors)
     fresh = [i for i in range(len(objs)) if i not in stale]
     fitted = fit_catalog_objects(

@@ -22,12 +22,12 @@ import numpy as np
 
 from .. import _core, _validate
 from ..catalog.run import CATALOG_ZONAL_DEGREE, MAX_SPAN, beyond_max_span
-from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, R_EARTH
+from ..constants import J2, R_EARTH
 from ..density.model import ModelLike
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
-from ..propagation.dynamics import Dynamics, resolve_automatic
+from ..propagation.dynamics import Dynamics, LooseFloorAndDegree, deprecated_keywords
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
@@ -59,6 +59,7 @@ from .screening import (
 
 if TYPE_CHECKING:
     import pandas
+    from typing_extensions import Unpack
 
 __all__ = ["ALL_ON_ALL_STAGES", "DEFAULT_MAX_MEMORY", "AllOnAllResult", "screen_all"]
 
@@ -246,8 +247,6 @@ def screen_all(
     radii: Mapping[int, float] | None = None,
     grid_step: float = DEFAULT_GRID_STEP,
     fine_step: float = DEFAULT_FINE_STEP,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    zonal_degree: int = CATALOG_ZONAL_DEGREE,
     dynamics: Dynamics | None = None,
     max_memory: float = DEFAULT_MAX_MEMORY,
     threads: int | None = None,
@@ -258,6 +257,7 @@ def screen_all(
     errors: Errors = "raise",
     progress: bool | Callable[[str, int, int], object] = True,
     max_span: float | None = MAX_SPAN,
+    **deprecated: Unpack[LooseFloorAndDegree],
 ) -> AllOnAllResult:
     """Screens every object of a catalog against every other for close approaches within
     ``distance`` over [start, end] (UTC), each with its probability of collision per
@@ -303,8 +303,8 @@ def screen_all(
             own sigma. Given weights keep each model's own sigma.
         pc: compute the Pc of every event (default True).
         grid_step, fine_step: coarse grid and refinement output steps, s.
-        floor_altitude, zonal_degree, dynamics: as for ``rp.propagate`` (default J2..J4,
-            the catalog's). The tracks follow the dynamics' ``integrator``, ``step`` and
+        dynamics: a :class:`~rhoprop.Dynamics` (default ``Dynamics(zonal_degree=4)``,
+            J2..J4, the catalog's). The tracks follow the dynamics' ``integrator``, ``step`` and
             ``rtol`` (default adaptive DOP853); the Pc stage runs its CCSP and Monte Carlo
             with RK8 at that ``step`` (default each object's catalog step, 180 s in LEO),
             so with ``pc`` the integrator must be None or ``"rk8"`` (ValueError
@@ -331,6 +331,8 @@ def screen_all(
             after ``end`` is not screened and is listed in ``skipped`` (default
             :data:`~rhoprop.catalog.run.MAX_SPAN`, 60 days: a propagation holds the density
             tiles of every day it flies through; None: no limit).
+        **deprecated: ``floor_altitude=`` and ``zonal_degree=``, folded into ``dynamics``
+            with a DeprecationWarning.
 
     Returns:
         :class:`AllOnAllResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -340,9 +342,7 @@ def screen_all(
     """
     wall0 = time.perf_counter()
     models, ref_name = _model_set(model, reference)
-    cfg = _settings(
-        start, end, distance, grid_step, fine_step, floor_altitude, zonal_degree, dynamics, pc
-    )
+    cfg = _settings(start, end, distance, grid_step, fine_step, dynamics, deprecated, pc)
     errors = _validate.errors_and_client("screen_all", errors, client)
     workers = worker_count(threads)
     budget = _validate.positive("max_memory", max_memory)
@@ -445,9 +445,8 @@ def _settings(
     distance: float,
     grid_step: float,
     fine_step: float,
-    floor_altitude: float,
-    zonal_degree: int,
     dynamics: Dynamics | None,
+    loose: Mapping[str, object],
     pc: bool,
 ) -> Window:
     t_start, t_end, span = window_span(start, end)
@@ -457,13 +456,15 @@ def _settings(
             f"grid_step = {step:g} s is too coarse: at most 300 s (1/18 of a low orbit) keeps "
             "the cubic Hermite interpolant of the relative motion meaningful"
         )
-    dyn = resolve_automatic(
+    dyn = deprecated_keywords(
         "screen_all",
         dynamics,
+        loose,
         Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
-        floor_altitude=floor_altitude,
-        zonal_degree=zonal_degree,
+        names=("floor_altitude", "zonal_degree"),
+        stacklevel=4,
     )
+    dyn.require_automatic_gravity("screen_all")
     if pc and dyn.integrator not in (None, "rk8"):
         raise ValueError(
             "screen_all()'s Pc stage integrates with rk8 (its CCSP and Monte Carlo), not "

@@ -28,7 +28,7 @@ import numpy as np
 from .. import _validate, frames
 from ..density.model import ModelLike
 from ..propagation import Spacecraft, Trajectory
-from ..propagation.dynamics import Dynamics, LooseDynamics, deprecated_keywords
+from ..propagation.dynamics import Dynamics, LooseFloorAndDegree, deprecated_keywords
 from ..propagation.propagate import check_model
 from ..time import add_seconds, to_seconds
 
@@ -117,7 +117,7 @@ def closest_approach(
     max_distance: float | None = None,
     fine_step: float = DEFAULT_FINE_STEP,
     dynamics: Dynamics | None = None,
-    **deprecated: Unpack[LooseDynamics],
+    **deprecated: Unpack[LooseFloorAndDegree],
 ) -> list[CloseApproach]:
     """Close approaches of two trajectories: every local minimum of their distance over
     the absolute times both cover, with the time of closest approach refined to well under
@@ -182,7 +182,7 @@ def closest_approach(
     step = _validate.positive("fine_step", fine_step)
     limit = None if max_distance is None else _validate.positive("max_distance", max_distance)
     settings = deprecated_keywords(
-        "closest_approach", dynamics, ("floor_altitude", "zonal_degree"), dict(deprecated)
+        "closest_approach", dynamics, deprecated, names=("floor_altitude", "zonal_degree")
     )
     floor = settings.floor_altitude
     ref = traj1.epoch

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..catalog.objects import object_drag_sigma
 from ..density.scaled import SigmaScaled
-from ..propagation import Spacecraft
+from ..propagation import Dynamics, Spacecraft
 from ..propagation.montecarlo import monte_carlo
 from ..time import seconds_between
 from .event_pc import EventPcs
@@ -65,9 +65,7 @@ def event_monte_carlo(
                         seed=seed + obj,
                         initial_covariance=cat.covariance,
                         drag_sigma=object_drag_sigma(cat, "auto"),
-                        zonal_degree=degree,
-                        floor_altitude=floor,
-                        step=step,
+                        dynamics=Dynamics(zonal_degree=degree, floor_altitude=floor, step=step),
                         progress=False,
                     )
                 )

@@ -18,14 +18,14 @@ import numpy as np
 
 from .. import _validate
 from ..catalog.elements import CatalogObject
-from ..constants import DEFAULT_FLOOR_ALTITUDE, J2, MU, R_EARTH, R_POLE
+from ..constants import J2, MU, R_EARTH, R_POLE
 from ..density.model import ModelLike
 from ..errors import DecayError
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
 from ..propagation import OrbitState, Spacecraft
-from ..propagation.dynamics import Dynamics, resolve_automatic
+from ..propagation.dynamics import Dynamics, LooseFloorAndDegree, deprecated_keywords
 from ..propagation.propagate import (
     check_model,
 )
@@ -55,6 +55,7 @@ from .kernel import (
 
 if TYPE_CHECKING:
     import pandas
+    from typing_extensions import Unpack
 
 __all__ = ["DEFAULT_GRID_STEP", "STAGES", "ScreeningResult", "screen"]
 
@@ -221,12 +222,11 @@ def screen(
     distance: float,
     grid_step: float = DEFAULT_GRID_STEP,
     fine_step: float = DEFAULT_FINE_STEP,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    zonal_degree: int = 2,
     threads: int | None = None,
     errors: Errors | Literal["skip"] = "raise",
     progress: bool | Callable[[int], object] = True,
     dynamics: Dynamics | None = None,
+    **deprecated: Unpack[LooseFloorAndDegree],
 ) -> ScreeningResult:
     """Screens one primary against many secondaries for close approaches within
     ``distance`` over [start, end] (UTC).
@@ -269,10 +269,8 @@ def screen(
         grid_step: coarse grid spacing, s (default 60 s; at most 1/20 of the primary's
             period, else ValueError).
         fine_step: output step of the refinement, s.
-        floor_altitude, zonal_degree: as for ``rp.propagate``.
-        dynamics: a :class:`~rhoprop.Dynamics` holding ``floor_altitude`` and
-            ``zonal_degree`` at once (then leave those keywords at their defaults); the
-            tracks follow its ``integrator``, ``step`` and ``rtol`` as ``rp.propagate``
+        dynamics: a :class:`~rhoprop.Dynamics` (None: ``Dynamics()``, J2 only, floor
+            120 km); the tracks follow its ``integrator``, ``step`` and ``rtol`` as ``rp.propagate``
             does (default adaptive DOP853; an object propagated back to ``start`` uses
             RK8 at 30 s, the one backward integrator); ``field_degree`` and
             ``third_bodies`` are refused (ValueError).
@@ -282,6 +280,8 @@ def screen(
             (``"skip"``, its old name, still works with a DeprecationWarning).
         progress: show a progress bar (secondaries done) on a terminal for screens over a
             second, or a callable given the number done.
+        **deprecated: ``floor_altitude=`` and ``zonal_degree=``, folded into ``dynamics``
+            with a DeprecationWarning.
 
     Returns:
         :class:`ScreeningResult`. Secondaries that decayed before ``start`` are skipped
@@ -297,9 +297,10 @@ def screen(
     wall0 = time.perf_counter()
     prim, objs, itself = _objects(primary, secondaries)
     check_model(model)
-    settings = resolve_automatic(
-        "screen", dynamics, Dynamics(), floor_altitude=floor_altitude, zonal_degree=zonal_degree
+    settings = deprecated_keywords(
+        "screen", dynamics, deprecated, names=("floor_altitude", "zonal_degree")
     )
+    settings.require_automatic_gravity("screen")
     w = make_window(
         prim,
         start,

@@ -267,7 +267,9 @@ def _shoot(
     goal = target.state
 
     def run(epoch: np.datetime64, x: np.ndarray, craft: Spacecraft = spacecraft) -> np.ndarray:
-        out = propagate(OrbitState(epoch, x[:3], x[3:]), craft, model, lead, integrator="rk8")
+        out = propagate(
+            OrbitState(epoch, x[:3], x[3:]), craft, model, lead, dynamics=Dynamics(integrator="rk8")
+        )
         if out.decayed_at is not None:
             raise ValueError(
                 f"the object decays within {lead:g} s before TCA under the reference model"
@@ -422,7 +424,7 @@ def density_pc(
     chosen = method_argument(method, "density_pc", MonteCarlo(output_step=None))
     options: dict[str, Any] = dict(ensemble_options)
     settings = {k: options.pop(k) for k in _METHOD_KEYS if k in options}
-    chosen = with_keywords(chosen, "density_pc", **settings)
+    chosen = with_keywords(chosen, "density_pc", settings)
     if weights is not None:
         options["weights"] = weights
     ens1, off1, cov1 = _object_mixture(

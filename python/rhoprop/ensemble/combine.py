@@ -350,7 +350,7 @@ def ensemble(
         :class:`EnsembleResult`; ``.mixture()`` and ``.along_track_pdf(x)`` give the PDF.
     """
     method = method_argument(method, "ensemble", MonteCarlo())
-    method = with_keywords(method, "ensemble", **method_options)
+    method = with_keywords(method, "ensemble", method_options)
     if not models:
         raise ValueError("models must name at least one density model")
     if reference not in models:

@@ -26,7 +26,8 @@ from ..io import (
 )
 from ..io.tables import format_argument, meta_path, write_folder_table
 from ..options import Duplicates, TableFormat
-from ..propagation.methods import Ccsp, Method
+from ..propagation import Dynamics
+from ..propagation.methods import Ccsp, Method, MonteCarlo
 from ..spaceweather import SpaceWeather
 from ..time import to_datetime64
 from .models import model_by_name
@@ -279,7 +280,7 @@ class CatalogJob:
             output_step=self.output_step,
             errors="record" if self.skip_bad else "raise",
             initial_covariance=covariance,
-            zonal_degree=self.zonal_degree,
+            dynamics=Dynamics(zonal_degree=self.zonal_degree),
             drag_sigma=sigma,
             fit="auto" if self.fit == "auto" else False,
             max_span=max_span_option(self.max_span_days),
@@ -429,7 +430,7 @@ class ReentryJob:
         result = reentry(
             cat,
             atmosphere,
-            n=self.members,
+            method=MonteCarlo(n=self.members),
             duration=self.horizon_days * 86400.0,
             drag_sigma=self.drag_sigma,
             fit=self.fit,

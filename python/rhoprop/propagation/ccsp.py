@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -17,7 +17,7 @@ from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..options import Perturbation
 from ..time import DurationLike, ut1_seconds
 from . import run_frame
-from .dynamics import Dynamics, resolve, zonal_degree_argument
+from .dynamics import Dynamics, deprecated_keywords, zonal_degree_argument
 from .kappa import Constant, GaussMarkov, KappaProcess, PiecewiseConstant, TwoScale
 from .montecarlo import drag_sigma_argument
 from .propagate import (
@@ -37,6 +37,8 @@ from .results import CcspResult, StateMoments
 from .state import OrbitState, Spacecraft
 
 if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
     from .._core import _CcspOutput
 
 #: The paper's near-zero initial covariance: 1 mm and 1 um/s (1 sigma) on each axis.
@@ -54,25 +56,38 @@ DEFAULT_UPDATE_INTERVAL = 3600.0
 APOGEE_UPDATE_ECCENTRICITY = 0.1
 
 
+class CcspKeywords(TypedDict, total=False):
+    """The keywords of :func:`ccsp`: the settings of :class:`~rhoprop.Ccsp`
+    (:data:`SETTINGS`, the same names, units and defaults), and, deprecated, the loose
+    :class:`~rhoprop.Dynamics` attributes the filter took (``step``, ``floor_altitude``,
+    ``zonal_degree``)."""
+
+    update_interval: float | None
+    kappa: KappaProcess | None
+    scaling: tuple[float, float] | None
+    perturbation: Perturbation
+    drag_sigma: float
+    coordinates: Coordinates
+    step: float
+    floor_altitude: float
+    zonal_degree: int
+
+
+#: The settings among :class:`CcspKeywords` (the fields of ``rp.Ccsp``).
+SETTINGS = ("update_interval", "kappa", "scaling", "perturbation", "drag_sigma", "coordinates")
+
+
 def ccsp(
     state: OrbitState,
     spacecraft: Spacecraft,
     model: ModelLike,
     duration: DurationLike | None = None,
     *,
-    update_interval: float | None = None,
     initial_covariance: npt.ArrayLike | None = None,
-    scaling: tuple[float, float] | None = None,
-    perturbation: Perturbation = "additive",
-    step: float | None = None,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
     update_times: npt.ArrayLike | None = None,
-    zonal_degree: int = 2,
-    drag_sigma: float = 0.0,
-    dynamics: Dynamics | None = None,
     output_times: npt.ArrayLike | None = None,
-    coordinates: Coordinates = "equinoctial",
-    kappa: KappaProcess | None = None,
+    dynamics: Dynamics | None = None,
+    **settings: Unpack[CcspKeywords],
 ) -> CcspResult:
     """Propagates mean and covariance with the CCSP filter.
 
@@ -113,62 +128,62 @@ def ccsp(
         model: density model with uncertainty (sampled into a field once).
         duration: span, s, or a ``timedelta``; may be left out when ``update_times`` is
             given, and must then equal the last update time if given too.
-        update_interval: s. Default None: every 60 min (the paper's tuning) for a
-            near-circular orbit; for an eccentric one (e >= 0.1) once per revolution, at
-            apogee, with outputs every 60 min between (:func:`update_schedule`: one kappa
-            per perigee pass; it was chosen when sigma points re-drawn in Cartesian
-            coordinates near perigee left the orbit's energy, which in equinoctial
-            elements they no longer do).
-            A number: updates every that many s whatever the orbit.
         initial_covariance: 6x6 state covariance (default: the paper's near-zero
             diag(eps^2) with eps = 1 mm and 1 um/s).
-        scaling: (lambda1 + n, lambda2 + p). None (default): (3, 1 / c) with c the
-            update-to-update correlation of ``kappa``'s process. Given (the paper's is
-            (3, 3)) and ``kappa`` None: the paper's filter, the process
-            ``PiecewiseConstant(update_interval, 1 / lambda2)``.
-        perturbation: ``"additive"`` or ``"lognormal"``.
-        step: largest RK8 step, s (None: 180 s, the RK8 default; at most 1/20 of the
-            orbital period).
-        floor_altitude: decay floor, m.
         update_times: explicit update times, s from the epoch (increasing, > 0; the last
             is the end), instead of ``update_interval`` (used to align objects on common
             output epochs).
-        zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
-            only, the paper's model; 3 to 6 add J3..J6 (EGM2008), which move the paper's orbit
-            by 1.6 km in a day.
-        drag_sigma: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
-            0.1 = 10 %; at most 3). Default 0: density uncertainty only, the paper's filter
-            (results unchanged). Costs one more sigma point (17 with the default kappa's slow
-            term: about 1.2x the run's cost).
-        dynamics: a :class:`~rhoprop.Dynamics` holding ``step``, ``floor_altitude`` and
-            ``zonal_degree`` at once (its integrator must be None or "rk8": the filter
-            integrates its sigma points with RK8).
         output_times: further outputs, s from the epoch (increasing, between 0 and the
             end): the moments of the sigma points in flight, not re-drawn there. Default
             None: an output at each update only (and, for an eccentric orbit with the
             default ``update_interval``, hourly between its apogee updates).
-        coordinates: where the sigma points are drawn and their moments taken:
-            ``"equinoctial"`` (default: elements a, h, k, p, q, lambda, in which an
-            along-track spread stays on the orbit; the Cartesian outputs are the linear
-            map of that Gaussian, which is returned too as ``element_mean`` and
-            ``element_covariance``) or ``"cartesian"`` (the paper's filter: its
-            straight-line points leave the orbit, and its along-track sigma outgrows the
-            Monte Carlo it stands for past about 5 days: 1.2x at 7 days, 8.6x at 19;
-            docs/conventions.md, "CCSP coordinates").
-        kappa: the density error the filter stands for (default None: the calibrated
-            :class:`~rhoprop.kappa.TwoScale`, as the Monte Carlo; ignored when
-            ``scaling`` is given). The filter carries one kappa held over each update,
-            correlated 1 / lambda2 from one update to the next, and the constant c of
-            ``drag_sigma``: a ``PiecewiseConstant`` (its interval must be the update
-            interval) or ``GaussMarkov`` is that kappa (correlation c = its own over the
-            update interval, or the longest spacing of ``update_times``); a ``TwoScale``
-            puts its fast term there (kappa scaled by sqrt(1 - w)) and its slow one, a
-            density scale that holds for days, into a third consider parameter s, held
-            over each update like kappa and correlated 2^(-dt / slow_half_life) from one
-            update to the next (dt the spacing of the two updates); ``Constant`` is s
-            alone, never decorrelating. Against 2,000 members of the same process the
-            along-track sigma is 0.97-1.03x and 93-96 % of the members lie inside the
-            filter's 95 % region of (a, lambda) at 1-14 days (docs/mc-vs-ccsp.md).
+        dynamics: :class:`~rhoprop.Dynamics`: the largest RK8 ``step`` (s; None: 180 s,
+            at most 1/20 of the orbital period), the zonal degree (2: J2 only, the paper's
+            model; 3 to 6 add J3..J6) and the floor altitude (m). Its integrator must be
+            None or ``"rk8"``: the filter integrates its sigma points with RK8.
+        **settings: the settings of :class:`~rhoprop.Ccsp`
+            (``rp.Ccsp(**settings).run(...)`` is the same run):
+
+            - ``update_interval``: s. Default None: every 60 min (the paper's tuning) for a
+              near-circular orbit; for an eccentric one (e >= 0.1) once per revolution, at
+              apogee, with outputs every 60 min between (:func:`update_schedule`: one kappa
+              per perigee pass; it was chosen when sigma points re-drawn in Cartesian
+              coordinates near perigee left the orbit's energy, which in equinoctial
+              elements they no longer do).
+              A number: updates every that many s whatever the orbit.
+            - ``kappa``: the density error the filter stands for (default None: the calibrated
+              :class:`~rhoprop.kappa.TwoScale`, as the Monte Carlo; ignored when
+              ``scaling`` is given). The filter carries one kappa held over each update,
+              correlated 1 / lambda2 from one update to the next, and the constant c of
+              ``drag_sigma``: a ``PiecewiseConstant`` (its interval must be the update
+              interval) or ``GaussMarkov`` is that kappa (correlation c = its own over the
+              update interval, or the longest spacing of ``update_times``); a ``TwoScale``
+              puts its fast term there (kappa scaled by sqrt(1 - w)) and its slow one, a
+              density scale that holds for days, into a third consider parameter s, held
+              over each update like kappa and correlated 2^(-dt / slow_half_life) from one
+              update to the next (dt the spacing of the two updates); ``Constant`` is s
+              alone, never decorrelating. Against 2,000 members of the same process the
+              along-track sigma is 0.97-1.03x and 93-96 % of the members lie inside the
+              filter's 95 % region of (a, lambda) at 1-14 days (docs/mc-vs-ccsp.md).
+            - ``scaling``: (lambda1 + n, lambda2 + p). None (default): (3, 1 / c) with c the
+              update-to-update correlation of ``kappa``'s process. Given (the paper's is
+              (3, 3)) and ``kappa`` None: the paper's filter, the process
+              ``PiecewiseConstant(update_interval, 1 / lambda2)``.
+            - ``perturbation``: ``"additive"`` or ``"lognormal"``.
+            - ``drag_sigma``: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
+              0.1 = 10 %; at most 3). Default 0: density uncertainty only, the paper's filter
+              (results unchanged). Costs one more sigma point (17 with the default kappa's slow
+              term: about 1.2x the run's cost).
+            - ``coordinates``: where the sigma points are drawn and their moments taken:
+              ``"equinoctial"`` (default: elements a, h, k, p, q, lambda, in which an
+              along-track spread stays on the orbit; the Cartesian outputs are the linear
+              map of that Gaussian, which is returned too as ``element_mean`` and
+              ``element_covariance``) or ``"cartesian"`` (the paper's filter: its
+              straight-line points leave the orbit, and its along-track sigma outgrows the
+              Monte Carlo it stands for past about 5 days: 1.2x at 7 days, 8.6x at 19;
+              docs/conventions.md, "CCSP coordinates").
+            Deprecated, folded into ``dynamics`` with a warning: ``step``,
+            ``floor_altitude``, ``zonal_degree``.
 
     Returns:
         :class:`CcspResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -176,14 +191,14 @@ def ccsp(
     given, given_cov, rot = state, initial_covariance, None
     if isinstance(state, OrbitState):
         state, initial_covariance, rot = run_frame.into_run(state, initial_covariance)
-    dyn = resolve(
-        "ccsp",
-        dynamics,
-        Dynamics(),
-        step=step,
-        floor_altitude=floor_altitude,
-        zonal_degree=zonal_degree,
+    loose = {k: v for k, v in settings.items() if k not in SETTINGS}
+    dyn = deprecated_keywords(
+        "ccsp", dynamics, loose, names=("step", "floor_altitude", "zonal_degree")
     )
+    update_interval, kappa = settings.get("update_interval"), settings.get("kappa")
+    scaling, perturbation = settings.get("scaling"), settings.get("perturbation", "additive")
+    drag_sigma = settings.get("drag_sigma", 0.0)
+    coordinates = settings.get("coordinates", "equinoctial")
     if dyn.integrator not in (None, "rk8"):
         raise ValueError(f"the CCSP integrates with RK8; dynamics.integrator = {dyn.integrator!r}")
     dyn.require_integrator("ccsp", ("rk8",))

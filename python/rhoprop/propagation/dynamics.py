@@ -1,15 +1,16 @@
 """One settings object for how every propagating function integrates an orbit and where a
-run ends: :class:`Dynamics`. Each of ``propagate``, ``monte_carlo``, ``ccsp``,
-``ensemble``, ``propagate_catalog``, ``catalog.reentry``, ``conjunction.screen`` and
-``conjunction.closest_approach`` takes ``dynamics=``; their keywords ``zonal_degree``,
-``floor_altitude``, ``integrator`` (``method`` of ``propagate``/``monte_carlo``, deprecated)
-and ``step`` stay as a documented convenience and are turned into a :class:`Dynamics` by
-:func:`resolve`, so there is one code path."""
+run ends: :class:`Dynamics`. Every propagating function (``propagate``, ``monte_carlo``,
+``ccsp``, ``ensemble``, ``propagate_catalog``, ``catalog.reentry``, the screening and
+close-approach functions) takes it whole as ``dynamics=``. Their older loose keywords
+(``zonal_degree``, ``floor_altitude``, ``integrator``, ``step``, ``rtol``) still work for
+one release with a DeprecationWarning (:func:`deprecated_keywords`), so a setting has one
+place and one code path."""
 
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from typing import TypedDict
 
 import numpy as np
@@ -182,85 +183,69 @@ class Dynamics:
             )
 
 
-def resolve(
-    function: str, dynamics: Dynamics | None, defaults: Dynamics, **given: object
-) -> Dynamics:
-    """The :class:`Dynamics` of a call to ``function``: ``dynamics`` itself, or one made
-    from the call's keywords ``given`` (some of the attributes). ``defaults`` holds the
-    function's own defaults of those keywords: giving ``dynamics`` together with a keyword
-    that is not at its default is a TypeError naming it."""
-    if dynamics is None:
-        return Dynamics(**given)  # type: ignore[arg-type]
-    if not isinstance(dynamics, Dynamics):
-        raise TypeError(f"dynamics must be a rhoprop.Dynamics, got {type(dynamics).__name__}")
-    clash = [k for k, v in given.items() if v != getattr(defaults, k)]
-    if clash:
-        raise TypeError(
-            f"{function}() got dynamics= and {', '.join(f'{k}=' for k in clash)}; give the "
-            "settings in one place"
-        )
-    return dynamics
-
-
-def resolve_automatic(
-    function: str,
-    dynamics: Dynamics | None,
-    defaults: Dynamics,
-    integrators: tuple[str, ...] | None = None,
-    **given: object,
-) -> Dynamics:
-    """:func:`resolve` for a function that runs every orbit with the automatic terms of
-    its regime: a ValueError if ``dynamics`` sets ``field_degree`` or ``third_bodies``
-    (:meth:`Dynamics.require_automatic_gravity`), or, given the ``integrators`` the
-    function can use, an integrator or rtol it cannot (:meth:`Dynamics.require_integrator`)."""
-    dyn = resolve(function, dynamics, defaults, **given)
-    dyn.require_automatic_gravity(function)
-    if integrators is not None:
-        dyn.require_integrator(function, integrators)
-    return dyn
-
-
-class LooseDynamics(TypedDict, total=False):
-    """Attributes of :class:`Dynamics` that some functions still take as keywords of their
-    own, deprecated (``**deprecated``): give them in ``dynamics=``."""
+class LooseFloorAndDegree(TypedDict, total=False):
+    """The two attributes of :class:`Dynamics` the catalog, screening and close-approach
+    functions took as keywords of their own; deprecated: give them in ``dynamics=``."""
 
     floor_altitude: float
     zonal_degree: int
 
 
+class LooseDynamics(LooseFloorAndDegree, total=False):
+    """Attributes of :class:`Dynamics` the single-object runs took as keywords of their
+    own before ``dynamics=`` existed; deprecated: give them in ``dynamics=``."""
+
+    integrator: Integrator
+    step: float
+    rtol: float
+
+
+#: The loose keywords every propagating function still takes, deprecated.
+LOOSE = ("floor_altitude", "zonal_degree", "integrator", "step", "rtol")
+
+
 def deprecated_keywords(
-    function: str, dynamics: Dynamics | None, names: tuple[str, ...], given: dict[str, object]
+    function: str,
+    dynamics: Dynamics | None,
+    given: Mapping[str, object],
+    defaults: Dynamics | None = None,
+    names: tuple[str, ...] = LOOSE,
+    aliases: Mapping[str, str] | None = None,
+    stacklevel: int = 3,
 ) -> Dynamics:
-    """The :class:`Dynamics` of a call whose loose keywords ``names`` (some of the
-    attributes: ``floor_altitude``, ``zonal_degree``, ...) are deprecated in favour of
-    ``dynamics=``: those ``given`` are folded in with a DeprecationWarning (giving both is a
-    TypeError, as :func:`resolve`); a keyword not among ``names`` is a TypeError naming it,
-    as Python's own."""
-    wrong = sorted(set(given) - set(names))
+    """The :class:`Dynamics` of a call to ``function`` whose loose keywords ``given``
+    (attributes of :class:`Dynamics`: ``floor_altitude``, ``zonal_degree``, ...) are
+    deprecated in favour of ``dynamics=``: those given are folded in with a
+    DeprecationWarning; giving one of them with ``dynamics=`` is a TypeError too. Without
+    either, ``defaults`` (the function's own; None: ``Dynamics()``). ``names`` are the
+    loose keywords the function took (default all of :data:`LOOSE`); ``aliases`` maps an
+    older name still accepted (``method``) to its attribute (``integrator``). A keyword that
+    is none of these is a TypeError naming it, as Python's own. ``stacklevel`` points the
+    warning at the user's call (3: ``function`` calls this directly)."""
+    aliases = aliases or {}
+    wrong = sorted(set(given) - set(names) - set(aliases))
     if wrong:
         raise TypeError(f"{function}() got an unexpected keyword argument {wrong[0]!r}")
+    base = Dynamics() if defaults is None else defaults
+    if dynamics is not None and not isinstance(dynamics, Dynamics):
+        raise TypeError(f"dynamics must be a rhoprop.Dynamics, got {type(dynamics).__name__}")
     if not given:
-        return Dynamics() if dynamics is None else resolve(function, dynamics, Dynamics())
+        return base if dynamics is None else dynamics
     warnings.warn(
-        f"{function}({', '.join(f'{k}=' for k in given)}) is deprecated; give them in "
-        f"dynamics=rp.Dynamics({', '.join(f'{k}=...' for k in given)})",
+        f"{function}({', '.join(f'{k}=' for k in given)}) is deprecated; give "
+        f"dynamics=rp.Dynamics({', '.join(f'{aliases.get(k, k)}=...' for k in given)})",
         DeprecationWarning,
-        stacklevel=3,
+        stacklevel=stacklevel,
     )
-    return resolve(function, dynamics, Dynamics(), **given)
-
-
-def integrator_argument(function: str, method: str | None, integrator: str | None) -> str | None:
-    """The integrator of a call that may still use the deprecated keyword ``method``
-    (which now names the uncertainty method of ``ensemble`` and ``propagate_catalog``)."""
-    if method is None:
-        return integrator
-    warnings.warn(
-        f"{function}(method=...) is deprecated; the integrator is called integrator= "
-        "(method= names the uncertainty method of ensemble and propagate_catalog)",
-        DeprecationWarning,
-        stacklevel=3,
-    )
-    if integrator is not None:
-        raise TypeError(f"{function}() got both method= and integrator=; give integrator only")
-    return method
+    if dynamics is not None:
+        raise TypeError(
+            f"{function}() got dynamics= and {', '.join(f'{k}=' for k in given)}; give the "
+            "settings in one place"
+        )
+    settings: dict[str, object] = {}
+    for old, new in aliases.items():
+        if old in given and new in given:
+            raise TypeError(f"{function}() got both {old}= and {new}=; give {new} only")
+    for name, value in given.items():
+        settings[aliases.get(name, name)] = value
+    return replace(base, **settings)  # type: ignore[arg-type]

@@ -12,9 +12,9 @@ asks the object (docs/architecture.md, "Uncertainty methods")."""
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
-from typing import ClassVar, Protocol, TypeAlias, runtime_checkable
+from typing import ClassVar, Protocol, TypeAlias, TypeVar, runtime_checkable
 
 import numpy.typing as npt
 
@@ -34,7 +34,14 @@ from .ccsp import (
 )
 from .dynamics import Dynamics
 from .kappa import KappaProcess
-from .montecarlo import drag_sigma_argument, members_argument, monte_carlo, threads_argument
+from .montecarlo import (
+    MEMBERS,
+    OUTPUT_STEP,
+    drag_sigma_argument,
+    members_argument,
+    monte_carlo,
+    threads_argument,
+)
 from .propagate import DEFAULT_MAX_MEMORY
 from .results import CcspResult, MonteCarloResult
 from .state import OrbitState, Spacecraft
@@ -113,10 +120,10 @@ class MonteCarlo:
         500
     """
 
-    n: int = 1000
+    n: int = MEMBERS
     seed: int = 0
     kappa: KappaProcess | None = None
-    output_step: float | None = 3600.0
+    output_step: float | None = OUTPUT_STEP
     perturbation: Perturbation = "additive"
     drag_sigma: float = 0.0
     record_density: bool = False
@@ -304,6 +311,7 @@ class Ccsp:
 
 #: A method object (the type of ``method=`` everywhere).
 Method: TypeAlias = MonteCarlo | Ccsp
+M = TypeVar("M", bound=MonteCarlo | Ccsp)
 #: The method classes by name.
 _CLASSES: dict[str, type[MonteCarlo] | type[Ccsp]] = {Ccsp.name: Ccsp, MonteCarlo.name: MonteCarlo}
 #: The method names (a command line's choices).
@@ -383,7 +391,7 @@ def from_name(name: str, **settings: object) -> Method:
     return cls(**{k: v for k, v in settings.items() if k in own and v is not None})  # type: ignore[arg-type]
 
 
-def with_keywords(method: Method, function: str, **given: object) -> Method:
+def with_keywords(method: M, function: str, given: Mapping[str, object], stacklevel: int = 3) -> M:
     """``method`` with the deprecated per-method keywords of ``function`` folded in (those
     not None), with a DeprecationWarning; a keyword the method does not have is a
     TypeError naming it."""
@@ -400,7 +408,7 @@ def with_keywords(method: Method, function: str, **given: object) -> Method:
         f"{function}({', '.join(f'{k}=' for k in given)}) is deprecated; give them in the "
         f"method: method=rp.{type(method).__name__}({', '.join(f'{k}=...' for k in given)})",
         DeprecationWarning,
-        stacklevel=3,
+        stacklevel=stacklevel,
     )
     return replace(method, **given)  # type: ignore[arg-type]
 

@@ -10,14 +10,13 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _core, _validate, frames
-from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike
 from ..options import Integrator, Perturbation
 from ..parallel import core_threads, worker_count
 from ..progress import ProgressBar
 from ..time import DurationLike, ut1_seconds
 from . import run_frame
-from .dynamics import Dynamics, integrator_argument, resolve, zonal_degree_argument
+from .dynamics import Dynamics, LooseDynamics, deprecated_keywords, zonal_degree_argument
 from .kappa import KappaProcess, TwoScale
 from .propagate import (
     DEFAULT_MAX_MEMORY,
@@ -35,6 +34,8 @@ from .results import MonteCarloResult, Trajectory, sample_moments, trajectory_fr
 from .state import OrbitState, Spacecraft
 
 if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
     from .._core import _MonteCarloOutput
 
 #: Methods of :func:`monte_carlo` (fixed step: kappa nodes fall on step boundaries).
@@ -84,30 +85,52 @@ def result_bytes(n: int, nt: int, record_density: bool) -> int:
     return n * nt * (8 * (9 + int(record_density)) + 2) + 64 * n + 4 * 24 * block
 
 
+class MonteCarloKeywords(LooseDynamics, total=False):
+    """The keywords of :func:`monte_carlo`: the settings of :class:`~rhoprop.MonteCarlo`
+    (:data:`SETTINGS`, the same names, units and defaults), and, deprecated, the loose
+    :class:`~rhoprop.Dynamics` attributes and ``method`` (an older name of
+    ``integrator``)."""
+
+    n: int
+    kappa: KappaProcess | None
+    seed: int
+    output_step: float | None
+    perturbation: Perturbation
+    record_density: bool
+    progress: bool | Callable[[int], object]
+    threads: int | None
+    max_memory: float
+    drag_sigma: float
+    method: Integrator
+
+
+#: Default members and output spacing (s) of a Monte Carlo.
+MEMBERS, OUTPUT_STEP = 1000, 3600.0
+#: The settings among :class:`MonteCarloKeywords` (the fields of ``rp.MonteCarlo``).
+SETTINGS = (
+    "n",
+    "seed",
+    "kappa",
+    "output_step",
+    "perturbation",
+    "drag_sigma",
+    "record_density",
+    "threads",
+    "max_memory",
+    "progress",
+)
+
+
 def monte_carlo(
     state: OrbitState,
     spacecraft: Spacecraft,
     model: ModelLike,
     duration: DurationLike | None = None,
     *,
-    n: int = 1000,
-    kappa: KappaProcess | None = None,
-    seed: int = 0,
-    output_step: float | None = 3600.0,
     output_times: npt.ArrayLike | None = None,
     initial_covariance: npt.ArrayLike | None = None,
-    perturbation: Perturbation = "additive",
-    record_density: bool = False,
-    progress: bool | Callable[[int], object] = True,
-    integrator: Integrator | None = None,
-    step: float | None = None,
-    threads: int | None = None,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    max_memory: float = DEFAULT_MAX_MEMORY,
-    zonal_degree: int = 2,
-    drag_sigma: float = 0.0,
     dynamics: Dynamics | None = None,
-    method: str | None = None,
+    **settings: Unpack[MonteCarloKeywords],
 ) -> MonteCarloResult:
     """Propagates ``n`` members, each with its own density perturbation kappa(t).
 
@@ -118,54 +141,51 @@ def monte_carlo(
             sigma are sampled into a field once and interpolated by the core.
         duration: span, s (> 0) or a ``timedelta``; may be left out when ``output_times``
             is given (then it must equal the last of them).
-        n: number of members (>= 2).
-        kappa: the kappa process (default :class:`~rhoprop.kappa.TwoScale`, calibrated on
-            observed densities: half-lives 4.6 h and 4.4 days, 54 % of the variance in
-            the slow term; the paper's was ``GaussMarkov(1080)``, 18 min).
-        seed: seed of the members' random streams (same seed, same numbers, whatever the
-            thread count).
-        output_step: output spacing, s (a multiple of the integration step); None gives
-            the start and end only. The end is always an output.
         output_times: explicit output times instead of ``output_step``, s from the epoch
             (increasing, >= 0, on the integration step grid; the last is the end).
         initial_covariance: optional 6x6 covariance of the initial state (m^2, m^2/s,
             m^2/s^2), symmetric positive semi-definite, finite; members then start from
             samples.
-        perturbation: ``"additive"`` (rho = mean + kappa sigma, clipped at 0 and counted)
-            or ``"lognormal"``.
-        record_density: also return the density each member sees at the output times.
-        progress: True shows a progress bar on a terminal for runs longer than a second;
-            or a callable, called with the number of members done about every 50 ms (an
-            exception it raises stops the run and is raised).
-        integrator: ``"rk8"`` (default), ``"rk4"`` or ``"abm"`` fixed step. ``"abm"`` (2
-            evaluations a step, restarted with RK8 at every kappa node) pays for held kappa
-            processes (``Constant``, long ``PiecewiseConstant``): about half RK8's cost
-            at its 80-s default; with nodes every 180 s (``GaussMarkov``) its step becomes
-            60 s and it restarts every third step.
-        step: largest integration step, s (None: the method's default, RK8 180 s, RK4 5 s,
-            ABM 80 s;
-            at most 1/20 of the orbital period); the step used divides the kappa node
-            spacing (e.g. 10 s for ``White(10)``).
-        threads: worker threads (default: all cores; at most 4 per core).
-        floor_altitude: decay floor, m.
-        max_memory: limit on the run's peak memory, bytes (default 8 GiB): a run whose
-            estimate (:func:`result_bytes`: n x outputs x 9 float64, 10 with densities,
-            plus per-member arrays and bounded temporaries) would exceed it is refused
-            before it starts, with the estimate in the message.
-        zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
-            only, the paper's model; 3 to 6 add J3..J6 (EGM2008), which move the paper's orbit
-            by 1.6 km in a day.
-        drag_sigma: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
-            0.1 = 10 %; default 0: every member flies the spacecraft's value). Member i
-            flies Cd*A/m times exp(drag_sigma c_i), c_i ~ N(0, 1): a log-normal with
-            median the nominal value (always positive; for small sigma, 1 + drag_sigma c).
-            c_i comes from a stream of its own per member, so it depends only on ``seed``
-            and i (not on the thread count) and leaves the member's kappa draws as they
-            are without it. The factors are ``result.drag_factors``. At most 3.
-        dynamics: a :class:`~rhoprop.Dynamics` holding ``integrator``, ``step``,
-            ``floor_altitude`` and ``zonal_degree`` at once (then leave those keywords at
-            their defaults).
-        method: deprecated name of ``integrator``.
+        dynamics: :class:`~rhoprop.Dynamics`: the integrator (``"rk8"``, the default,
+            ``"rk4"`` or ``"abm"``, fixed step; ``"abm"``, 2 evaluations a step restarted
+            with RK8 at every kappa node, pays for held kappa processes such as
+            ``Constant``: about half RK8's cost at its 80-s default), the largest
+            ``step`` (s; None: RK8 180 s, RK4 5 s, ABM 80 s, at most 1/20 of the orbital
+            period; the step used divides the kappa node spacing), the zonal degree (2: J2
+            only, the paper's model; 3 to 6 add J3..J6) and the floor altitude (m).
+        **settings: the settings of :class:`~rhoprop.MonteCarlo`
+            (``rp.MonteCarlo(**settings).run(...)`` is the same run):
+
+            - ``n``: number of members (>= 2).
+            - ``kappa``: the kappa process (default :class:`~rhoprop.kappa.TwoScale`, calibrated on
+              observed densities: half-lives 4.6 h and 4.4 days, 54 % of the variance in
+              the slow term; the paper's was ``GaussMarkov(1080)``, 18 min).
+            - ``seed``: seed of the members' random streams (same seed, same numbers, whatever the
+              thread count).
+            - ``output_step``: output spacing, s (a multiple of the integration step); None gives
+              the start and end only. The end is always an output.
+            - ``perturbation``: ``"additive"`` (rho = mean + kappa sigma, clipped at 0 and counted)
+              or ``"lognormal"``.
+            - ``record_density``: also return the density each member sees at the output times.
+            - ``progress``: True shows a progress bar on a terminal for runs longer than a second;
+              or a callable, called with the number of members done about every 50 ms (an
+              exception it raises stops the run and is raised).
+            - ``threads``: worker threads (default: all cores; at most 4 per core).
+            - ``max_memory``: limit on the run's peak memory, bytes (default 8 GiB): a run whose
+              estimate (:func:`result_bytes`: n x outputs x 9 float64, 10 with densities,
+              plus per-member arrays and bounded temporaries) would exceed it is refused
+              before it starts, with the estimate in the message.
+            - ``drag_sigma``: relative 1-sigma of the ballistic coefficient Cd*A/m (dimensionless;
+              0.1 = 10 %; default 0: every member flies the spacecraft's value). Member i
+              flies Cd*A/m times exp(drag_sigma c_i), c_i ~ N(0, 1): a log-normal with
+              median the nominal value (always positive; for small sigma, 1 + drag_sigma c).
+              c_i comes from a stream of its own per member, so it depends only on ``seed``
+              and i (not on the thread count) and leaves the member's kappa draws as they
+              are without it. The factors are ``result.drag_factors``. At most 3.
+
+            Deprecated, folded into ``dynamics`` with a warning: ``integrator``,
+            ``step``, ``floor_altitude``, ``zonal_degree`` (and ``method``, an older name
+            of ``integrator``).
 
     Returns:
         :class:`MonteCarloResult`. Decayed members are NaN from their decay time on and
@@ -179,21 +199,20 @@ def monte_carlo(
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a Spacecraft, got {type(spacecraft).__name__}")
     check_model(model)
+    loose = {k: v for k, v in settings.items() if k not in SETTINGS}
+    dyn = deprecated_keywords("monte_carlo", dynamics, loose, aliases={"method": "integrator"})
+    n, seed, kappa = settings.get("n", MEMBERS), settings.get("seed", 0), settings.get("kappa")
+    output_step = settings.get("output_step", OUTPUT_STEP)
+    perturbation = settings.get("perturbation", "additive")
+    record_density, progress = settings.get("record_density", False), settings.get("progress", True)
+    threads, drag_sigma = settings.get("threads"), settings.get("drag_sigma", 0.0)
+    max_memory = settings.get("max_memory", DEFAULT_MAX_MEMORY)
     kappa = TwoScale() if kappa is None else kappa
     if not isinstance(kappa, KappaProcess):
         raise TypeError(f"kappa must be a rhoprop.kappa process, got {type(kappa).__name__}")
     n = members_argument(n)
     seed = _validate.seed(seed)
     threads = core_threads() if threads is None else threads_argument(threads)
-    dyn = resolve(
-        "monte_carlo",
-        dynamics,
-        Dynamics(),
-        integrator=integrator_argument("monte_carlo", method, integrator),
-        step=step,
-        floor_altitude=floor_altitude,
-        zonal_degree=zonal_degree,
-    )
     method = dyn.integrator or "rk8"
     step, floor_altitude, zonal_degree = dyn.step, dyn.floor_altitude, dyn.zonal_degree
     if method not in METHODS:
@@ -204,7 +223,7 @@ def monte_carlo(
         span = span_of(duration, None, "output_times")
         times = output_grid(span, output_step)
     else:
-        if output_step not in (None, 3600.0):
+        if output_step not in (None, OUTPUT_STEP):
             raise ValueError("give output_step or output_times, not both")
         times = explicit_times("output_times", output_times, allow_zero=True)
         span = span_of(duration, times, "output_times")

@@ -8,32 +8,29 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _core, _validate
-from ..constants import DEFAULT_FLOOR_ALTITUDE, MU
+from ..constants import MU
 from ..density.atlas import Atlas
 from ..density.model import (
     AtmosphereLike,
     CoreAtmosphere,
-    DensityModel,
     ModelLike,
     as_atmosphere,
 )
 from ..options import Integrator
 from ..time import DurationLike, add_seconds, ut1_seconds
 from . import run_frame
-from .dynamics import (
-    Dynamics,
-    integrator_argument,
-    resolve,
-    zonal_degree_argument,
-)
+from .dynamics import Dynamics, LooseDynamics, deprecated_keywords, zonal_degree_argument
 from .results import Trajectory, trajectory_from_core
 from .state import OrbitState, Spacecraft
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
 
 T = TypeVar("T")
 
@@ -282,6 +279,15 @@ def model_argument(model: ModelLike | None, density: ModelLike | None, function:
     return density
 
 
+class PropagateKeywords(LooseDynamics, total=False):
+    """The deprecated keywords of :func:`propagate`: the loose :class:`Dynamics`
+    attributes, ``method`` (an older name of ``integrator``) and ``density`` (of
+    ``model``)."""
+
+    method: Integrator
+    density: ModelLike
+
+
 def propagate(
     state: OrbitState,
     spacecraft: Spacecraft,
@@ -289,14 +295,8 @@ def propagate(
     duration: DurationLike | None = None,
     *,
     output_step: float | None = None,
-    integrator: Integrator | None = None,
-    rtol: float | None = None,
-    step: float | None = None,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    density: DensityModel | None = None,
-    zonal_degree: int = 2,
     dynamics: Dynamics | None = None,
-    method: str | None = None,
+    **deprecated: Unpack[PropagateKeywords],
 ) -> Trajectory:
     """Propagates one orbit with two-body + J2 (optionally up to J6) + drag at the mean
     density; a deep-space orbit (period of 225 min or more) also feels the Sun, the Moon
@@ -311,22 +311,15 @@ def propagate(
         duration: propagation span, s (> 0), or a ``timedelta``.
         output_step: spacing of the outputs, s; None gives the start and end only. The end
             is always an output.
-        integrator: ``"dop853"`` (adaptive, dense output; default), ``"rk8"`` (fixed-step
-            8th-order Dormand-Prince), ``"rk4"`` (fixed-step classic RK4) or ``"abm"``
-            (fixed-step Adams-Bashforth-Moulton, 10 back values, started with RK8).
-        rtol: relative tolerance of ``"dop853"`` (default 1e-10).
-        step: step of ``"rk8"`` / ``"rk4"`` / ``"abm"``, s (None: the method's default,
-            180 s / 5 s / 80 s,
-            :data:`DEFAULT_STEP`; at most 1/20 of the orbital period); for ``"dop853"`` an
-            optional largest step.
-        floor_altitude: geodetic altitude below which the object counts as decayed, m.
-        zonal_degree: highest zonal harmonic of the gravity field: 2 (default) is J2
-            only, the paper's model; 3 to 6 add J3..J6 (EGM2008), which move the paper's orbit
-            by 1.6 km in a day.
-        dynamics: a :class:`~rhoprop.Dynamics` holding ``integrator``, ``step``,
-            ``rtol``, ``floor_altitude`` and ``zonal_degree`` at once (then leave those
-            keywords at their defaults).
-        method: deprecated name of ``integrator``.
+        dynamics: :class:`~rhoprop.Dynamics`: the integrator (``"dop853"``, adaptive with
+            dense output, the default; ``"rk8"``, ``"rk4"`` or ``"abm"``, fixed step),
+            its ``step`` (s; for DOP853 an optional largest step) and ``rtol`` (DOP853's,
+            default 1e-10), the zonal degree (2: J2 only, the paper's model; up to 6) and
+            the floor altitude (m). None: ``Dynamics()``.
+        **deprecated: ``integrator=``, ``rtol=``, ``step=``, ``floor_altitude=``,
+            ``zonal_degree=`` (and ``method=``, an older name of ``integrator``), folded
+            into ``dynamics`` with a DeprecationWarning; ``density=``, an older name of
+            ``model``.
 
     Returns:
         :class:`Trajectory` at the output times (shorter if the object decayed; its
@@ -341,22 +334,14 @@ def propagate(
         >>> tr.positions.shape
         (2, 3)
     """
-    model = model_argument(model, density, "propagate")
+    loose = dict(deprecated)
+    model = model_argument(model, loose.pop("density", None), "propagate")  # type: ignore[arg-type]
     if not isinstance(state, OrbitState):
         raise TypeError(f"state must be an OrbitState, got {type(state).__name__}")
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a Spacecraft, got {type(spacecraft).__name__}")
     check_model(model)
-    dyn = resolve(
-        "propagate",
-        dynamics,
-        Dynamics(),
-        integrator=integrator_argument("propagate", method, integrator),
-        step=step,
-        rtol=rtol,
-        floor_altitude=floor_altitude,
-        zonal_degree=zonal_degree,
-    )
+    dyn = deprecated_keywords("propagate", dynamics, loose, aliases={"method": "integrator"})
     method = dyn.integrator or "dop853"
     step, rtol, floor_altitude, zonal_degree = (
         dyn.step,

@@ -17,6 +17,7 @@ from ..density.model import DensityModel, ModelLike
 from ..ensemble import debias_drag_coefficient, ensemble
 from ..options import Integrator
 from ..propagation import (
+    Dynamics,
     MonteCarlo,
     MonteCarloResult,
     OrbitState,
@@ -142,8 +143,7 @@ def method_comparison(
             seed=seed,
             output_step=None,
             progress=progress,
-            integrator=integrator,
-            step=step,
+            dynamics=Dynamics(integrator=integrator, step=step),
         )
         # Over the members still flying at the end (decayed ones are NaN).
         stds[key] = float(results[key].stats().std[-1, 1])
@@ -159,8 +159,7 @@ def method_comparison(
             output_step=h,
             record_density=True,
             progress=False,
-            integrator=integrator,
-            step=step,
+            dynamics=Dynamics(integrator=integrator, step=step),
         )
         assert trace.densities is not None  # record_density=True
         traces[key] = (trace.times, trace.densities)

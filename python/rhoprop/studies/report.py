@@ -14,7 +14,7 @@ from .. import frames
 from ..density import Msis
 from ..ensemble import EnsembleResult
 from ..io import OutputFolder, command_line
-from ..propagation import OrbitState, Spacecraft, propagate
+from ..propagation import Dynamics, OrbitState, Spacecraft, propagate
 from ..spaceweather import SpaceWeather
 from . import scenarios
 from .conjunction import ConjunctionStudy, conjunction_study, most_disputed
@@ -276,7 +276,7 @@ def _paper_orbits(
     reference = None
     for method in ("dop853", "rk8", "rk4"):
         t0 = time.perf_counter()
-        tr = propagate(state, craft, model, duration, integrator=method)
+        tr = propagate(state, craft, model, duration, dynamics=Dynamics(integrator=method))
         wall = time.perf_counter() - t0
         reference = tr.positions[-1] if reference is None else reference
         diff = float(np.linalg.norm(tr.positions[-1] - reference))
