@@ -113,7 +113,7 @@ def fit_all(snapshot: Path) -> None:
     )
 
 
-def on_dask(objs, model, end, **options):
+def on_dask(objs, model, end, errors="raise"):
     """(result, wall s) of ``propagate_catalog`` on a 2-worker Dask LocalCluster."""
     import distributed
 
@@ -124,9 +124,8 @@ def on_dask(objs, model, end, **options):
         distributed.Client(cluster) as client,
     ):
         t0 = time.perf_counter()
-        remote = catalog.propagate_catalog(
-            objs, model, end, client=client, progress=False, **options
-        )
+        run_on = rp.Execution(client=client, progress=False, errors=errors)
+        remote = catalog.propagate_catalog(objs, model, end, execution=run_on)
         return remote, time.perf_counter() - t0
 
 
@@ -155,7 +154,12 @@ def whole(snapshot: Path, days: float, dask: bool) -> None:
     stages["fit"] = time.perf_counter() - t0
     fitted = sum(o.fit is not None for o in objs)
     t0 = time.perf_counter()
-    local = catalog.propagate_catalog(objs, model, end, progress=False, errors="record")
+    local = catalog.propagate_catalog(
+        objs,
+        model,
+        end,
+        execution=rp.Execution(progress=False, errors="record"),
+    )
     stages["propagation"] = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
@@ -262,11 +266,21 @@ def main() -> None:
     end = max(o.state.epoch for o in cat) + np.timedelta64(int(args.days * 86400), "s")
     model = rp.density.Msis("2.1")
     t0 = time.perf_counter()
-    catalog.propagate_catalog(cat, model, end, progress=False, errors="record")
+    catalog.propagate_catalog(
+        cat,
+        model,
+        end,
+        execution=rp.Execution(progress=False, errors="record"),
+    )
     first = time.perf_counter() - t0
     # The second run finds the field in the disk cache: propagation alone.
     t0 = time.perf_counter()
-    local = catalog.propagate_catalog(cat, model, end, progress=False, errors="record")
+    local = catalog.propagate_catalog(
+        cat,
+        model,
+        end,
+        execution=rp.Execution(progress=False, errors="record"),
+    )
     wall = time.perf_counter() - t0
     print(f"first run, field sampling included: {first:.1f} s (field ~{first - wall:.1f} s)")
     memory = rp.density.atlas.field_memory()

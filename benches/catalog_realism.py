@@ -200,8 +200,7 @@ def run_config(
             model,
             truth[obj.norad_id]["epoch"],
             output_step=1e9,
-            progress=False,
-            errors="record",
+            execution=rp.Execution(progress=False, errors="record"),
         )
         ran = res.objects[0]
         fitted = ran.fit if ran.fit is not None else obj.fit

@@ -129,7 +129,10 @@ def realism(
         if later.state.epoch <= obj.state.epoch + np.timedelta64(86400, "s"):
             continue
         res = rp.catalog.propagate_catalog(
-            [obj], model, later.state.epoch, progress=False, errors="record"
+            [obj],
+            model,
+            later.state.epoch,
+            execution=rp.Execution(progress=False, errors="record"),
         )
         if res.status[0] != "propagated":
             print(f"{k} {obj.name.strip()}: {res.status[0]}: {res.reason[0]}")

@@ -146,8 +146,7 @@ def start_day(
                 model,
                 truth[norad]["epoch"],
                 output_step=1e9,
-                progress=False,
-                errors="record",
+                execution=rp.Execution(progress=False, errors="record"),
             )
             return norad, {
                 "mean": res.mean[0, -1],

@@ -123,7 +123,7 @@ def main() -> None:
             end,
             output_step=3600.0,
             start=utc[0] - np.timedelta64(1, "h"),
-            progress=False,
+            execution=rp.Execution(progress=False),
         )
     rows: dict[str, dict[int, list[tuple[float, float, float]]]] = {}
     for i, prn in enumerate(order):

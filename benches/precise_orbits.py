@@ -102,7 +102,13 @@ def predict(
     obj = cat.objects[0]
     out = []
     for end in ends:
-        res = catalog.propagate_catalog([obj], model, end, output_step=1e9, progress=False)
+        res = catalog.propagate_catalog(
+            [obj],
+            model,
+            end,
+            output_step=1e9,
+            execution=rp.Execution(progress=False),
+        )
         out.append(rp.frames.teme_to_gcrf(obj.state.epoch, res.mean[0, -1])[:3])
     return out
 

@@ -38,7 +38,9 @@ msis = rp.density.Msis("2.1", resolution=coarse)
 h("propagate dop853", rp.propagate(state, craft, exp, 86400.0, output_step=600.0).positions)
 h(
     "propagate rk8 J4",
-    rp.propagate(state, craft, msis, 86400.0, method="rk8", zonal_degree=4).positions,
+    rp.propagate(
+        state, craft, msis, 86400.0, dynamics=rp.Dynamics(integrator="rk8", zonal_degree=4)
+    ).positions,
 )
 mc = rp.monte_carlo(state, craft, exp, 86400.0, n=64, seed=3, progress=False, drag_sigma=0.1)
 h("monte_carlo exp", mc.positions, mc.velocities)
@@ -64,7 +66,11 @@ c = rp.ccsp(
 h("ccsp msis", c.mean, c.covariance)
 cat = catalog.load(SAMPLE)
 r = catalog.propagate_catalog(
-    cat, exp, "2002-09-08T00:00", output_step=1800.0, progress=False, errors="record"
+    cat,
+    exp,
+    "2002-09-08T00:00",
+    output_step=1800.0,
+    execution=rp.Execution(progress=False, errors="record"),
 )
 h("catalog ccsp", r.mean, r.covariance)
 r = catalog.propagate_catalog(
@@ -72,7 +78,7 @@ r = catalog.propagate_catalog(
     msis,
     "2002-09-07T12:00",
     output_step=1800.0,
-    progress=False,
+    execution=rp.Execution(progress=False),
     method=rp.MonteCarlo(n=16),
 )
 h("catalog mc msis", r.mean, r.covariance)
@@ -84,7 +90,7 @@ s = rp.conjunction.screen(
     start="2002-09-07T00:00",
     end="2002-09-08T00:00",
     distance=5e6,
-    progress=False,
+    execution=rp.Execution(progress=False),
 )
 h("screen", [e.miss_distance for e in s.events], [e.tca.astype("int64") for e in s.events])
 ens = rp.ensemble(

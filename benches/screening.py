@@ -121,8 +121,7 @@ def main() -> None:
             start=start,
             end=end,
             distance=args.distance,
-            threads=args.threads,
-            progress=False,
+            execution=rp.Execution(threads=args.threads, progress=False),
         )
         print(
             f"\nprimary {prim.name} ({norad}), {start} + {args.days:g} days, distance "
@@ -199,9 +198,7 @@ def all_on_all(args: argparse.Namespace) -> None:
         end=end,
         distance=args.distance,
         pc=not args.no_pc,
-        threads=args.threads,
-        errors="record",
-        progress=False,
+        execution=rp.Execution(threads=args.threads, errors="record", progress=False),
     )
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(
@@ -267,9 +264,9 @@ def dask_scaling(args: argparse.Namespace) -> None:
     end = start + np.timedelta64(int(days * 86400), "s")
     models = default_models()
     kw = dict(start=start, end=end, distance=args.distance, pc=not args.no_pc)
-    kw.update(errors="record", progress=False)
-    screen_all(objs, models, **kw)  # warm: the atlas tiles sampled and cached
-    local = screen_all(objs, models, **kw)
+    quiet = rp.Execution(errors="record", progress=False)
+    screen_all(objs, models, execution=quiet, **kw)  # warm: the atlas tiles sampled and cached
+    local = screen_all(objs, models, execution=quiet, **kw)
     key = [(e.id1, e.id2, e.tca) for e in local.events]
     runs = {"local": local}
     for n in (int(x) for x in args.dask.split(",")):
@@ -279,7 +276,8 @@ def dask_scaling(args: argparse.Namespace) -> None:
             ) as cluster,
             distributed.Client(cluster) as client,
         ):
-            res = screen_all(objs, models, client=client, **kw)
+            on_dask = rp.Execution(client=client, errors="record", progress=False)
+            res = screen_all(objs, models, execution=on_dask, **kw)
         same = [(e.id1, e.id2, e.tca) for e in res.events] == key and np.array_equal(
             res.pc_models, local.pc_models, equal_nan=True
         )

@@ -211,7 +211,13 @@ def test_dask_workers_sample_or_read_tiles_and_give_the_same_bits(tmp_path, monk
 
     model = rp.density.Msis("2.1", resolution=COARSE)
     cat = rp.catalog.load(SAMPLE)
-    local = rp.catalog.propagate_catalog(cat, model, END, output_step=1800.0, progress=False)
+    local = rp.catalog.propagate_catalog(
+        cat,
+        model,
+        END,
+        output_step=1800.0,
+        execution=rp.Execution(progress=False),
+    )
     monkeypatch.setenv("RHOPROP_CACHE", str(tmp_path))
     with (
         distributed.LocalCluster(
@@ -220,7 +226,11 @@ def test_dask_workers_sample_or_read_tiles_and_give_the_same_bits(tmp_path, monk
         distributed.Client(cluster) as client,
     ):
         remote = rp.catalog.propagate_catalog(
-            cat, model, END, output_step=1800.0, client=client, chunk_size=2, progress=False
+            cat,
+            model,
+            END,
+            output_step=1800.0,
+            execution=rp.Execution(client=client, chunk_size=2, progress=False),
         )
     np.testing.assert_array_equal(remote.mean, local.mean)
     np.testing.assert_array_equal(remote.covariance, local.covariance)

@@ -133,7 +133,7 @@ def local_result():
         rp.scenarios.benchmark_exponential(0.2),
         END,
         output_step=1800.0,
-        progress=False,
+        execution=rp.Execution(progress=False),
     )
 
 
@@ -147,7 +147,12 @@ def test_common_epochs_and_decay(local_result):
     # "decayed" with the epoch; outputs after it are invalid and NaN (they used to hold
     # the last valid state).
     dense = rp.density.Exponential(3e-9, 400e3, 58.515e3, rel_sigma=0.2)
-    d = catalog.propagate_catalog(catalog.load(SAMPLE), dense, "2002-09-09T00:00", progress=False)
+    d = catalog.propagate_catalog(
+        catalog.load(SAMPLE),
+        dense,
+        "2002-09-09T00:00",
+        execution=rp.Execution(progress=False),
+    )
     assert (~np.isnat(d.decay_epoch)).any()
     k = int(np.flatnonzero(~np.isnat(d.decay_epoch))[0])
     assert not d.valid[k, -1] and np.isfinite(d.mean[d.valid]).all()
@@ -200,7 +205,7 @@ def test_element_sets_older_than_max_span_end_stale_and_leave_the_rest_unchanged
         rp.scenarios.benchmark_exponential(0.2),
         END,
         output_step=1800.0,
-        progress=False,
+        execution=rp.Execution(progress=False),
         max_span=14 * 3600.0,
     )
     assert list(r.status) == ["stale"] * 2 + ["propagated"] * 4
@@ -242,8 +247,8 @@ def test_a_ccsp_that_loses_definiteness_is_shortened_and_says_so(monkeypatch):
             catalog.load(SAMPLE),
             dense,
             "2002-09-09T00:00",
-            progress=False,
-            initial_covariance="paper",
+            initial=rp.catalog.Initial(covariance="paper"),
+            execution=rp.Execution(progress=False),
         )
 
     default = run()
@@ -282,11 +287,21 @@ def test_errors_are_raised_chained_or_recorded_never_swallowed(tmp_path):
     field = narrow_field()
     # Default: the first failing object raises its own error type, named and chained.
     with pytest.raises(rp.DensityFieldError, match=r"object 9000\d \(SYNTH-\d") as info:
-        catalog.propagate_catalog(cat, field, END, output_step=1800.0, progress=False)
+        catalog.propagate_catalog(
+            cat,
+            field,
+            END,
+            output_step=1800.0,
+            execution=rp.Execution(progress=False),
+        )
     assert isinstance(info.value.__cause__, rp.DensityFieldError)
     # errors="record": every object is kept, with its status and reason.
     r = catalog.propagate_catalog(
-        cat, field, END, output_step=1800.0, progress=False, errors="record"
+        cat,
+        field,
+        END,
+        output_step=1800.0,
+        execution=rp.Execution(progress=False, errors="record"),
     )
     failed = r.status == "failed"
     assert failed.any() and (r.status[~failed] == "propagated").all()
@@ -304,14 +319,24 @@ def test_errors_are_raised_chained_or_recorded_never_swallowed(tmp_path):
     ephemeris = pq.read_table(io.write_ephemeris(r, tmp_path / "e.parquet")).to_pydict()
     assert set(ephemeris["object"]) == set(np.flatnonzero(~failed).tolist())
     with pytest.raises(ValueError, match="errors must be 'raise' or 'record'"):
-        catalog.propagate_catalog(cat, field, END, errors="ignore")
+        catalog.propagate_catalog(
+            cat,
+            field,
+            END,
+            execution=rp.Execution(errors="ignore"),
+        )
 
 
 def test_monte_carlo_catalog_goes_through_the_public_wrapper():
     cat = catalog.load(SAMPLE)
     model = rp.scenarios.benchmark_exponential(0.2)
     r = catalog.propagate_catalog(
-        cat, model, END, method=rp.MonteCarlo(n=16, seed=3), output_step=1800.0, progress=False
+        cat,
+        model,
+        END,
+        method=rp.MonteCarlo(n=16, seed=3),
+        output_step=1800.0,
+        execution=rp.Execution(progress=False),
     )
     obj = cat[2]
     mc = rp.monte_carlo(
@@ -414,9 +439,7 @@ def test_dask_cluster_equals_local(local_result):
             rp.scenarios.benchmark_exponential(0.2),
             END,
             output_step=1800.0,
-            client=client,
-            chunk_size=2,
-            progress=False,
+            execution=rp.Execution(client=client, chunk_size=2, progress=False),
         )
         objs = catalog.load(SAMPLE).objects
         own = [local_result.epochs[: 2 + i] for i in range(len(objs))]
@@ -445,9 +468,7 @@ def test_dask_raises_the_workers_own_exception():
             narrow_field(),
             END,
             output_step=1800.0,
-            client=client,
-            chunk_size=2,
-            progress=False,
+            execution=rp.Execution(client=client, chunk_size=2, progress=False),
         )
     assert info.value.__cause__ is not None
 
@@ -521,9 +542,7 @@ def test_dask_survives_a_worker_dying_mid_run(local_result):
                 rp.scenarios.benchmark_exponential(0.2),
                 END,
                 output_step=1800.0,
-                client=client,
-                chunk_size=1,
-                progress=False,
+                execution=rp.Execution(client=client, chunk_size=1, progress=False),
             )
 
         worker = threading.Thread(target=run)
@@ -617,8 +636,8 @@ def test_an_initial_covariance_callable_is_called_once_per_object():
         rp.scenarios.benchmark_exponential(0.2),
         END,
         output_step=1800.0,
-        initial_covariance=per_object,
-        progress=False,
+        initial=rp.catalog.Initial(covariance=per_object),
+        execution=rp.Execution(progress=False),
     )
     assert sorted(calls) == sorted(o.norad_id for o in cat)
 
@@ -663,9 +682,20 @@ def test_start_before_the_newest_epoch_leaves_only_that_objects_earlier_outputs_
     # epoch on, SYNTH-6 with the same states there as without a start.
     cat = catalog.load(SAMPLE)
     model = rp.scenarios.benchmark_exponential(0.2)
-    plain = catalog.propagate_catalog(cat, model, END, output_step=3600.0, progress=False)
+    plain = catalog.propagate_catalog(
+        cat,
+        model,
+        END,
+        output_step=3600.0,
+        execution=rp.Execution(progress=False),
+    )
     early = catalog.propagate_catalog(
-        cat, model, END, output_step=3600.0, progress=False, start="2002-09-06T12:00"
+        cat,
+        model,
+        END,
+        output_step=3600.0,
+        execution=rp.Execution(progress=False),
+        start="2002-09-06T12:00",
     )
     assert plain.epochs[0] == np.datetime64("2002-09-07T00:00")
     assert early.epochs[0] == np.datetime64("2002-09-06T12:00")
@@ -678,7 +708,13 @@ def test_start_before_the_newest_epoch_leaves_only_that_objects_earlier_outputs_
     assert (early.status == "propagated").all()
     np.testing.assert_array_equal(early.mean[k, lead:], plain.mean[k])
     with pytest.raises(ValueError, match="start"):
-        catalog.propagate_catalog(cat, model, END, start=END, progress=False)
+        catalog.propagate_catalog(
+            cat,
+            model,
+            END,
+            start=END,
+            execution=rp.Execution(progress=False),
+        )
 
 
 def test_cli_catalog_starts_where_99_percent_of_the_epochs_are(tmp_path, capsys):

@@ -160,7 +160,11 @@ def test_catalog_equals_object_by_object(density, end, monkeypatch):
     model = rp.density.Exponential(density, 400e3, 58.515e3, rel_sigma=0.2)
     cat = catalog.load(SAMPLE)
     batched = catalog.propagate_catalog(
-        cat, model, end, progress=False, initial_covariance="object"
+        cat,
+        model,
+        end,
+        initial=rp.catalog.Initial(covariance="object"),
+        execution=rp.Execution(progress=False),
     )
     alone = one_by_one(cat, model, end, initial_covariance="object")
     for k, ref in enumerate(alone):

@@ -181,7 +181,11 @@ def test_catalog_monte_carlo_moments_use_the_survivors():
     cat = catalog.load(catalog_sample())
     end = "2002-09-09T00:00"
     res = catalog.propagate_catalog(
-        cat, dense, end, method=rp.MonteCarlo(n=20, seed=5), progress=False
+        cat,
+        dense,
+        end,
+        method=rp.MonteCarlo(n=20, seed=5),
+        execution=rp.Execution(progress=False),
     )
     assert set(res.status) <= {"propagated", "decayed"} and "decayed" in set(res.status)
     # Object k is the public Monte Carlo seeded with seed + k at the common epochs.

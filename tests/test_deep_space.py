@@ -99,7 +99,12 @@ def test_deep_space_covariance_covers_the_next_element_sets(test_data, tmp_path,
         when = rp.time.from_jd(later.jdsatepoch, later.jdsatepochF, scale="utc")
         _, r, v = later.sgp4(later.jdsatepoch, later.jdsatepochF)
         truth = rp.OrbitState(when, np.array(r) * 1e3, np.array(v) * 1e3)
-        res = catalog.propagate_catalog([obj], rp.density.Msis("2.1"), when, progress=False)
+        res = catalog.propagate_catalog(
+            [obj],
+            rp.density.Msis("2.1"),
+            when,
+            execution=rp.Execution(progress=False),
+        )
         assert list(res.status) == ["propagated"]
         mean = res.mean[0, -1]
         cov = res.covariance[0, -1, :3, :3] + tle_covariance(truth)[:3, :3]

@@ -226,7 +226,14 @@ def test_catalog_drag_sigma_per_object():
     model = rp.scenarios.benchmark_exponential(0.2)
 
     def run(**kw):
-        return catalog.propagate_catalog(cat, model, END, output_step=1800.0, progress=False, **kw)
+        return catalog.propagate_catalog(
+            cat,
+            model,
+            END,
+            output_step=1800.0,
+            initial=rp.catalog.Initial(**kw),
+            execution=rp.Execution(progress=False),
+        )
 
     auto, none, fixed = run(), run(drag_sigma=0.0), run(drag_sigma=lambda o: 0.3)
     # No fit: "auto" is 0.15 (the reentry rule); the note says what is included.
@@ -273,7 +280,11 @@ def test_catalog_auto_rule_for_fitted_objects():
         for o, rel in zip(cat.objects[:3], (0.05, 0.1, 6.0), strict=True)
     ]
     r = catalog.propagate_catalog(
-        objs, rp.scenarios.benchmark_exponential(0.2), END, output_step=1800.0, progress=False
+        objs,
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        execution=rp.Execution(progress=False),
     )
     np.testing.assert_allclose(r.drag_sigma, [0.08, 0.1, 1.0], rtol=1e-12)
     assert "relative 1-sigma 0.1, the fit's formal sigma" in r.covariance_note[1]

@@ -110,7 +110,7 @@ def test_progress_is_a_bool_or_a_callable_everywhere():
         rp.scenarios.benchmark_exponential(0.2),
         END,
         output_step=1800.0,
-        progress=seen.append,
+        execution=rp.Execution(progress=seen.append),
     )
     assert seen and seen[-1] == len(rp.catalog.load(SAMPLE))
 
@@ -130,7 +130,13 @@ def test_catalog_runs_honour_the_integration_settings():
 
     def run(**kw):
         return catalog.propagate_catalog(
-            cat, model, END, output_step=1800.0, progress=False, initial_covariance=None, **kw
+            cat,
+            model,
+            END,
+            output_step=1800.0,
+            initial=rp.catalog.Initial(covariance=None),
+            execution=rp.Execution(progress=False),
+            **kw,
         )
 
     default = run()
@@ -209,7 +215,7 @@ def test_a_setting_a_function_cannot_use_is_refused(setup, call, message):
             end=END,
             distance=5e3,
             dynamics=rp.Dynamics(zonal_degree=4, integrator="rk4"),
-            progress=False,
+            execution=rp.Execution(progress=False),
         ),
     }
     with pytest.raises(ValueError, match=message):
@@ -241,7 +247,7 @@ def test_screens_and_closest_approach_propagate_with_the_integration_settings(mo
         [(s2, CRAFT, "b")],
         MODEL,
         distance=1e3,
-        progress=False,
+        execution=rp.Execution(progress=False),
         dynamics=dyn,
         **window,
     )
@@ -256,7 +262,7 @@ def test_screens_and_closest_approach_propagate_with_the_integration_settings(mo
         MODEL,
         distance=1e3,
         pc=False,
-        progress=False,
+        execution=rp.Execution(progress=False),
         dynamics=rp.Dynamics(zonal_degree=2, rtol=1e-8),
         **window,
     )

@@ -88,7 +88,13 @@ def test_eccentric_catalog_run_follows_a_monte_carlo_of_its_initial_covariance()
     obj = CatalogObject("MOLNIYA-LIKE", 99001, state, 0.01, 0.0, "test", cov, "element model")
     atm = rp.scenarios.benchmark_exponential(0.2)
     end = EPOCH + np.timedelta64(3 * 86400, "s")
-    res = propagate_catalog([obj], atm, end, dynamics=rp.Dynamics(zonal_degree=4), progress=False)
+    res = propagate_catalog(
+        [obj],
+        atm,
+        end,
+        dynamics=rp.Dynamics(zonal_degree=4),
+        execution=rp.Execution(progress=False),
+    )
     assert list(res.status) == ["propagated"]
     mean = res.mean[0, -1]
     basis = rtn_basis(mean[:3], mean[3:])
@@ -151,7 +157,11 @@ def test_update_times_at_edges_and_unbound_states():
     obj = CatalogObject("MOLNIYA-LIKE", 99001, state, 0.01, 0.0, "test", cov, "element model")
     atm = rp.scenarios.benchmark_exponential(0.2)
     res = propagate_catalog(
-        [obj], atm, EPOCH + np.timedelta64(7200, "s"), output_step=86400.0, progress=False
+        [obj],
+        atm,
+        EPOCH + np.timedelta64(7200, "s"),
+        output_step=86400.0,
+        execution=rp.Execution(progress=False),
     )
     assert list(res.status) == ["propagated"]
     r = 7e6

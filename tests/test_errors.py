@@ -57,8 +57,8 @@ def test_core_errors_arrive_typed_with_their_values():
             rp.catalog.load(SAMPLE),
             rp.scenarios.benchmark_exponential(0.2),
             END,
-            initial_covariance=-np.eye(6),
-            progress=False,
+            initial=rp.catalog.Initial(covariance=-np.eye(6)),
+            execution=rp.Execution(progress=False),
         )
     assert info.value.time == 0.0 and info.value.min_eigenvalue < 0
 

@@ -86,7 +86,11 @@ def test_nonpositive_bstar_loads_with_a_guess_fitted_or_refused(tle_file, atmosp
     with pytest.raises(ValueError, match="needs a density model"):
         catalog.load(tle_file, fit=True)
     r = catalog.propagate_catalog(
-        fitted, atmosphere, "2002-09-09T00:00", initial_covariance="object", progress=False
+        fitted,
+        atmosphere,
+        "2002-09-09T00:00",
+        initial=rp.catalog.Initial(covariance="object"),
+        execution=rp.Execution(progress=False),
     )
     assert (r.status == "propagated").all()
 
@@ -138,11 +142,18 @@ def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):
     cat = catalog.load(SAMPLE)
     end = "2002-09-08T00:00"
     # Cd*A/m uncertainty off: it would hide the initial covariance being compared here.
-    kw = {"progress": False, "output_step": 21600.0, "drag_sigma": 0.0}
-    paper = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="paper", **kw)
-    default = catalog.propagate_catalog(cat, atmosphere, end, **kw)  # "object"
-    tle = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="tle", **kw)
-    own = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="object", **kw)
+    quiet = rp.Execution(progress=False)
+
+    def run(**kw):
+        initial = rp.catalog.Initial(drag_sigma=0.0, **kw)
+        return catalog.propagate_catalog(
+            cat, atmosphere, end, output_step=21600.0, initial=initial, execution=quiet
+        )
+
+    paper = run(covariance="paper")
+    default = run()  # "object"
+    tle = run(covariance="tle")
+    own = run(covariance="object")
     np.testing.assert_array_equal(tle.covariance, own.covariance)
     np.testing.assert_array_equal(default.covariance, own.covariance)
     ok = paper.valid[:, -1] & tle.valid[:, -1]
@@ -153,10 +164,10 @@ def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):
     assert "near-zero" in paper.covariance_note[0]
     assert "TLE accuracy" in tle.covariance_note[0] and "not included" in tle.covariance_note[0]
     matrix = np.diag([1e4, 1e4, 1e4, 1.0, 1.0, 1.0])
-    user = catalog.propagate_catalog(cat, atmosphere, end, initial_covariance=matrix, **kw)
+    user = run(covariance=matrix)
     assert "user-supplied" in user.covariance_note[0]
     with pytest.raises(ValueError, match="initial_covariance"):
-        catalog.propagate_catalog(cat, atmosphere, end, initial_covariance="huge", **kw)
+        run(covariance="huge")
     paths = rp.io.write_oem(tle, tmp_path / "oem")
     assert "COMMENT initial covariance: published TLE accuracy" in paths[0].read_text()
     table = catalog.summary_table(tle)
@@ -247,7 +258,10 @@ def test_tle_covariance_near_the_apogee_of_an_eccentric_orbit_has_full_rank(test
     sig = np.sqrt(np.diag(basis @ cov[:3, :3] @ basis.T))
     np.testing.assert_allclose(sig, [acc.radial, acc.along_track, acc.cross_track], rtol=1e-6)
     r = catalog.propagate_catalog(
-        [obj], rp.scenarios.benchmark_exponential(0.2), "2023-06-30T13:00", progress=False
+        [obj],
+        rp.scenarios.benchmark_exponential(0.2),
+        "2023-06-30T13:00",
+        execution=rp.Execution(progress=False),
     )
     assert list(r.status) == ["propagated"]
 

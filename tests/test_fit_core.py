@@ -14,6 +14,8 @@ import pytest
 from reference_fit import reference_fit
 from sgp4.api import Satrec
 
+from rhoprop import Execution
+from rhoprop.catalog import Initial
 from rhoprop.catalog import fit as fit_module
 from rhoprop.catalog.fit import fit_element_set, fit_histories
 from rhoprop.density import Msis
@@ -98,7 +100,12 @@ def test_propagate_catalog_fits_near_earth_objects_at_every_altitude_by_default(
     objs = [*low, *high]
     end = max(o.state.epoch for o in objs) + np.timedelta64(6, "h")
     model = Msis("2.1")
-    res = catalog.propagate_catalog(objs, model, end, progress=False)
+    res = catalog.propagate_catalog(
+        objs,
+        model,
+        end,
+        execution=Execution(progress=False),
+    )
     assert [o.fit is not None for o in res.objects] == [True, True, True]
     high_alone = catalog.fit_objects(high, model, zonal_degree=4)[0]
     assert np.array_equal(res.objects[2].state.state, high_alone.state.state)
@@ -106,12 +113,24 @@ def test_propagate_catalog_fits_near_earth_objects_at_every_altitude_by_default(
     alone = catalog.fit_objects(low[:1], model, zonal_degree=4)[0]
     assert np.array_equal(res.objects[0].state.state, alone.state.state)
     assert res.objects[0].drag_parameter == alone.drag_parameter
-    plain = catalog.propagate_catalog(objs, model, end, progress=False, fit=False)
+    plain = catalog.propagate_catalog(
+        objs,
+        model,
+        end,
+        initial=Initial(fit=False),
+        execution=Execution(progress=False),
+    )
     assert all(o.fit is None for o in plain.objects)
     assert "Cd*A/m fitted" in res.covariance_note[0]
     assert "Cd*A/m fitted" not in plain.covariance_note[0]
     with pytest.raises(ValueError, match="fit must be"):
-        catalog.propagate_catalog(objs, model, end, progress=False, fit="yes")
+        catalog.propagate_catalog(
+            objs,
+            model,
+            end,
+            initial=Initial(fit="yes"),
+            execution=Execution(progress=False),
+        )
 
 
 def test_rhoprop_catalog_names_skip_bad_when_an_element_set_is_unusable(tmp_path, capsys):

@@ -109,7 +109,14 @@ def test_catalog_runs_say_when_the_cartesian_gaussian_stops_holding():
     model = rp.density.Exponential.benchmark(rel_sigma=0.2)
     objs = [catalog_object(300e3), catalog_object(700e3)]
     end = "2009-12-16T00:00:00"  # 14 days
-    r = propagate_catalog(objs, model, end, output_step=6 * 3600.0, drag_sigma=0.1, progress=False)
+    r = propagate_catalog(
+        objs,
+        model,
+        end,
+        output_step=6 * 3600.0,
+        initial=rp.catalog.Initial(drag_sigma=0.1),
+        execution=rp.Execution(progress=False),
+    )
     assert list(r.status) == ["non_gaussian", "propagated"], list(r.reason)
     assert "does not hold the spread's shape" in r.reason[0] and r.reason[1] == ""
     assert r.gaussian is not None and r.valid.all()
@@ -125,8 +132,8 @@ def test_catalog_runs_say_when_the_cartesian_gaussian_stops_holding():
         model,
         "2009-12-03T00:00:00",
         output_step=3600.0,
-        drag_sigma=0.1,
-        progress=False,
+        initial=rp.catalog.Initial(drag_sigma=0.1),
+        execution=rp.Execution(progress=False),
     )
     assert short.status[0] == "propagated"
 

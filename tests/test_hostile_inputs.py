@@ -370,14 +370,14 @@ def test_user_csvs_take_a_byte_order_mark_and_name_bad_bytes_and_repeats(tmp_pat
 
 def test_numpy_scalars_are_numbers_for_the_pc_options():
     # np.float32 / np.int64 were refused as a hard-body radius or a radius.
-    from rhoprop.conjunction.event_pc import check_options
+    from rhoprop.conjunction import PcSettings
 
-    check_options({"m": None}, None, np.float32(3.0), None)
-    check_options({"m": None}, None, None, {5: np.int64(2), 6: np.float64(1.5)})
+    PcSettings(hard_body_radius=np.float32(3.0))
+    PcSettings(radii={5: np.int64(2), 6: np.float64(1.5)})
     with pytest.raises(ValueError, match="hard_body_radius"):
-        check_options({"m": None}, None, np.bool_(True), None)
+        PcSettings(hard_body_radius=np.bool_(True))
     with pytest.raises(ValueError, match="radii"):
-        check_options({"m": None}, None, None, {5: np.float32(-1.0)})
+        PcSettings(radii={5: np.float32(-1.0)})
 
 
 def test_a_ten_year_run_is_not_too_many_steps_and_the_limit_names_the_run():
@@ -583,9 +583,9 @@ def test_screen_all_of_any_settings_runs_or_is_refused(distance, days, grid_step
             start=start,
             end=end,
             distance=distance,
-            grid_step=grid_step,
+            search=rp.conjunction.Search(grid_step=grid_step),
+            execution=rp.Execution(progress=False),
             pc=False,
-            progress=False,
         )
     except GOOD:
         return
@@ -618,7 +618,17 @@ def test_a_client_that_is_not_a_dask_client_is_refused_before_the_run():
     end = rp.time.add_seconds(start, 3600.0)
     with pytest.raises(TypeError, match=r"screen_all: client must be a dask.*\(no submit, scatter"):
         rp.conjunction.screen_all(
-            objs, MODEL, start=start, end=end, distance=5e5, client=object(), progress=False
+            objs,
+            MODEL,
+            start=start,
+            end=end,
+            distance=5e5,
+            execution=rp.Execution(client=object(), progress=False),
         )
     with pytest.raises(TypeError, match=r"propagate_catalog: client must be a dask"):
-        rp.catalog.propagate_catalog(objs, MODEL, end=end, client="tcp://x:8786", progress=False)
+        rp.catalog.propagate_catalog(
+            objs,
+            MODEL,
+            end=end,
+            execution=rp.Execution(client="tcp://x:8786", progress=False),
+        )

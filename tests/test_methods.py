@@ -129,7 +129,13 @@ def test_the_old_strings_and_keywords_warn_and_give_the_same_numbers():
 def test_a_catalog_takes_its_method_whole():
     cat = catalog.load(SAMPLE)
     mc = rp.MonteCarlo(n=16, seed=3)
-    new = catalog.propagate_catalog(cat, MODEL, END, method=mc, progress=False)
+    new = catalog.propagate_catalog(
+        cat,
+        MODEL,
+        END,
+        method=mc,
+        execution=rp.Execution(progress=False),
+    )
     with pytest.warns(DeprecationWarning, match="propagate_catalog"):
         old = catalog.propagate_catalog(
             cat, MODEL, END, method="monte_carlo", n=16, seed=3, progress=False
@@ -138,9 +144,18 @@ def test_a_catalog_takes_its_method_whole():
     assert new.method == "monte_carlo"
     # The CCSP's kappa reaches every object now (it was dropped before: the filter ran
     # the default process whatever was given).
-    plain = catalog.propagate_catalog(cat, MODEL, END, progress=False)
+    plain = catalog.propagate_catalog(
+        cat,
+        MODEL,
+        END,
+        execution=rp.Execution(progress=False),
+    )
     fast = catalog.propagate_catalog(
-        cat, MODEL, END, method=rp.Ccsp(kappa=rp.kappa.GaussMarkov(1080.0)), progress=False
+        cat,
+        MODEL,
+        END,
+        method=rp.Ccsp(kappa=rp.kappa.GaussMarkov(1080.0)),
+        execution=rp.Execution(progress=False),
     )
     assert plain.method == "ccsp" and not np.array_equal(plain.covariance, fast.covariance)
 
@@ -156,7 +171,13 @@ def test_a_catalog_takes_its_method_whole():
 )
 def test_a_catalog_refuses_a_method_setting_it_cannot_use(method, match):
     with pytest.raises(ValueError, match=match):
-        catalog.propagate_catalog(catalog.load(SAMPLE), MODEL, END, method=method, progress=False)
+        catalog.propagate_catalog(
+            catalog.load(SAMPLE),
+            MODEL,
+            END,
+            method=method,
+            execution=rp.Execution(progress=False),
+        )
 
 
 def test_the_functions_keywords_are_the_method_objects_fields():

@@ -65,7 +65,7 @@ def test_monte_carlo_and_catalog_moments_at():
     assert np.all(np.diag(cov) > 0)
     cat = catalog.load(SAMPLE)
     end = "2002-09-07T06:00"
-    kw = {"progress": False, "fit": False}
+    kw = {"initial": catalog.Initial(fit=False), "execution": rp.Execution(progress=False)}
     res = catalog.propagate_catalog(cat[:2], m, end, output_step=60.0, **kw)
     fine = catalog.propagate_catalog(cat[:2], m, end, output_step=30.0, **kw)
     at = res.epochs[10] + np.timedelta64(30, "s")

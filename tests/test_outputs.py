@@ -135,7 +135,11 @@ def test_object_names_cannot_inject_lines_into_an_oem(tmp_path):
     path.write_text(json.dumps([record]))
     cat = catalog.load(path)
     r = catalog.propagate_catalog(
-        cat, rp.scenarios.benchmark_exponential(0.2), END, output_step=1800.0, progress=False
+        cat,
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        execution=rp.Execution(progress=False),
     )
     (oem_path,) = io.write_oem(r, tmp_path / "oem")
     text = oem_path.read_text()
@@ -152,7 +156,11 @@ def test_a_catalog_oem_in_gcrf_is_rotated_from_teme(tmp_path):
 
     cat = catalog.load(SAMPLE)
     r = catalog.propagate_catalog(
-        cat[:2], rp.scenarios.benchmark_exponential(0.2), END, output_step=1800.0, progress=False
+        cat[:2],
+        rp.scenarios.benchmark_exponential(0.2),
+        END,
+        output_step=1800.0,
+        execution=rp.Execution(progress=False),
     )
     teme = io.write_oem(r, tmp_path / "teme")
     gcrf = io.write_oem(r, tmp_path / "gcrf", ref_frame="GCRF")

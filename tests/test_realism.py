@@ -56,7 +56,12 @@ def test_fitted_mean_beats_sgp4_and_covariance_is_stated(tmp_path, snapshots):
         _, r1, _ = s1.sgp4(s2.jdsatepoch, s2.jdsatepochF)
         truth, vel = np.array(r2) * 1e3, np.array(v2) * 1e3
         res = catalog.propagate_catalog(
-            [obj], field, end, output_step=1e9, initial_covariance="object", progress=False
+            [obj],
+            field,
+            end,
+            output_step=1e9,
+            initial=rp.catalog.Initial(covariance="object"),
+            execution=rp.Execution(progress=False),
         )
         assert res.valid[0, -1] and "TLE accuracy" in res.covariance_note[0]
         along = rtn_basis(truth, vel)[1]

@@ -179,7 +179,9 @@ def test_catalog_and_reentry_runs_of_one_element_set_agree(test_data):
     assert not windows.fitted.any()  # both fits fail (diverge), as measured
     for k, obj in enumerate(windows.objects):
         end = add_seconds(obj.state.epoch, 6 * 86400.0)
-        run = catalog.propagate_catalog([obj], model, end, progress=False, max_span=None)
+        run = catalog.propagate_catalog(
+            [obj], model, end, execution=rp.Execution(progress=False), max_span=None
+        )
         decay = run.decay_epoch[0]
         assert windows.epoch_q025[k] <= decay <= windows.epoch_q975[k], obj.name
 

@@ -220,7 +220,11 @@ def test_ensemble(setup, tmp_path):
 def catalog_result():
     dense = rp.density.Exponential(3e-9, 400e3, 58.515e3, rel_sigma=0.2)
     return catalog.propagate_catalog(
-        catalog.load(SAMPLE), dense, "2002-09-09T00:00", output_step=3 * 3600.0, progress=False
+        catalog.load(SAMPLE),
+        dense,
+        "2002-09-09T00:00",
+        output_step=3 * 3600.0,
+        execution=rp.Execution(progress=False),
     )
 
 

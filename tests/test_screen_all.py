@@ -5,6 +5,7 @@ thread count and bad input."""
 
 from __future__ import annotations
 
+import dataclasses
 import gzip
 import signal
 import subprocess
@@ -118,7 +119,15 @@ def test_screen_all_equals_an_all_pairs_brute_force_search(shell):
     assert len(objs) == 300
     end = add_seconds(start, 3 * 3600.0)
     distance = 20e3
-    res = screen_all(objs, MODEL, start=start, end=end, distance=distance, pc=False, progress=False)
+    res = screen_all(
+        objs,
+        MODEL,
+        start=start,
+        end=end,
+        distance=distance,
+        pc=False,
+        execution=rp.Execution(progress=False),
+    )
     brute = [b for b in _brute_force(objs, start, end, distance) if b[3] <= distance]
     assert len(brute) >= 20  # the subset holds real approaches
     # The filters do their work: far fewer pair-intervals reach the bounds than exist.
@@ -157,10 +166,11 @@ def test_memory_chunks_and_threads_do_not_change_the_events(shell):
     objs, start = shell
     objs = objs[:120]
     end = add_seconds(start, 6 * 3600.0)
-    kwargs = dict(start=start, end=end, distance=30e3, pc=False, progress=False)
-    one = screen_all(objs, MODEL, threads=1, **kwargs)
+    kwargs = dict(start=start, end=end, distance=30e3, pc=False)
+    one = screen_all(objs, MODEL, execution=rp.Execution(threads=1, progress=False), **kwargs)
     # 120 objects x 48 B x 50 samples: chunks of 50 samples (7 chunks over 6 h).
-    cut = screen_all(objs, MODEL, threads=2, max_memory=120 * 48 * 50, **kwargs)
+    small = rp.Execution(threads=2, max_memory=120 * 48 * 50, progress=False)
+    cut = screen_all(objs, MODEL, execution=small, **kwargs)
     assert one.chunks == 1 and cut.chunks == 8
     assert len(one.events) == len(cut.events) >= 5
     for a, b in zip(one.events, cut.events, strict=True):
@@ -188,8 +198,8 @@ def test_pc_per_model_and_mixture_follow_from_the_ccsp_moments(shell):
         start=start,
         end=end,
         distance=30e3,
-        weights={"low 1.0x": 3.0, "High-1.6x": 1.0},
-        progress=False,
+        pc=rp.conjunction.PcSettings(weights={"low 1.0x": 3.0, "High-1.6x": 1.0}),
+        execution=rp.Execution(progress=False),
     )
     assert res.models == ["low 1.0x", "High-1.6x"] and np.allclose(res.weights, [0.75, 0.25])
     # The event table as columns and as a DataFrame: model columns named for Parquet.
@@ -212,7 +222,11 @@ def test_pc_per_model_and_mixture_follow_from_the_ccsp_moments(shell):
     # catalog run whose last output is TCA itself.
     by_id = {o.norad_id: o for o in objs}
     cat = rp.catalog.propagate_catalog(
-        [by_id[e.id1], by_id[e.id2]], MODEL, e.tca, output_step=60.0, progress=False
+        [by_id[e.id1], by_id[e.id2]],
+        MODEL,
+        e.tca,
+        output_step=60.0,
+        execution=rp.Execution(progress=False),
     )
     assert cat.epochs[-1] == e.tca
     c1 = cat.covariance[0, -1, :3, :3]
@@ -236,11 +250,13 @@ def test_radii_table_and_hard_body_radius(shell):
     objs, start = shell
     objs = objs[:80]
     end = add_seconds(start, 6 * 3600.0)
-    kw = dict(start=start, end=end, distance=30e3, progress=False)
-    res = screen_all(objs, MODEL, hard_body_radius=20.0, **kw)
+    kw = dict(start=start, end=end, distance=30e3, execution=rp.Execution(progress=False))
+    res = screen_all(objs, MODEL, pc=rp.conjunction.PcSettings(hard_body_radius=20.0), **kw)
     assert len(res.events) >= 1 and (res.hard_body_radius == 20.0).all()
     e = res.events[0]
-    table = screen_all(objs, MODEL, radii={e.id1: 7.0, e.id2: 3.0}, **kw)
+    table = screen_all(
+        objs, MODEL, pc=rp.conjunction.PcSettings(radii={e.id1: 7.0, e.id2: 3.0}), **kw
+    )
     same = [n for n, x in enumerate(table.events) if (x.id1, x.id2, x.tca) == (e.id1, e.id2, e.tca)]
     assert table.hard_body_radius[same[0]] == 10.0
     assert object_radius("FENGYUN 1C DEB") == RADII["debris"]
@@ -270,23 +286,72 @@ def test_bad_input_is_refused_naming_what(shell):
     objs, start = shell
     end = add_seconds(start, 3600.0)
     with pytest.raises(ValueError, match="distance"):
-        screen_all(objs[:5], MODEL, start=start, end=end, distance=-1.0, progress=False)
+        screen_all(
+            objs[:5],
+            MODEL,
+            start=start,
+            end=end,
+            distance=-1.0,
+            execution=rp.Execution(progress=False),
+        )
     with pytest.raises(ValueError, match="end"):
-        screen_all(objs[:5], MODEL, start=end, end=start, distance=1e3, progress=False)
+        screen_all(
+            objs[:5],
+            MODEL,
+            start=end,
+            end=start,
+            distance=1e3,
+            execution=rp.Execution(progress=False),
+        )
     with pytest.raises(ValueError, match="at least two"):
-        screen_all(objs[:1], MODEL, start=start, end=end, distance=1e3, progress=False)
+        screen_all(
+            objs[:1],
+            MODEL,
+            start=start,
+            end=end,
+            distance=1e3,
+            execution=rp.Execution(progress=False),
+        )
     with pytest.raises(ValueError, match="grid_step"):
-        screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, grid_step=900.0)
+        screen_all(
+            objs[:5],
+            MODEL,
+            start=start,
+            end=end,
+            distance=1e3,
+            search=rp.conjunction.Search(grid_step=900.0),
+        )
     with pytest.raises(ValueError, match="reference"):
         screen_all(objs[:5], {"m": MODEL}, reference="x", start=start, end=end, distance=1e3)
     with pytest.raises(ValueError, match="weights"):
-        screen_all(objs[:5], {"m": MODEL}, weights={"y": 1.0}, start=start, end=end, distance=1e3)
+        screen_all(
+            objs[:5],
+            {"m": MODEL},
+            pc=rp.conjunction.PcSettings(weights={"y": 1.0}),
+            start=start,
+            end=end,
+            distance=1e3,
+        )
     with pytest.raises(TypeError, match="objects"):
         screen_all([1, 2], MODEL, start=start, end=end, distance=1e3)
     with pytest.raises(ValueError, match="hard_body_radius"):
-        screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, hard_body_radius=-1)
+        screen_all(
+            objs[:5],
+            MODEL,
+            start=start,
+            end=end,
+            distance=1e3,
+            pc=rp.conjunction.PcSettings(hard_body_radius=-1),
+        )
     with pytest.raises(ValueError, match="radii"):
-        screen_all(objs[:5], MODEL, start=start, end=end, distance=1e3, radii={5: 0.0})
+        screen_all(
+            objs[:5],
+            MODEL,
+            start=start,
+            end=end,
+            distance=1e3,
+            pc=rp.conjunction.PcSettings(radii={5: 0.0}),
+        )
 
 
 def test_screen_all_messages_name_its_own_parameter_and_the_repeats(shell):
@@ -294,7 +359,7 @@ def test_screen_all_messages_name_its_own_parameter_and_the_repeats(shell):
     # said only "needs at least two objects within max_span; 0 of 1 lie further".
     objs, start = shell
     end = add_seconds(start, 3600.0)
-    kw = {"start": start, "end": end, "distance": 1e3, "progress": False}
+    kw = {"start": start, "end": end, "distance": 1e3, "execution": rp.Execution(progress=False)}
     with pytest.raises(TypeError, match=r"^objects must be a rhoprop\.catalog\.Catalog"):
         screen_all(None, MODEL, **kw)
     with pytest.raises(TypeError, match=r"^objects must be a Catalog or a list"):
@@ -302,7 +367,7 @@ def test_screen_all_messages_name_its_own_parameter_and_the_repeats(shell):
     with pytest.raises(ValueError, match=r"two different objects.*1 repeat another's epoch"):
         screen_all([objs[0], objs[0]], MODEL, **kw)
     with pytest.raises(ValueError, match=r"two different objects.*got 0"):
-        screen_all([objs[0], objs[0]], MODEL, **kw, max_span=1.0)
+        screen_all([objs[0], objs[0]], MODEL, **kw, search=rp.conjunction.Search(max_span=1.0))
 
 
 def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
@@ -319,7 +384,8 @@ def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
         add_seconds(old.state.epoch, -61 * 86400.0), old.state.position, old.state.velocity
     )
     stale = dataclasses.replace(old, state=stale_state, name="OLD ONE")
-    kw = {"start": start, "end": end, "distance": 30e3, "pc": False, "progress": False}
+    quiet = rp.Execution(progress=False)
+    kw = {"start": start, "end": end, "distance": 30e3, "pc": False, "execution": quiet}
     res = screen_all([*objs[1:], stale], MODEL, **kw)
     assert [n for n, _ in res.skipped] == ["OLD ONE"]
     assert "days before the start, beyond max_span (60 days" in res.skipped[0][1]
@@ -328,7 +394,7 @@ def test_element_sets_older_than_max_span_are_set_aside_and_named(shell):
         (e.name1, e.name2, e.tca) for e in alone.events
     ]
     with pytest.raises(ValueError, match="max_span"):
-        screen_all(objs[:5], MODEL, **kw, max_span=-1.0)
+        screen_all(objs[:5], MODEL, **kw, search=rp.conjunction.Search(max_span=-1.0))
     from rhoprop.cli import main
 
     sample = Path(__file__).parent / "data" / "sample.tle"
@@ -368,7 +434,9 @@ def test_progress_reports_every_stage():
         start=epoch,
         end=epoch + np.timedelta64(6, "h"),
         distance=20e3,
-        progress=lambda stage, done, total: seen.__setitem__(stage, (done, total)),
+        execution=rp.Execution(
+            progress=lambda stage, done, total: seen.__setitem__(stage, (done, total))
+        ),
     )
     assert len(res.events) >= 1
     assert seen["propagation"] == (150, 150)
@@ -416,10 +484,9 @@ def test_dask_screen_equals_local(shell):
         start=start,
         end=add_seconds(start, 6 * 3600.0),
         distance=30e3,
-        progress=False,
-        max_memory=1e5,  # 26 samples a chunk for 80 objects
     )
-    local = screen_all(objs, MODEL, **kw)
+    small = rp.Execution(progress=False, max_memory=1e5)  # 26 samples a chunk for 80 objects
+    local = screen_all(objs, MODEL, execution=small, **kw)
     assert len(local.events) >= 1 and local.chunks >= 3
     with (
         distributed.LocalCluster(
@@ -427,7 +494,8 @@ def test_dask_screen_equals_local(shell):
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
-        remote = screen_all(objs, MODEL, client=client, **kw)
+        on_dask = dataclasses.replace(small, client=client)
+        remote = screen_all(objs, MODEL, execution=on_dask, **kw)
     assert [(e.id1, e.id2, e.tca, e.within, e.edge) for e in remote.events] == [
         (e.id1, e.id2, e.tca, e.within, e.edge) for e in local.events
     ]
@@ -481,10 +549,8 @@ def test_member_monte_carlo_pc_of_the_most_probable_events(shell):
         start=start,
         end=add_seconds(start, 3 * 3600.0),
         distance=30e3,
-        monte_carlo_events=2,
-        members=400,
-        hard_body_radius=50.0,
-        progress=False,
+        pc=rp.conjunction.PcSettings(hard_body_radius=50.0, monte_carlo_events=2, members=400),
+        execution=rp.Execution(progress=False),
     )
     top = res.events[0]
     assert {top.name1, top.name2} == {objs[0].name, "TWIN"}
@@ -507,7 +573,7 @@ def test_member_monte_carlo_pc_of_the_most_probable_events(shell):
             start=start,
             end=add_seconds(start, 3600.0),
             distance=1e3,
-            monte_carlo_events=1.5,
+            pc=rp.conjunction.PcSettings(monte_carlo_events=1.5),
         )
 
 
@@ -567,7 +633,7 @@ def test_rhoprop_screen_writes_the_event_table_and_cdms(shell, test_data, tmp_pa
         start=start,
         end=end,
         distance=30e3,
-        progress=False,
+        execution=rp.Execution(progress=False),
     )
     assert len(res.events) == len(cdms)
     # A CDM's states are the screened TEME states rotated to EME2000 (REF_FRAME true):
@@ -754,7 +820,7 @@ def test_events_days_from_the_epochs_say_when_the_gaussian_no_longer_holds():
             start=start,
             end=start + np.timedelta64(2, "h"),
             distance=50e3,
-            progress=False,
+            execution=rp.Execution(progress=False),
         )
         assert len(res.events) >= 1 and np.isfinite(res.pc).all()
         notes[days] = res.pc_notes
@@ -778,7 +844,7 @@ def test_an_object_whose_epoch_is_after_all_its_events_gets_its_epoch_covariance
         start=a.epoch,
         end=add_seconds(a.epoch, 6 * 3600.0),
         distance=5e3,
-        progress=False,
+        execution=rp.Execution(progress=False),
     )
     assert len(res.events) == 1
     assert "an object's epoch is after TCA: its covariance at epoch" in res.pc_notes[0]

@@ -206,7 +206,7 @@ def test_screen_finds_an_encounter_between_grid_samples():
         start=start,
         end=add_seconds(T, 3 * 3600.0),
         distance=1e3,
-        progress=False,
+        execution=rp.Execution(progress=False),
     )
     assert list(res.counts) == list(STAGES)
     assert res.counts["secondaries"] == 3 and res.counts["radial"] == 2
@@ -243,8 +243,8 @@ def test_screen_sampling_margin_keeps_fast_encounters(inc2, phase, grid_step):
         start=start,
         end=add_seconds(start, 6 * 3600.0),
         distance=400.0,
-        grid_step=grid_step,
-        progress=False,
+        search=rp.conjunction.Search(grid_step=grid_step),
+        execution=rp.Execution(progress=False),
     )
     (event,) = res.events
     assert abs((event.tca - at) / np.timedelta64(1, "ns")) * 1e-9 < 1e-3
@@ -269,7 +269,7 @@ def test_screen_with_a_sampled_model_and_an_eccentric_secondary():
     end = add_seconds(T, 3 * 3600.0)
     eccentric = rp.OrbitState(s1.epoch, s1.position, 1.18 * s1.velocity, "TEME")
     secs = [(s2, CRAFT, "secondary"), (eccentric, CRAFT, "eccentric")]
-    kw = {"start": start, "end": end, "distance": 1e3, "progress": False}
+    kw = {"start": start, "end": end, "distance": 1e3, "execution": rp.Execution(progress=False)}
     sampled = rp.density.FromFunction(_spherical_exponential)
     res = screen((s1, CRAFT), secs, sampled, **kw)
     ref = screen((s1, CRAFT), secs, MODEL, **kw)
@@ -303,13 +303,13 @@ def test_screen_bad_input_and_decay():
     prim = (_circular(400e3, 51.6, 0.0, 0.0, epoch), CRAFT)
     sec = [(_circular(410e3, 97.0, 30.0, 10.0, epoch), CRAFT)]
     end = add_seconds(epoch, 3600.0)
-    kw = {"start": epoch, "end": end, "distance": 5e3, "progress": False}
+    kw = {"start": epoch, "end": end, "distance": 5e3, "execution": rp.Execution(progress=False)}
     with pytest.raises(ValueError, match="after start"):
         screen(prim, sec, MODEL, **{**kw, "end": epoch})
     with pytest.raises(ValueError, match="distance"):
         screen(prim, sec, MODEL, **{**kw, "distance": 0.0})
     with pytest.raises(ValueError, match="grid_step"):
-        screen(prim, sec, MODEL, **kw, grid_step=600.0)
+        screen(prim, sec, MODEL, **kw, search=rp.conjunction.Search(grid_step=600.0))
     with pytest.raises(ValueError, match="empty"):
         screen(prim, [], MODEL, **kw)
     with pytest.raises(ValueError, match="only the primary"):
@@ -323,7 +323,7 @@ def test_screen_bad_input_and_decay():
     with pytest.raises(TypeError, match="model"):
         screen(prim, sec, None, **kw)
     with pytest.raises(ValueError, match="errors"):
-        screen(prim, sec, MODEL, **kw, errors="ignore")
+        screen(prim, sec, MODEL, **{**kw, "execution": rp.Execution(errors="ignore")})
     # A secondary that comes down before the window starts is skipped, with its decay
     # epoch; one that comes down inside it is screened up to then.
     # (Both start at the primary's altitude, so that the radial prefilter keeps them.)
@@ -359,7 +359,7 @@ def test_screen_secondary_decaying_after_an_approach():
         start=start,
         end=add_seconds(T, 3 * 3600.0),
         distance=200e3,
-        progress=False,
+        execution=rp.Execution(progress=False),
     )
     assert [name for name, _ in res.notes] == ["sinking"]
     decayed = np.datetime64(res.notes[0][1].split()[2], "ns")
@@ -382,8 +382,7 @@ def test_screen_progress_and_interrupt_in_process():
         start=epoch,
         end=add_seconds(epoch, 3600.0),
         distance=5e3,
-        progress=seen.append,
-        threads=1,
+        execution=rp.Execution(threads=1, progress=seen.append),
     )
     assert seen == list(range(1, 7))
 
@@ -398,7 +397,7 @@ def test_screen_progress_and_interrupt_in_process():
             start=epoch,
             end=add_seconds(epoch, 3600.0),
             distance=5e3,
-            progress=stop,
+            execution=rp.Execution(progress=stop),
         )
 
 
@@ -542,7 +541,15 @@ def test_screen_real_snapshot_equals_brute_force_all_pairs(snapshot):
     rest = rng.choice(order[120:], 80, replace=False)
     objs = [recent[int(i)] for i in (*order[:120], *rest)]
     distance = 30e3
-    res = screen(prim, objs, MODEL, start=start, end=end, distance=distance, progress=False)
+    res = screen(
+        prim,
+        objs,
+        MODEL,
+        start=start,
+        end=end,
+        distance=distance,
+        execution=rp.Execution(progress=False),
+    )
     brute = _brute_force_screen(prim, objs, start, end, distance)
     assert res.counts["radial"] < len(objs)  # the prefilters do drop objects
     within = [b for b in brute if b[2] <= distance]
@@ -582,7 +589,7 @@ def test_screen_real_snapshot_counts_are_consistent(snapshot):
         start=start,
         end=add_seconds(start, 3 * 3600.0),
         distance=10e3,
-        progress=False,
+        execution=rp.Execution(progress=False),
     )
     assert res.skipped == [(prim.name, "the primary itself")]
     counts = [res.counts[s] for s in STAGES]

@@ -240,7 +240,7 @@ def test_the_catalog_passes_the_degree_on():
             sample,
             model,
             "2002-09-07T06:00:00",
-            progress=False,
+            execution=rp.Execution(progress=False),
             dynamics=rp.Dynamics(zonal_degree=n),
         )
         for n in (2, 6)

@@ -24,6 +24,7 @@ from .errors import (
     RhopropError,
     ScenarioError,
 )
+from .execution import Execution
 from .propagation import (
     Ccsp,
     CcspResult,
@@ -81,6 +82,7 @@ __all__ = [
     "DensityFieldError",
     "Dynamics",
     "EnsembleResult",
+    "Execution",
     "GaussianMixture",
     "IntegrationError",
     "MonteCarlo",

@@ -13,6 +13,14 @@ import numpy as np
 from .options import Errors
 
 
+def is_real(value: object) -> bool:
+    """Whether ``value`` is a real number, numpy's scalars included (np.float32,
+    np.int64), and not a bool."""
+    return isinstance(value, (Real, np.floating, np.integer)) and not isinstance(
+        value, (bool, np.bool_)
+    )
+
+
 def real(name: str, value: object) -> float:
     """``value`` as a finite float, else TypeError/ValueError naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):

@@ -24,7 +24,7 @@ from .elements import (
     load,
 )
 from .fit import FitResult, bstar_prior, fit_element_set, fit_element_sets
-from .objects import scaled_bstar_drag
+from .objects import Initial, scaled_bstar_drag
 from .reentry_windows import ReentryResult, reentry
 from .run import CatalogResult, common_epochs, propagate_catalog
 
@@ -36,6 +36,7 @@ __all__ = [
     "CatalogResult",
     "DecayIntervals",
     "FitResult",
+    "Initial",
     "ReentryResult",
     "TleAccuracy",
     "bstar_prior",

@@ -47,7 +47,7 @@ from ..time import (
     add_seconds,
     to_seconds,
 )
-from .covariance import paper_covariance
+from .covariance import COVARIANCE_NAMES, paper_covariance
 from .elements import CatalogObject, object_error
 from .fit import DEFAULT_DRAG_PARAMETER
 
@@ -476,6 +476,67 @@ def _real_atmosphere(model: object) -> bool:
     from ..density.atlas import Atlas
 
     return isinstance(model, (SampledModel, Atlas, DensityField))
+
+
+@dataclass(frozen=True)
+class Initial:
+    """How each object of a catalog run starts: its state (fitted or not) and its initial
+    uncertainty. Checked when made; the per-object values (a matrix, a callable's result)
+    when the run plans each object.
+
+    Attributes:
+        covariance: each object's initial covariance at its epoch: ``"object"`` (the
+            default, as in ``rhoprop catalog``): the object's own ``covariance`` (``load``
+            sets the published TLE accuracy of its regime; fitted objects add the fit's);
+            ``"tle"``: the TLE accuracy of the regime; ``"paper"`` or None: the paper's
+            near-zero diag(1 mm^2, 1 um^2/s^2), 100x too small for TLE-derived states
+            (docs/catalog-realism.md; the default until 0.1); a (6, 6) matrix (m^2,
+            m^2/s, m^2/s^2, inertial) for every object; or a callable object -> matrix.
+            What it includes is in the result's ``covariance_note`` (and the OEM and
+            summary).
+        drag_sigma: relative 1-sigma of each object's Cd*A/m (dimensionless, 0.15 =
+            15 %), propagated as the CCSP's second consider parameter or sampled per Monte
+            Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
+            fit's formal relative sigma but at least 0.08 (at most 1, for fits whose prior
+            dominated); for an object without a fit whose B* is scaled to a real model
+            0.5, else 0.15 (as ``rp.catalog.reentry``); a number for every object (0:
+            none); or a callable object -> number. Recorded in the result's
+            ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md).
+        fit: ``"auto"`` (default): with a model of the real atmosphere, the objects whose
+            Cd*A/m comes from the element set (B*, or the guess for B* <= 0), at every
+            altitude, are first fitted to their element sets with the run's model (state
+            and Cd*A/m, :func:`~rhoprop.catalog.fit_objects`, in the core at about 100
+            objects/s on 2 cores; :data:`AUTO_FIT_PERIGEE_KM`); True: every unfitted
+            object with an element set; False: none (B* scaled to the model). A failed
+            fit leaves the object as it was, the failure in its note.
+
+    Example:
+        >>> import rhoprop as rp
+        >>> rp.catalog.Initial(covariance="tle", fit=False).drag_sigma
+        'auto'
+    """
+
+    covariance: InitialCovariance = "object"
+    drag_sigma: DragSigma = "auto"
+    fit: FitChoice = "auto"
+
+    def __post_init__(self) -> None:
+        c = self.covariance
+        if isinstance(c, str) and c not in COVARIANCE_NAMES:
+            raise ValueError(
+                f"covariance (a catalog run's initial_covariance) must be one of "
+                f"{', '.join(map(repr, COVARIANCE_NAMES))}, a (6, 6) matrix, a callable or "
+                f"None, got {c!r}"
+            )
+        d = self.drag_sigma
+        if isinstance(d, str) and d != "auto":
+            raise ValueError(f"drag_sigma must be 'auto', a number or a callable, got {d!r}")
+        if not isinstance(d, str) and not callable(d) and not _validate.is_real(d):
+            raise TypeError(
+                f"drag_sigma must be 'auto', a number or a callable, got {type(d).__name__}"
+            )
+        if not (isinstance(self.fit, bool) or (isinstance(self.fit, str) and self.fit == "auto")):
+            raise ValueError(f"fit must be True, False or 'auto', got {self.fit!r}")
 
 
 def fit_choice(obj: CatalogObject, fit: FitChoice) -> bool:

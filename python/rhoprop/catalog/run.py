@@ -9,15 +9,17 @@ the :class:`CatalogResult`; one object's plan, run and outcome are
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .. import _validate
+from .._deprecated import fold_keywords
 from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel
+from ..execution import Execution, execution_argument
 from ..options import Errors
 from ..progress import ProgressBar
 from ..propagation import OrbitState
@@ -53,6 +55,7 @@ from .elements import CatalogObject
 from .objects import (  # noqa: F401 - the names tests and older code import from here
     DragSigma,
     FitChoice,
+    Initial,
     InitialCovariance,
     ObjectOutcome,
     ObjectPlan,
@@ -296,14 +299,23 @@ def common_epochs(
 
 
 class CatalogKeywords(LooseFloorAndDegree, total=False):
-    """The deprecated keywords of :func:`propagate_catalog`: the method's settings (now in
-    ``method=rp.MonteCarlo(n=, kappa=, seed=)`` or ``rp.Ccsp(update_interval=, kappa=)``)
-    and the loose :class:`~rhoprop.Dynamics` attributes (now in ``dynamics=``)."""
+    """The deprecated keywords of :func:`propagate_catalog`, each now in a settings
+    record: the method's (``method=rp.MonteCarlo(n=, kappa=, seed=)`` or
+    ``rp.Ccsp(update_interval=, kappa=)``), ``initial=rp.catalog.Initial(covariance=,
+    drag_sigma=, fit=)``, ``execution=rp.Execution(client=, chunk_size=, progress=,
+    errors=)`` and ``dynamics=rp.Dynamics(floor_altitude=, zonal_degree=)``."""
 
     n: int
     kappa: KappaProcess
     seed: int
     update_interval: float
+    initial_covariance: InitialCovariance
+    drag_sigma: DragSigma
+    fit: FitChoice
+    client: object
+    chunk_size: int
+    progress: bool | Callable[[int], object]
+    errors: Errors
 
 
 def propagate_catalog(
@@ -311,18 +323,13 @@ def propagate_catalog(
     model: DensityModel,
     end: EpochLike,
     *,
+    start: EpochLike | None = None,
     method: Method | MethodName = Ccsp(),
     output_step: float = 3600.0,
-    client: Any = None,  # a distributed.Client (Any: distributed stays optional)
-    chunk_size: int = 50,
-    progress: bool | Callable[[int], object] = True,
-    errors: Errors = "raise",
-    initial_covariance: InitialCovariance = "object",
-    drag_sigma: DragSigma = "auto",
+    initial: Initial | None = None,
     dynamics: Dynamics | None = None,
-    fit: FitChoice = "auto",
     max_span: float | None = MAX_SPAN,
-    start: EpochLike | None = None,
+    execution: Execution | None = None,
     **deprecated: Unpack[CatalogKeywords],
 ) -> CatalogResult:
     """Propagates every object from its own epoch to ``end`` (UTC).
@@ -344,44 +351,18 @@ def propagate_catalog(
             stay at their defaults: the catalog has its own). The strings ``"ccsp"`` and
             ``"monte_carlo"`` are deprecated: ``rp.Ccsp()`` and ``rp.MonteCarlo(n=100)``
             with a warning.
-        n, kappa, seed, update_interval: deprecated: the method's settings, folded into
-            ``method`` with a warning (give ``rp.MonteCarlo(n=..., kappa=..., seed=...)``
-            or ``rp.Ccsp(update_interval=..., kappa=...)``).
-        output_step: spacing of the common output epochs, s, counted back from ``end``.
         start: no output epoch before it (UTC; default: the newest object's epoch, so
             every object is valid at every output). An earlier start gives the objects
             whose epoch is later no valid output before their epoch (rhoprop propagates
             forward only); it must be before ``end``.
-        client: a ``dask.distributed.Client``: objects are split into chunks of
-            ``chunk_size``, the atmosphere is sent once and replicated to every worker
-            (recomputed if a worker dies), failed tasks are retried twice; results equal
-            the local run.
-        progress: True shows a progress bar (objects done) on a terminal for runs over a
-            second; or a callable, called with the number of objects done.
-        errors: ``"raise"`` (default): the first object that fails raises its error (same
-            type, the object named, chained to the cause); ``"record"``: it gets status
-            "failed" with the error as reason and no valid output, and the run goes on.
-        initial_covariance: each object's initial covariance at its epoch:
-            ``"object"`` (the default, as in ``rhoprop catalog``): the object's own
-            ``covariance`` (``load`` sets the published TLE accuracy of its regime; fitted
-            objects add the fit's); ``"tle"``: the TLE accuracy of the regime;
-            ``"paper"`` or ``None``: the paper's near-zero diag(1 mm^2, 1 um^2/s^2), 100x
-            too small for TLE-derived states (docs/catalog-realism.md; the default until
-            0.1); a (6, 6) matrix (m^2, m^2/s, m^2/s^2, inertial) for
-            every object; or a callable object -> matrix. What it includes is in
-            ``covariance_note`` (and the OEM and summary).
-        drag_sigma: relative 1-sigma of each object's Cd*A/m (dimensionless, 0.15 =
-            15 %), propagated as the CCSP's second consider parameter or sampled per Monte
-            Carlo member (log-normal, see ``rp.monte_carlo``): ``"auto"`` (default) the
-            fit's formal relative sigma but at least 0.08 (at most 1, for fits whose prior
-            dominated); for an object without a fit whose B* is scaled to a real
-            model (below) 0.5, else 0.15 (as ``rp.catalog.reentry``); a number for
-            every object (0: none,
-            the behaviour before Cd*A/m uncertainty); or a callable object -> number. Recorded in
-            ``drag_sigma`` and ``covariance_note`` (docs/catalog-realism.md). An object
-            whose Cd*A/m is B*'s plain conversion runs with it scaled to the model's
-            density (:func:`~rhoprop.catalog.scaled_bstar_drag`; real-atmosphere models
-            only), and ``objects`` of the result carry the value used.
+        output_step: spacing of the common output epochs, s, counted back from ``end``.
+        initial: a :class:`~rhoprop.catalog.Initial` (None: ``Initial()``): each object's
+            initial covariance (default its own), Cd*A/m uncertainty (default ``"auto"``)
+            and whether its state and Cd*A/m are first fitted to its element set (default
+            ``"auto"``). An object whose Cd*A/m is B*'s plain conversion runs with it
+            scaled to the model's density (:func:`~rhoprop.catalog.scaled_bstar_drag`;
+            real-atmosphere models only), and ``objects`` of the result carry the value
+            used and the fitted objects.
         dynamics: a :class:`~rhoprop.Dynamics` (None: ``Dynamics(zonal_degree=4)``,
             J2..J4 as SGP4 carries, from which the element sets come; 2 is the paper's
             J2-only model, the default until 0.1; up to 6). Its ``floor_altitude`` (m) is
@@ -392,24 +373,29 @@ def propagate_catalog(
             ``"abm"`` for the Monte Carlo; ``rtol``, ``field_degree`` and
             ``third_bodies`` are refused (ValueError), never ignored. The fit before the
             run (``fit``) keeps its own RK8 grid.
-        fit: ``"auto"`` (default): with a model of the real atmosphere, the objects
-            whose Cd*A/m comes from the element set (B*, or the guess for B* <= 0), at
-            every altitude (until 2026-12-04 only perigees below 700 km), are first fitted
-            to their element sets with ``model`` (state and Cd*A/m,
-            :func:`~rhoprop.catalog.fit_objects`, in the core at about 100 objects/s on 2
-            cores; :data:`~rhoprop.catalog.objects.AUTO_FIT_PERIGEE_KM`); True: every
-            unfitted object with an element set; False: none (B* scaled to the model).
-            A failed fit leaves the object as it was, the failure in its note; ``objects``
-            of the result carry the fitted ones.
         max_span: longest run, s from an object's epoch to ``end`` (default
             :data:`MAX_SPAN`, 60 days): an object whose epoch is older is not fitted or
             propagated and ends with status ``"stale"``, its reason saying so, so that a
             catalog holding a few months-old element sets runs in bounded memory (the
             density tiles of every day of a run stay in memory while it runs); None: no
             limit.
+        execution: an :class:`~rhoprop.Execution` (None: the defaults): ``errors``
+            ``"raise"`` (the first object that fails raises its error, same type, the
+            object named, chained to the cause) or ``"record"`` (it gets status "failed"
+            with the error as reason and no valid output, and the run goes on);
+            ``progress`` (a bar of the objects done on a terminal for runs over a second,
+            or a callable called with the number done); ``client``, a
+            ``dask.distributed.Client``: objects are split into chunks of ``chunk_size``,
+            the atmosphere is sent once and replicated to every worker (recomputed if a
+            worker dies), failed tasks are retried twice; results equal the local run.
+            Its ``threads`` and ``max_memory`` are refused (ValueError): a Monte Carlo's
+            are the method's.
         **deprecated: the method's ``n=``, ``kappa=``, ``seed=``, ``update_interval=``
-            (give them in ``method``) and ``floor_altitude=``, ``zonal_degree=`` (in
-            ``dynamics``), folded in with a DeprecationWarning.
+            (give them in ``method``); ``initial_covariance=``, ``drag_sigma=``, ``fit=``
+            (in ``initial``: ``covariance``, ``drag_sigma``, ``fit``); ``client=``,
+            ``chunk_size=``, ``progress=``, ``errors=`` (in ``execution``);
+            ``floor_altitude=``, ``zonal_degree=`` (in ``dynamics``); each folded in with
+            a DeprecationWarning.
 
     Returns:
         :class:`CatalogResult`, with a ``status`` and ``reason`` per object. Ctrl-C stops
@@ -418,12 +404,10 @@ def propagate_catalog(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
-    errors = _validate.errors_and_client("propagate_catalog", errors, client)
+    chosen, dyn, init, run_on = _settings(method, dynamics, initial, execution, deprecated)
     bad = [o for o in objs if not isinstance(o, CatalogObject)]
     if bad:
         raise TypeError(f"objects must be CatalogObjects, got a {type(bad[0]).__name__}")
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
-        raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     end64 = to_datetime64(end, "end")
     late = [o for o in objs if o.state.epoch >= end64]
     if late:
@@ -438,32 +422,23 @@ def propagate_catalog(
         for i, o in enumerate(objs)
         if (reason := beyond_max_span(seconds_between(o.state.epoch, end64), "end", limit))
     }
-    loose = dict(deprecated)
-    own: dict[str, object] = {
-        k: loose.pop(k) for k in ("n", "kappa", "seed", "update_interval") if k in loose
-    }
-    dyn = deprecated_keywords(
-        "propagate_catalog",
-        dynamics,
-        loose,
-        Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
-        names=("floor_altitude", "zonal_degree"),
-    )
-    dyn.require_automatic_gravity("propagate_catalog")
-    chosen = method_argument(method, "propagate_catalog", MonteCarlo(n=100))
-    chosen = with_keywords(chosen, "propagate_catalog", own)
-    cfg = RunSettings.checked(chosen, dyn, errors)
+    cfg = RunSettings.checked(chosen, dyn, run_on.errors)
     fresh = [i for i in range(len(objs)) if i not in stale]
     fitted = fit_catalog_objects(
-        [objs[i] for i in fresh], model, fit, cfg.zonal_degree, progress=progress is True
+        [objs[i] for i in fresh],
+        model,
+        init.fit,
+        cfg.zonal_degree,
+        progress=run_on.progress is True,
     )
     for i, obj in zip(fresh, fitted, strict=True):
         objs[i] = obj
-    plans = _plans(objs, initial_covariance, drag_sigma, model, cfg.step)
-    notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, drag_sigma)}" for p in plans]
+    plans = _plans(objs, init.covariance, init.drag_sigma, model, cfg.step)
+    notes = [f"{p.initial_note}; {_drag_note(p.obj, p.drag_sigma, init.drag_sigma)}" for p in plans]
     epochs = common_epochs(objs, end64, step, _start(start, end64))
     shipped = _shipped_model(model)
     shown = None
+    progress, client = run_on.progress, run_on.client
     if callable(progress):
         bar: Callable[[int], object] | None = progress
     else:
@@ -478,12 +453,59 @@ def propagate_catalog(
             _run_local(running, shipped, epochs, cfg, bar, results)
         elif running:
             indexed = by_epoch(running)
-            chunks = [indexed[i : i + chunk_size] for i in range(0, len(indexed), chunk_size)]
+            size = run_on.chunk_size
+            chunks = [indexed[i : i + size] for i in range(0, len(indexed), size)]
             _run_on_dask(client, shipped, chunks, epochs, cfg, bar, results)
     finally:
         if shown is not None:
             shown.close()
     return _result(objs, epochs, cfg.method.name, results, plans, notes)
+
+
+#: Where each deprecated keyword of :func:`propagate_catalog` goes now.
+_LOOSE = {
+    "method": ("n", "kappa", "seed", "update_interval"),
+    "initial": ("initial_covariance", "drag_sigma", "fit"),
+    "execution": ("client", "chunk_size", "progress", "errors"),
+}
+
+
+def _settings(
+    method: object,
+    dynamics: Dynamics | None,
+    initial: Initial | None,
+    execution: Execution | None,
+    deprecated: Mapping[str, object],
+) -> tuple[Method, Dynamics, Initial, Execution]:
+    """:func:`propagate_catalog`'s settings records, checked, with its deprecated loose
+    keywords folded in (each with a DeprecationWarning pointing to its record)."""
+    loose = dict(deprecated)
+    part = {k: {n: loose.pop(n) for n in names if n in loose} for k, names in _LOOSE.items()}
+    name = "propagate_catalog"
+    chosen = method_argument(method, name, MonteCarlo(n=100), stacklevel=4)
+    chosen = with_keywords(chosen, name, part["method"], stacklevel=4)
+    init = fold_keywords(
+        name,
+        "initial",
+        initial,
+        Initial(),
+        part["initial"],
+        "rp.catalog.Initial",
+        4,
+        renamed={"initial_covariance": "covariance"},
+    )
+    run_on = execution_argument(name, execution, part["execution"], stacklevel=5)
+    run_on.require_defaults(name, ("threads", "max_memory"))
+    dyn = deprecated_keywords(
+        name,
+        dynamics,
+        loose,
+        Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
+        names=("floor_altitude", "zonal_degree"),
+        stacklevel=4,
+    )
+    dyn.require_automatic_gravity(name)
+    return chosen, dyn, init, run_on
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,8 @@
 (``kernel``: tracks, the window check, refinement, events), close approaches between
 propagated objects (``approach``), catalog screening (``screening``: one primary against many;
 ``all_on_all``: every pair, with each event's Pc per density model, ``event_pc``), the
-probability of collision for Gaussian states, Gaussian mixtures and Monte Carlo members
+settings records of a screening (``settings``: :class:`Search`, :class:`PcSettings`),
+the probability of collision for Gaussian states, Gaussian mixtures and Monte Carlo members
 (``probability``), whether the short-encounter model applies and a Pc over the encounter
 where it does not (``encounter``), CCSDS conjunction data messages (``cdm``) and a
 message's Pc with the density models' disagreement added (``with_density``). Positions
@@ -22,6 +23,7 @@ from .probability import (
     pc_monte_carlo,
 )
 from .screening import ScreeningResult, screen
+from .settings import PcSettings, Search
 from .with_density import DensityPc, density_pc
 
 __all__: list[str] = [
@@ -35,7 +37,9 @@ __all__: list[str] = [
     "MixturePcResult",
     "MonteCarloPcResult",
     "PcResult",
+    "PcSettings",
     "ScreeningResult",
+    "Search",
     "closest_approach",
     "density_pc",
     "encounter_check",

@@ -21,9 +21,11 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .. import _core, _validate
-from ..catalog.run import CATALOG_ZONAL_DEGREE, MAX_SPAN, beyond_max_span
+from .._deprecated import fold_keywords
+from ..catalog.run import CATALOG_ZONAL_DEGREE, beyond_max_span
 from ..constants import J2, R_EARTH
 from ..density.model import ModelLike
+from ..execution import Execution, execution_argument
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
@@ -31,9 +33,9 @@ from ..propagation.dynamics import Dynamics, LooseFloorAndDegree, deprecated_key
 from ..propagation.propagate import check_model
 from ..propagation.results import optional_import
 from ..time import EpochLike, add_seconds, seconds_between
-from .approach import DEFAULT_FINE_STEP, event_columns
+from .approach import event_columns
 from .event_mc import event_monte_carlo
-from .event_pc import EventPcs, check_coverage, check_options, event_probabilities
+from .event_pc import EventPcs, check_coverage, check_weights, event_probabilities
 from .kernel import (
     CloseApproach,
     EventPlan,
@@ -49,13 +51,13 @@ from .kernel import (
 )
 from .screen_stages import DaskStages, Track, refine_slice, track_one
 from .screening import (
-    DEFAULT_GRID_STEP,
     HERMITE_SAMPLES,
     MAX_ACCELERATION,
     RADIAL_MARGIN,
     ZONAL_PAD,
     ScreenObject,
 )
+from .settings import PcSettings, Search
 
 if TYPE_CHECKING:
     import pandas
@@ -233,6 +235,46 @@ class _Chunk:
     samples: np.ndarray
 
 
+class ScreenAllKeywords(LooseFloorAndDegree, total=False):
+    """The deprecated keywords of :func:`screen_all`, each now in a settings record:
+    ``pc=PcSettings(...)``, ``search=Search(...)``, ``execution=rp.Execution(...)`` and
+    ``dynamics=rp.Dynamics(...)`` (:data:`_LOOSE`)."""
+
+    weights: Mapping[str, float] | None
+    hard_body_radius: float | None
+    radii: Mapping[int, float] | None
+    monte_carlo_events: int
+    members: int
+    seed: int
+    grid_step: float
+    fine_step: float
+    max_span: float | None
+    max_memory: float
+    threads: int | None
+    client: object
+    errors: Errors
+    progress: bool | Callable[[str, int, int], object]
+
+
+#: Where each deprecated keyword of :func:`screen_all` goes now.
+_LOOSE = {
+    "pc": ("weights", "hard_body_radius", "radii", "monte_carlo_events", "members", "seed"),
+    "search": ("grid_step", "fine_step", "max_span"),
+    "execution": ("max_memory", "threads", "client", "errors", "progress"),
+}
+
+
+def _pc_settings(pc: object, loose: dict[str, object]) -> PcSettings:
+    """The :class:`PcSettings` of ``pc=`` (True: the defaults; False: the defaults, unused)
+    with the deprecated Pc keywords ``loose`` folded in."""
+    if not isinstance(pc, (bool, np.bool_, PcSettings)):
+        raise TypeError(f"pc must be True, False or a PcSettings, got {type(pc).__name__}")
+    record = pc if isinstance(pc, PcSettings) else None
+    return fold_keywords(
+        "screen_all", "pc", record, PcSettings(), loose, "rp.conjunction.PcSettings", 4
+    )
+
+
 def screen_all(
     objects: Iterable[ScreenObject],
     model: ModelLike | Mapping[str, ModelLike],
@@ -241,23 +283,11 @@ def screen_all(
     end: EpochLike,
     distance: float,
     reference: str | None = None,
-    weights: Mapping[str, float] | None = None,
-    pc: bool = True,
-    hard_body_radius: float | None = None,
-    radii: Mapping[int, float] | None = None,
-    grid_step: float = DEFAULT_GRID_STEP,
-    fine_step: float = DEFAULT_FINE_STEP,
+    pc: bool | PcSettings = True,
+    search: Search | None = None,
     dynamics: Dynamics | None = None,
-    max_memory: float = DEFAULT_MAX_MEMORY,
-    threads: int | None = None,
-    client: object = None,  # a distributed.Client (distributed stays optional)
-    monte_carlo_events: int = 0,
-    members: int = 200,
-    seed: int = 0,
-    errors: Errors = "raise",
-    progress: bool | Callable[[str, int, int], object] = True,
-    max_span: float | None = MAX_SPAN,
-    **deprecated: Unpack[LooseFloorAndDegree],
+    execution: Execution | None = None,
+    **deprecated: Unpack[ScreenAllKeywords],
 ) -> AllOnAllResult:
     """Screens every object of a catalog against every other for close approaches within
     ``distance`` over [start, end] (UTC), each with its probability of collision per
@@ -295,44 +325,45 @@ def screen_all(
             the screening propagates with; default the first); e.g.
             ``rhoprop.studies.scenarios.default_models()``.
         start, end: the window, UTC; distance: screening distance, m.
-        weights: mixture weights {model name: weight}; default as ``rp.ensemble``'s:
-            when every model is a calibrated family, the calibrated weights (NRLMSIS 2.1
-            0.849, JB2008 0.151, Jacchia-Roberts 0) with every model's density sigma times
-            the calibrated spread 0.861 in its CCSP and Monte Carlo (``spread`` of the
-            result; docs/density-calibration.md); else equal weights and each model's
-            own sigma. Given weights keep each model's own sigma.
-        pc: compute the Pc of every event (default True).
-        grid_step, fine_step: coarse grid and refinement output steps, s.
+        pc: compute the Pc of every event: True (default, ``PcSettings()``), a
+            :class:`~rhoprop.conjunction.PcSettings` (its mixture weights, hard-body
+            radii and the member Monte Carlo of the events of largest Pc), or False.
+            Default weights are as ``rp.ensemble``'s: when every model is a calibrated
+            family, the calibrated weights (NRLMSIS 2.1 0.849, JB2008 0.151,
+            Jacchia-Roberts 0) with every model's density sigma times the calibrated
+            spread 0.861 in its CCSP and Monte Carlo (``spread`` of the result;
+            docs/density-calibration.md); else equal weights and each model's own sigma.
+            Given weights keep each model's own sigma.
+        search: a :class:`~rhoprop.conjunction.Search` (None: ``Search()``): the coarse
+            grid step (at most 300 s), the refinement's output step, and ``max_span``: an
+            object whose epoch lies more than this (s) before ``start`` or after ``end`` is
+            not screened and is listed in ``skipped`` (default 60 days: a propagation holds
+            the density tiles of every day it flies through; None: no limit).
         dynamics: a :class:`~rhoprop.Dynamics` (default ``Dynamics(zonal_degree=4)``,
-            J2..J4, the catalog's). The tracks follow the dynamics' ``integrator``, ``step`` and
+            J2..J4, the catalog's). The tracks follow its ``integrator``, ``step`` and
             ``rtol`` (default adaptive DOP853); the Pc stage runs its CCSP and Monte Carlo
             with RK8 at that ``step`` (default each object's catalog step, 180 s in LEO),
             so with ``pc`` the integrator must be None or ``"rk8"`` (ValueError
             otherwise; ``rtol`` applies to the tracks); ``field_degree`` and
             ``third_bodies`` are refused.
-        max_memory: bytes the tracks of one time chunk may take (default 0.5 GB; the
-            window is cut into time chunks that fit).
-        threads: worker threads (default CPU count); errors: ``"raise"`` (default: the
-            first object whose propagation fails raises, named) or ``"record"`` (it is
-            listed in ``skipped`` and the screen goes on).
-        monte_carlo_events: also give the ``monte_carlo_events`` events of largest
-            mixture Pc the member Monte Carlo's Pc, per model and mixed
-            (:mod:`.event_mc`: ``members`` members per object and model, object i seeded
-            with ``seed + i``); default 0 (none).
-        client: a ``dask.distributed.Client``: every stage runs there, each time
-            chunk's propagation in blocks of objects, its sieve in ranges of grid
-            intervals, its refinement in slices of candidates (:mod:`.screen_stages`),
-            the Pc stage's CCSP as ``propagate_catalog(client=...)``; the events equal
-            the local run's, bit for bit. ``benches/screening.py --dask`` measures how
-            it scales.
-        progress: show progress bars on a terminal, or a callable given (stage, done,
-            total).
-        max_span: an object whose epoch lies more than this (s) before ``start`` or
-            after ``end`` is not screened and is listed in ``skipped`` (default
-            :data:`~rhoprop.catalog.run.MAX_SPAN`, 60 days: a propagation holds the density
-            tiles of every day it flies through; None: no limit).
-        **deprecated: ``floor_altitude=`` and ``zonal_degree=``, folded into ``dynamics``
-            with a DeprecationWarning.
+        execution: an :class:`~rhoprop.Execution` (None: the defaults): ``threads``;
+            ``max_memory``, bytes the tracks of one time chunk may take (None: 0.5 GB; the
+            window is cut into time chunks that fit); ``errors`` ``"raise"`` (the first
+            object whose propagation fails raises, named) or ``"record"`` (it is listed in
+            ``skipped`` and the screen goes on); ``progress`` (bars on a terminal, or a
+            callable given (stage, done, total)); ``client``, a
+            ``dask.distributed.Client``: every stage runs there, each time chunk's
+            propagation in blocks of objects, its sieve in ranges of grid intervals, its
+            refinement in slices of candidates (:mod:`.screen_stages`), the Pc stage's
+            CCSP as ``propagate_catalog`` on Dask; the events equal the local run's, bit
+            for bit (``benches/screening.py --dask`` measures how it scales). Its
+            ``chunk_size`` is refused (ValueError): the Dask stages cut their own blocks.
+        **deprecated: the keywords that moved into ``pc`` (``weights``,
+            ``hard_body_radius``, ``radii``, ``monte_carlo_events``, ``members``,
+            ``seed``), ``search`` (``grid_step``, ``fine_step``, ``max_span``),
+            ``execution`` (``max_memory``, ``threads``, ``client``, ``errors``,
+            ``progress``) and ``dynamics`` (``floor_altitude``, ``zonal_degree``), folded
+            in with a DeprecationWarning.
 
     Returns:
         :class:`AllOnAllResult`. Ctrl-C stops the run with KeyboardInterrupt.
@@ -342,19 +373,24 @@ def screen_all(
     """
     wall0 = time.perf_counter()
     models, ref_name = _model_set(model, reference)
-    cfg = _settings(start, end, distance, grid_step, fine_step, dynamics, deprecated, pc)
-    errors = _validate.errors_and_client("screen_all", errors, client)
-    workers = worker_count(threads)
-    budget = _validate.positive("max_memory", max_memory)
-    n_mc = _validate.count("monte_carlo_events", monte_carlo_events, minimum=0)
-    _validate.count("members", members, minimum=2)
-    _validate.seed(seed, limit=2**63)
+    loose: dict[str, object] = dict(deprecated)
+    part = {k: {n: loose.pop(n) for n in names if n in loose} for k, names in _LOOSE.items()}
+    settings = _pc_settings(pc, part["pc"])
+    enabled = pc is not False
+    found = fold_keywords(
+        "screen_all", "search", search, Search(), part["search"], "rp.conjunction.Search"
+    )
+    run_on = execution_argument("screen_all", execution, part["execution"])
+    run_on.require_defaults("screen_all", ("chunk_size",))
+    cfg = _settings(start, end, distance, found, dynamics, loose, enabled)
+    errors, client, workers = run_on.errors, run_on.client, worker_count(run_on.threads)
+    budget = DEFAULT_MAX_MEMORY if run_on.max_memory is None else run_on.max_memory
     objs, skipped, given = _unique_objects(objects)
-    objs = _recent(objs, skipped, cfg.start, cfg.end, max_span)
+    objs = _recent(objs, skipped, cfg.start, cfg.end, found.max_span)
     earliest = min([cfg.start, *(o.state.epoch for o in objs)])
     latest = max([cfg.end, *(o.state.epoch for o in objs)])
-    check_options(models, weights, hard_body_radius, radii)
-    if pc:
+    check_weights(models, settings.weights)
+    if enabled:
         check_coverage(models, earliest, latest)
     timings = dict.fromkeys(("field", "propagation", "sieve", "refinement"), 0.0)
     t0 = time.perf_counter()
@@ -364,26 +400,19 @@ def screen_all(
     for obj, own in zip(objs, atlases, strict=True):
         obj.model = own
     timings["field"] = time.perf_counter() - t0
-    run = _Run(objs, cfg, workers, errors, _reporter(progress), client)
+    run = _Run(objs, cfg, workers, errors, _reporter(run_on.progress), client)
     try:
         events, pairs, counts, notes, gone, chunks = run.screen(budget, timings)
         plan = EventPlan(events, pairs, objs, models, ref_name, cfg)
         pcs = event_probabilities(
-            plan,
-            weights,
-            pc,
-            hard_body_radius,
-            radii,
-            timings,
-            client=client,
-            report=run.report,
-            seed=seed,
+            plan, settings, enabled, timings, client=client, report=run.report
         )
     finally:
         run.close()
     skipped += gone
     counts["objects"] = given
-    mc_models, mc = _monte_carlo(plan, pcs, n_mc if pc else 0, members, seed, timings)
+    n_mc = settings.monte_carlo_events if enabled else 0
+    mc_models, mc = _monte_carlo(plan, pcs, n_mc, settings.members, settings.seed, timings)
     order = _by_pc(events, pcs.pc)
     return AllOnAllResult(
         events=[events[i] for i in order],
@@ -443,14 +472,13 @@ def _settings(
     start: EpochLike,
     end: EpochLike,
     distance: float,
-    grid_step: float,
-    fine_step: float,
+    search: Search,
     dynamics: Dynamics | None,
     loose: Mapping[str, object],
     pc: bool,
 ) -> Window:
     t_start, t_end, span = window_span(start, end)
-    step = _validate.positive("grid_step", grid_step)
+    step = search.grid_step
     if step > 300.0:
         raise ValueError(
             f"grid_step = {step:g} s is too coarse: at most 300 s (1/18 of a low orbit) keeps "
@@ -476,7 +504,7 @@ def _settings(
         span,
         _validate.positive("distance", distance),
         step,
-        _validate.positive("fine_step", fine_step),
+        search.fine_step,
         dyn,
     )
 

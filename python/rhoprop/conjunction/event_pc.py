@@ -20,7 +20,6 @@ object's covariance at its epoch and no offset.
 from __future__ import annotations
 
 import dataclasses
-import numbers
 import time
 from collections import defaultdict
 from collections.abc import Callable, Mapping
@@ -41,6 +40,7 @@ from ..time import seconds_between
 from .encounter import encounter_check, pc_interval
 from .kernel import CloseApproach, EventPlan, catalog_object
 from .probability import PcResult, pc_2d
+from .settings import PcSettings
 
 __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "RADII", "object_radius"]
 
@@ -106,26 +106,10 @@ def _weights(models: dict[str, Any], weights: Any) -> np.ndarray:
     return np.asarray(w / w.sum())
 
 
-def check_options(
-    models: dict[str, Any],
-    weights: Mapping[str, float] | None,
-    hbr: float | None,
-    radii: Mapping[int, float] | None,
-) -> None:
-    """The Pc options checked before any work (ValueError/TypeError naming them)."""
+def check_weights(models: dict[str, Any], weights: Mapping[str, float] | None) -> None:
+    """The Pc weights checked against the models before any work (ValueError/TypeError
+    naming them)."""
     _weights(models, weights)
-    if hbr is not None and not (_real(hbr) and np.isfinite(hbr) and hbr > 0):
-        raise ValueError(f"hard_body_radius must be a number > 0 m, got {hbr!r}")
-    if radii is not None and not isinstance(radii, Mapping):
-        raise TypeError(f"radii must be a mapping {{NORAD id: m}}, got {type(radii).__name__}")
-    for key, r in (radii or {}).items():
-        if not (_real(r) and np.isfinite(r) and r > 0):
-            raise ValueError(f"radii[{key!r}] must be > 0 m, got {r!r}")
-
-
-def _real(value: Any) -> bool:
-    """A real number, numpy's scalars included (np.float32, np.int64), not a bool."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def _radii(events: list[Any], hbr: float | None, radii: Any) -> np.ndarray:
@@ -240,28 +224,27 @@ def _rtn_moments(mean: np.ndarray, cov: np.ndarray, ref: np.ndarray) -> tuple[An
 
 def event_probabilities(
     plan: EventPlan,
-    weights: Mapping[str, float] | None,
+    settings: PcSettings,
     enabled: bool,
-    hbr: float | None,
-    radii: Mapping[int, float] | None,
     timings: dict[str, float],
     *,
     client: object = None,
     report: Callable[[str, int, int], object] | None = None,
-    seed: int = 0,
 ) -> EventPcs:
-    """Pc per event and model and the mixture's (see the module docs); ``client`` (a
+    """Pc per event and model and the mixture's (see the module docs) with ``settings``'
+    weights and radii (computed only when ``enabled``); ``client`` (a
     ``distributed.Client``) runs the CCSP on Dask, ``report(stage, done, total)`` is told
     the objects done; an encounter too slow for the 2-D Pc gets
-    :func:`~rhoprop.conjunction.encounter.pc_interval`, its draws seeded with ``seed``
-    and the event's index."""
+    :func:`~rhoprop.conjunction.encounter.pc_interval`, its draws seeded with
+    ``settings.seed`` and the event's index."""
+    weights, seed = settings.weights, settings.seed
     events, pairs, objs, models = plan.events, plan.pairs, plan.objects, plan.models
     ref, cfg = plan.reference, plan.window
     w = _weights(models, weights)
     # The calibrated families with their calibrated weights mix as rp.ensemble does: each
     # model's density sigma times the calibrated spread.
     spread = default_spread(models) if weights is None else 1.0
-    radius = _radii(events, hbr, radii)
+    radius = _radii(events, settings.hard_body_radius, settings.radii)
     n_ev, n_mod = len(events), len(models)
     pcm = np.full((n_ev, n_mod), np.nan)
     notes = [""] * n_ev

@@ -16,11 +16,13 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from .. import _validate
+from .._deprecated import fold_keywords
 from ..catalog.elements import CatalogObject
+from ..catalog.run import beyond_max_span
 from ..constants import J2, MU, R_EARTH, R_POLE
 from ..density.model import ModelLike
 from ..errors import DecayError
+from ..execution import Execution, execution_argument
 from ..options import Errors
 from ..parallel import map_in_threads, worker_count
 from ..progress import ProgressBar
@@ -30,8 +32,8 @@ from ..propagation.propagate import (
     check_model,
 )
 from ..propagation.results import optional_import
-from ..time import EpochLike, add_seconds, to_seconds
-from .approach import DEFAULT_FINE_STEP, event_columns
+from ..time import EpochLike, add_seconds, seconds_between, to_seconds
+from .approach import event_columns
 from .kernel import (
     CloseApproach,
     SampledTrack,
@@ -52,6 +54,7 @@ from .kernel import (
     refine,
     secondaries_list,
 )
+from .settings import DEFAULT_GRID_STEP, Search
 
 if TYPE_CHECKING:
     import pandas
@@ -59,8 +62,6 @@ if TYPE_CHECKING:
 
 __all__ = ["DEFAULT_GRID_STEP", "STAGES", "ScreeningResult", "screen"]
 
-#: Spacing of the coarse common grid of :func:`screen`, s.
-DEFAULT_GRID_STEP = 60.0
 #: Bound on the acceleration of either object, m/s^2: two-body gravity at the polar
 #: radius (9.86 m/s^2) plus 1 % for J2..J6 and drag (J2 adds 0.2 %; drag stays below
 #: 0.1 m/s^2 above the floor for any ordinary object).
@@ -212,6 +213,22 @@ def _interpolation_margin(a: SampledTrack, b: SampledTrack, h: float) -> float:
     return 10.0 * h**4 / 384.0 * (fourth(a) + fourth(b)) + 100.0
 
 
+class ScreenKeywords(LooseFloorAndDegree, total=False):
+    """The deprecated keywords of :func:`screen`, each now in a settings record:
+    ``search=Search(grid_step=, fine_step=)``, ``execution=rp.Execution(threads=,
+    errors=, progress=)`` and ``dynamics=rp.Dynamics(floor_altitude=, zonal_degree=)``."""
+
+    grid_step: float
+    fine_step: float
+    threads: int | None
+    errors: Errors | Literal["skip"]
+    progress: bool | Callable[[int], object]
+
+
+#: Where each deprecated keyword of :func:`screen` goes now.
+_LOOSE = {"search": ("grid_step", "fine_step"), "execution": ("threads", "errors", "progress")}
+
+
 def screen(
     primary: ScreenObject,
     secondaries: Iterable[ScreenObject],
@@ -220,13 +237,10 @@ def screen(
     start: EpochLike,
     end: EpochLike,
     distance: float,
-    grid_step: float = DEFAULT_GRID_STEP,
-    fine_step: float = DEFAULT_FINE_STEP,
-    threads: int | None = None,
-    errors: Errors | Literal["skip"] = "raise",
-    progress: bool | Callable[[int], object] = True,
+    search: Search | None = None,
     dynamics: Dynamics | None = None,
-    **deprecated: Unpack[LooseFloorAndDegree],
+    execution: Execution | None = None,
+    **deprecated: Unpack[ScreenKeywords],
 ) -> ScreeningResult:
     """Screens one primary against many secondaries for close approaches within
     ``distance`` over [start, end] (UTC).
@@ -266,22 +280,27 @@ def screen(
         model: density model (e.g. ``rp.density.Exponential.benchmark()``, ``Msis()``).
         start, end: the window, UTC (end > start).
         distance: screening distance, m (> 0).
-        grid_step: coarse grid spacing, s (default 60 s; at most 1/20 of the primary's
-            period, else ValueError).
-        fine_step: output step of the refinement, s.
+        search: a :class:`~rhoprop.conjunction.Search` (None: ``Search()``): the coarse
+            grid spacing (default 60 s; at most 1/20 of the primary's period, else
+            ValueError), the refinement's output step (s), and ``max_span``: a secondary
+            whose epoch lies more than this (s) before ``start`` or after ``end`` is not
+            screened and is listed in ``skipped``, a primary's is a ValueError (default
+            60 days; None: no limit).
         dynamics: a :class:`~rhoprop.Dynamics` (None: ``Dynamics()``, J2 only, floor
-            120 km); the tracks follow its ``integrator``, ``step`` and ``rtol`` as ``rp.propagate``
-            does (default adaptive DOP853; an object propagated back to ``start`` uses
-            RK8 at 30 s, the one backward integrator); ``field_degree`` and
-            ``third_bodies`` are refused (ValueError).
-        threads: worker threads (default: CPU count); the core releases the GIL.
-        errors: ``"raise"`` (default): a secondary that fails raises its error with the
-            object named; ``"record"``: it is listed in ``skipped`` and the screen goes on
-            (``"skip"``, its old name, still works with a DeprecationWarning).
-        progress: show a progress bar (secondaries done) on a terminal for screens over a
-            second, or a callable given the number done.
-        **deprecated: ``floor_altitude=`` and ``zonal_degree=``, folded into ``dynamics``
-            with a DeprecationWarning.
+            120 km); the tracks follow its ``integrator``, ``step`` and ``rtol`` as
+            ``rp.propagate`` does (default adaptive DOP853; an object propagated back to
+            ``start`` uses RK8 at 30 s, the one backward integrator); ``field_degree``
+            and ``third_bodies`` are refused (ValueError).
+        execution: an :class:`~rhoprop.Execution` (None: the defaults): ``threads``
+            (default: CPU count; the core releases the GIL); ``errors`` ``"raise"``
+            (a secondary that fails raises its error with the object named) or
+            ``"record"`` (it is listed in ``skipped`` and the screen goes on); ``progress``
+            (a bar of the secondaries done on a terminal for screens over a second, or a
+            callable given the number done). Its ``client``, ``chunk_size`` and
+            ``max_memory`` are refused (ValueError): the screen runs in this process.
+        **deprecated: ``grid_step=``, ``fine_step=`` (now in ``search``), ``threads=``,
+            ``errors=``, ``progress=`` (in ``execution``), ``floor_altitude=`` and
+            ``zonal_degree=`` (in ``dynamics``), folded in with a DeprecationWarning.
 
     Returns:
         :class:`ScreeningResult`. Secondaries that decayed before ``start`` are skipped
@@ -297,23 +316,22 @@ def screen(
     wall0 = time.perf_counter()
     prim, objs, itself = _objects(primary, secondaries)
     check_model(model)
+    loose: dict[str, object] = dict(deprecated)
+    part = {k: {n: loose.pop(n) for n in names if n in loose} for k, names in _LOOSE.items()}
+    found = fold_keywords(
+        "screen", "search", search, Search(), part["search"], "rp.conjunction.Search"
+    )
+    run_on = execution_argument("screen", execution, part["execution"])
+    run_on.require_defaults("screen", ("client", "chunk_size", "max_memory"))
     settings = deprecated_keywords(
-        "screen", dynamics, deprecated, names=("floor_altitude", "zonal_degree")
+        "screen", dynamics, loose, names=("floor_altitude", "zonal_degree")
     )
     settings.require_automatic_gravity("screen")
-    w = make_window(
-        prim,
-        start,
-        end,
-        distance,
-        grid_step,
-        fine_step,
-        settings,
-    )
-    errors = _validate.errors_argument("screen", errors)
-    workers = worker_count(threads)
-    if workers < 1:
-        raise ValueError(f"threads must be >= 1, got {threads!r}")
+    w = make_window(prim, start, end, distance, found.grid_step, found.fine_step, settings)
+    given = len(objs)
+    objs, far = _within_span(prim, objs, w, found.max_span)
+    errors, progress = run_on.errors, run_on.progress
+    workers = worker_count(run_on.threads)
     timings = dict.fromkeys(
         ("primary", "radial", "field", "propagation", "coarse_grid", "interpolated", "refinement"),
         0.0,
@@ -326,9 +344,9 @@ def screen(
     timings["radial"] = time.perf_counter() - t0
 
     counts = dict.fromkeys(STAGES, 0)
-    counts["secondaries"] = len(objs)
+    counts["secondaries"] = given
     counts["radial"] = len(survivors)
-    skipped: list[tuple[str, str]] = [(o.name, "the primary itself") for o in itself]
+    skipped: list[tuple[str, str]] = [(o.name, "the primary itself") for o in itself] + far
     notes: list[tuple[str, str]] = []
     events: list[CloseApproach] = []
     if survivors:
@@ -371,6 +389,29 @@ def screen(
         distance=w.limit,
         grid_step=w.step,
     )
+
+
+def _within_span(
+    prim: ScreenedObject, objs: list[ScreenedObject], w: Window, max_span: float | None
+) -> tuple[list[ScreenedObject], list[tuple[str, str]]]:
+    """The secondaries whose epoch lies within ``max_span`` s before the window's start
+    or after its end, and (name, reason) of the others; a ValueError if the primary's
+    does not."""
+    if max_span is None:
+        return objs, []
+
+    def beyond(obj: ScreenedObject) -> str:
+        t = obj.state.epoch
+        if t <= w.start:
+            return beyond_max_span(seconds_between(t, w.start), "start", max_span)
+        return beyond_max_span(seconds_between(t, w.end), "end", max_span) if t > w.end else ""
+
+    if why := beyond(prim):
+        raise ValueError(f"the primary {prim.name}: {why}")
+    reasons = [beyond(o) for o in objs]
+    kept = [o for o, why in zip(objs, reasons, strict=True) if not why]
+    far = [(o.name, why) for o, why in zip(objs, reasons, strict=True) if why]
+    return kept, far
 
 
 def _objects(

@@ -13,7 +13,9 @@ import numpy as np
 
 from ..catalog.covariance import COVARIANCE_NAMES
 from ..catalog.elements import Catalog, load
+from ..catalog.objects import Initial
 from ..catalog.run import MAX_SPAN, STATUSES, CatalogResult, propagate_catalog
+from ..execution import Execution
 from ..io import (
     OutputFolder,
     command_line,
@@ -276,14 +278,15 @@ class CatalogJob:
             atmosphere,
             self.end,
             method=self.method,
-            client=client,
             output_step=self.output_step,
-            errors="record" if self.skip_bad else "raise",
-            initial_covariance=covariance,
+            initial=Initial(
+                covariance=covariance,
+                drag_sigma=sigma,
+                fit="auto" if self.fit == "auto" else False,
+            ),
             dynamics=Dynamics(zonal_degree=self.zonal_degree),
-            drag_sigma=sigma,
-            fit="auto" if self.fit == "auto" else False,
             max_span=max_span_option(self.max_span_days),
+            execution=Execution(client=client, errors="record" if self.skip_bad else "raise"),
             start=to_datetime64(self.start, "--start") if self.start else default_start(cat),
         )
         wall = time.perf_counter() - t0

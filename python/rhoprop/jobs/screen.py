@@ -15,6 +15,8 @@ from ..catalog.elements import Catalog, load
 from ..catalog.run import MAX_SPAN
 from ..conjunction.all_on_all import AllOnAllResult, screen_all
 from ..conjunction.cdm import CdmObject, ConjunctionMessage
+from ..conjunction.settings import PcSettings, Search
+from ..execution import Execution
 from ..io.events import write_event_table
 from ..io.files import OutputFolder, command_line, sanitise
 from ..io.tables import format_argument, table_name
@@ -235,14 +237,16 @@ class ScreenJob:
                 start=t0,
                 end=to_datetime64(self.end, "end"),
                 distance=self.distance,
-                pc=self.pc,
-                hard_body_radius=self.hard_body_radius,
-                radii=radii,
-                monte_carlo_events=self.monte_carlo_events,
-                members=self.members,
-                errors="record" if self.skip_bad else "raise",
-                max_span=span,
-                client=client,
+                pc=PcSettings(
+                    hard_body_radius=self.hard_body_radius,
+                    radii=radii,
+                    monte_carlo_events=self.monte_carlo_events,
+                    members=self.members,
+                )
+                if self.pc
+                else False,
+                search=Search(max_span=span),
+                execution=Execution(client=client, errors="record" if self.skip_bad else "raise"),
             )
         finally:
             if client is not None:

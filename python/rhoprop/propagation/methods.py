@@ -354,7 +354,7 @@ def _one_by_one(
     return out
 
 
-def method_argument(value: object, function: str, default: Method) -> Method:
+def method_argument(value: object, function: str, default: Method, stacklevel: int = 3) -> Method:
     """``method=`` of ``function`` as an object: a :class:`MonteCarlo` or :class:`Ccsp`
     as it is; the deprecated strings ``"monte_carlo"`` / ``"ccsp"`` as the function's own
     default of that method (``default`` if it is one, else the class's defaults), with a
@@ -371,7 +371,7 @@ def method_argument(value: object, function: str, default: Method) -> Method:
             f"{function}(method={value!r}) is deprecated; pass rp.{cls.__name__}(...) "
             "(its settings travel with it)",
             DeprecationWarning,
-            stacklevel=3,
+            stacklevel=stacklevel,
         )
         return default if isinstance(default, cls) else cls()
     raise TypeError(
