@@ -95,7 +95,11 @@ def fit_all(snapshot: Path) -> None:
     """Fits every element set of a whole snapshot through NRLMSIS 2.1's atlas."""
     model = rp.density.Msis("2.1")
     t0 = time.perf_counter()
-    cat = catalog.load(snapshot, errors="record", fit=True, model=model)
+    cat = catalog.load(
+        snapshot,
+        errors="record",
+        fit=rp.catalog.FitSettings(model),
+    )
     wall = time.perf_counter() - t0
     fitted = sum(o.fit is not None for o in cat)
     notes = collections.Counter(

@@ -179,17 +179,16 @@ def run_config(
         cat = catalog.load(paths[-1], errors="record")
     elif config == "fit":
         cat = catalog.load(
-            paths[-1], fit=True, model=model, errors="record", threads=threads, span=span
+            paths[-1],
+            fit=rp.catalog.FitSettings(model, span=span, threads=threads),
+            errors="record",
         )
     else:
         cat = catalog.load(
             paths,
-            fit=True,
-            model=model,
+            fit=rp.catalog.FitSettings(model, span=span, threads=threads),
             errors="record",
-            threads=threads,
             history="fit",
-            span=span,
         )
     t_load = time.perf_counter() - t0
     objects = [o for o in cat.objects if o.norad_id in truth]

@@ -115,10 +115,8 @@ def start_day(
         # Cd*A/m comes from its element set), not again for each horizon.
         cat = catalog.load(
             path,
-            fit=True,
-            model=model,
+            fit=rp.catalog.FitSettings(model, threads=threads),
             errors="record",
-            threads=threads,
             history="fit" if together else "newest",
         )
     objects = {o.norad_id: o for o in cat.objects}

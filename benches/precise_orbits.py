@@ -98,7 +98,9 @@ def predict(
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "sets.tle"
         path.write_text("".join(f"{s[0]}\n{s[1]}\n" for s in before))
-        cat = catalog.load(path, fit=True, model=model, history="fit" if history else "newest")
+        cat = catalog.load(
+            path, fit=rp.catalog.FitSettings(model), history="fit" if history else "newest"
+        )
     obj = cat.objects[0]
     out = []
     for end in ends:

@@ -266,8 +266,11 @@ def test_api_shape_stays_within_its_limits():
     found = api_shape.any_parameters()
     assert {f.split("(")[1].rstrip(")") for f in found} <= {"sat", "sats", "client"}, found
     # More than 10 parameters: 15 functions before the method objects, the jobs and the
-    # event plans; never more again (the goal is none).
-    assert len(api_shape.wide_functions()) <= 2, api_shape.wide_functions()
+    # event plans (screen_all had 24); none since the settings records (rp.Dynamics,
+    # rp.MonteCarlo/Ccsp, rp.Execution, catalog.Initial/FitSettings, conjunction.Search/
+    # PcSettings, rp.Debias) travel whole. **deprecated, gone at the next release, is not
+    # counted.
+    assert not api_shape.wide_functions(), api_shape.wide_functions()
     assert not api_shape.long_functions(), api_shape.long_functions()
     assert not api_shape.message_regexes(), api_shape.message_regexes()
     assert not api_shape.dict_returns(), api_shape.dict_returns()

@@ -249,7 +249,13 @@ def test_density_pc_mixes_models_with_shared_atmosphere():
         "low": rp.density.Exponential.benchmark(rel_sigma=0.1),
         "high": rp.density.Exponential(1.5 * 3.725e-12, 400e3, 58.515e3, rel_sigma=0.3),
     }
-    out = density_pc(msg, models, "low", method=rp.Ccsp(), cds={"high": 2.2})
+    out = density_pc(
+        msg,
+        models,
+        "low",
+        method=rp.Ccsp(),
+        debias=rp.Debias(cds={"high": 2.2}),
+    )
     assert out.names == ["low", "high"]
     assert out.pc == pytest.approx(out.weights @ out.pc_models, rel=1e-12)
     # More drag in "high" (Cd not debiased here): the orbit sinks and speeds up, so the

@@ -25,7 +25,7 @@ def two_model_ensemble():
         models,
         "low",
         duration=86400.0,
-        cds={"high": 2.2},
+        debias=rp.Debias(cds={"high": 2.2}),
         # The paper's 18-minute process: model means more than 2 sigma apart in a day.
         method=rp.MonteCarlo(
             n=600, kappa=rp.kappa.GaussMarkov(1080.0), seed=3, output_step=None, progress=False
@@ -63,7 +63,7 @@ def test_most_disputed_picks_the_case_whose_models_disagree(two_model_ensemble):
         },
         "a",
         duration=86400.0,
-        cds={"b": 2.2},
+        debias=rp.Debias(cds={"b": 2.2}),
         method=rp.MonteCarlo(n=100, output_step=None, progress=False),
     )
     assert most_disputed({"calm": calm, "stormy": two_model_ensemble}) == "stormy"

@@ -146,7 +146,7 @@ def test_ensemble_components_use_the_survivors(setup):
         models,
         "ref",
         duration=1.8 * DAY,
-        cds={"same": craft.cd},
+        debias=rp.Debias(cds={"same": craft.cd}),
         method=rp.MonteCarlo(n=200, kappa=rp.kappa.Constant(), progress=False),
     )
     r = ens.results["ref"]
@@ -167,7 +167,13 @@ def test_ccsp_ensemble_with_a_model_that_comes_down(setup):
     state, craft = setup
     models = {"ref": rp.scenarios.benchmark_exponential(0.2), "dense": DENSE}
     ens = rp.ensemble(
-        state, craft, models, "ref", method=rp.Ccsp(), duration=3 * DAY, cds={"dense": craft.cd}
+        state,
+        craft,
+        models,
+        "ref",
+        method=rp.Ccsp(),
+        duration=3 * DAY,
+        debias=rp.Debias(cds={"dense": craft.cd}),
     )
     assert ens.results["dense"].decayed_at is not None
     assert len(ens.times) == 73 and np.isnan(ens.component_means[-1, 1]).all()

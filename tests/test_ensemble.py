@@ -62,7 +62,7 @@ def test_ccsp_ensemble_and_weights(analytic):
         method=rp.Ccsp(),
         duration=86400.0,
         weights=[3.0, 1.0],
-        cds={"denser": 3.0912},
+        debias=rp.Debias(cds={"denser": 3.0912}),
     )
     np.testing.assert_allclose(ens.weights, [0.75, 0.25])
     # Undebiased, the denser model's orbit runs ahead of the reference.
@@ -80,7 +80,7 @@ def test_a_spread_narrows_every_component_as_a_scaled_model_would(analytic):
     # multiplies 0.2 x 0.5 = 0.1 exactly), so each component equals a plain ensemble of
     # those halved models.
     state, craft, models = analytic
-    run = dict(method=rp.Ccsp(), duration=86400.0, cds={"denser": 3.0912})
+    run = dict(method=rp.Ccsp(), duration=86400.0, debias=rp.Debias(cds={"denser": 3.0912}))
     ens = rp.ensemble(state, craft, models, "ref", spread=0.5, **run)
     halved = {
         name: rp.density.Exponential(m.rho0, m.h0, m.scale_height, rel_sigma=0.1)

@@ -79,7 +79,10 @@ def test_nonpositive_bstar_loads_with_a_guess_fitted_or_refused(tle_file, atmosp
     guessed = catalog.load(tle_file)[1:]  # B* = 0 and < 0: the fit's starting guess
     assert all(o.drag_parameter == DEFAULT_DRAG_PARAMETER for o in guessed)
     assert all("0.022" in o.covariance_note for o in guessed)
-    fitted = catalog.load(tle_file, fit=True, model=atmosphere)
+    fitted = catalog.load(
+        tle_file,
+        fit=rp.catalog.FitSettings(atmosphere),
+    )
     assert [o.norad_id for o in fitted] == [91001, 91002, 91003]
     assert all(o.fit is not None and o.drag_parameter > 0 for o in fitted)
     assert all("fit to SGP4" in o.covariance_note for o in fitted)
@@ -225,10 +228,15 @@ def test_fit_with_sgp4s_own_zonals_matches_sgp4(atmosphere):
     obj = catalog.load(SAMPLE)[0]
     rms = {d: fit_element_set(obj, atmosphere, zonal_degree=d).rms_total for d in (2, 4, 6)}
     assert rms[4] < 20.0 and rms[2] > 10 * rms[4] and rms[6] > 2 * rms[4], rms
-    fitted = catalog.load(SAMPLE, fit=True, model=atmosphere, zonal_degree=4)
+    fitted = catalog.load(
+        SAMPLE,
+        fit=rp.catalog.FitSettings(atmosphere, dynamics=rp.Dynamics(zonal_degree=4)),
+    )
     assert fitted[0].fit.rms_total == pytest.approx(rms[4], rel=1e-6)
     with pytest.raises(ValueError, match="zonal_degree"):
-        catalog.load(SAMPLE, zonal_degree=7)
+        catalog.load(
+            SAMPLE, fit=rp.catalog.FitSettings(atmosphere, dynamics=rp.Dynamics(zonal_degree=7))
+        )
 
 
 def test_tle_covariance_near_the_apogee_of_an_eccentric_orbit_has_full_rank(test_data, tmp_path):

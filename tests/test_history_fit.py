@@ -103,15 +103,21 @@ def test_a_history_fit_against_a_single_fit_on_a_real_week(week, monkeypatch):
     # the docs.
     files, truth, ids = week
     model = Msis("2.1")
-    single = catalog.load(files[-1], fit=True, model=model)
-    newest = catalog.load(files, fit=True, model=model)  # the default: the newest, alone
-    within_a_day = catalog.load(files, fit=True, model=model, history="fit")
+    single = catalog.load(
+        files[-1],
+        fit=rp.catalog.FitSettings(model),
+    )
+    newest = catalog.load(
+        files,
+        fit=rp.catalog.FitSettings(model),
+    )  # the default: the newest, alone
+    within_a_day = catalog.load(files, fit=rp.catalog.FitSettings(model), history="fit")
     assert [o.drag_parameter for o in newest] == [o.drag_parameter for o in single]
     assert [o.drag_parameter for o in within_a_day] == [o.drag_parameter for o in single]
     assert all(len(o.fit.element_sets) == 1 for o in within_a_day)
     assert all("the newest of 2 element sets" in o.covariance_note for o in newest)
     monkeypatch.setattr(catalog.elements, "HISTORY_DAYS", 10.0)
-    history = catalog.load(files, fit=True, model=model, history="fit")
+    history = catalog.load(files, fit=rp.catalog.FitSettings(model), history="fit")
     assert [o.norad_id for o in history] == [o.norad_id for o in single] == ids
     used = [len(o.fit.element_sets) for o in history]
     assert max(used) == 2 and np.mean(used) > 1.5  # most histories are fitted whole
@@ -138,7 +144,13 @@ def test_the_bstar_prior_is_the_fitted_drag_where_the_fit_sees_it(week):
     # times too small (SGP4's density is several times NRLMSIS's at 400-600 km).
     files, _, _ = week
     model = Msis("2.1")
-    fitted = [o for o in catalog.load(files[-1], fit=True, model=model)]
+    fitted = [
+        o
+        for o in catalog.load(
+            files[-1],
+            fit=rp.catalog.FitSettings(model),
+        )
+    ]
     seen = [o for o in fitted if o.fit.drag_sigma < 0.1 * o.drag_parameter]
     assert len(seen) >= 20
     to_prior = np.log([o.drag_parameter / o.fit.prior for o in seen])

@@ -38,10 +38,13 @@ RUNS = {
         "field = rp.density.FromFunction(fn).field(state.epoch, end, altitude_range=band,"
         " resolution=res)\n"
         "print('started', flush=True)\n"
-        "rp.propagate(state, craft, field, 1.1e8, rtol=1e-12)"
+        "rp.propagate(state, craft, field, 1.1e8, dynamics=rp.Dynamics(rtol=1e-12))"
     ),
     # ~8 s: 10^7 RK8 steps of 10 s.
-    "propagate_rk8": "rp.propagate(state, craft, model, 9.99e7, integrator='rk8', step=10.0)",
+    "propagate_rk8": (
+        "rp.propagate(state, craft, model, 9.99e7, "
+        "dynamics=rp.Dynamics(integrator='rk8', step=10.0))"
+    ),
     # ~80 s: 200,000 members x 3 days.
     "monte_carlo": (
         "rp.monte_carlo(state, craft, model, 3 * 86400.0, n=200_000, output_step=None, "
@@ -60,7 +63,8 @@ RUNS = {
         "from rhoprop import catalog\n"
         f"cat = catalog.load(Path({os.path.dirname(__file__)!r}) / 'data' / 'sample.tle')\n"
         "print('started', flush=True)\n"
-        "catalog.propagate_catalog(list(cat) * 1000, model, '2002-09-10T00:00', progress=False)"
+        "catalog.propagate_catalog(list(cat) * 1000, model, '2002-09-10T00:00', "
+        "execution=rp.Execution(progress=False))"
     ),
     # Minutes: reentry windows of 5,000 members per object on threads (once
     # 17-21 s to stop, as every running object finished its members first).
@@ -69,12 +73,14 @@ RUNS = {
         "from rhoprop import catalog\n"
         f"cat = catalog.load(Path({os.path.dirname(__file__)!r}) / 'data' / 'sample.tle')\n"
         "print('started', flush=True)\n"
-        "catalog.reentry(list(cat) * 10, model, n=5000, duration=30 * 86400.0, history='each')"
+        "catalog.reentry(list(cat) * 10, model, method=rp.MonteCarlo(n=5000), "
+        "duration=30 * 86400.0, history='each')"
     ),
     # ~80 s: two models of 100,000 members each.
     "ensemble": (
         "rp.ensemble(state, craft, {'a': model, 'b': model}, 'a', duration=3 * 86400.0, "
-        "cds={'b': 2.2}, method=rp.MonteCarlo(n=100_000, output_step=None, progress=False))"
+        "debias=rp.Debias(cds={'b': 2.2}), "
+        "method=rp.MonteCarlo(n=100_000, output_step=None, progress=False))"
     ),
 }
 

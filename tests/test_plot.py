@@ -28,7 +28,7 @@ def runs():
         {"a": model, "b": rp.density.Exponential(4.5e-12, 400e3, 58.515e3, rel_sigma=0.2)},
         "a",
         duration=21600.0,
-        cds={"b": 2.2},
+        debias=rp.Debias(cds={"b": 2.2}),
         method=rp.MonteCarlo(n=200, output_step=None, progress=False),
     )
     return mc, cc, ens

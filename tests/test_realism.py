@@ -44,7 +44,10 @@ def test_fitted_mean_beats_sgp4_and_covariance_is_stated(tmp_path, snapshots):
     path = tmp_path / "four.tle"
     path.write_text("".join("\n".join(first[i]) + "\n" for i in IDS))
     field = Msis("2.1").field("2023-11-11", "2023-11-20", altitude_range=(300e3, 750e3))
-    cat = catalog.load(path, fit=True, model=field)
+    cat = catalog.load(
+        path,
+        fit=rp.catalog.FitSettings(field),
+    )
     assert all(o.fit is not None and o.fit.converged for o in cat)
     assert all(o.fit.rms_total < 1500 for o in cat)  # m, over two days
     ours, theirs = [], []

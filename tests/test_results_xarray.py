@@ -205,7 +205,13 @@ def test_ensemble(setup, tmp_path):
     round_trip(ds, tmp_path, "ensemble")
     # A CCSP ensemble: the same layout, method "ccsp", no kappa settings.
     cc = rp.ensemble(
-        state, craft, models, "ref", method=rp.Ccsp(), duration=6 * 3600.0, cds={"denser": 3.0}
+        state,
+        craft,
+        models,
+        "ref",
+        method=rp.Ccsp(),
+        duration=6 * 3600.0,
+        debias=rp.Debias(cds={"denser": 3.0}),
     )
     ds = cc.to_xarray()
     assert ds.attrs["method"] == "ccsp" and "kappa" not in ds.attrs

@@ -177,3 +177,39 @@ def test_every_record_is_frozen():
         field = dataclasses.fields(record)[0].name
         with pytest.raises(dataclasses.FrozenInstanceError):
             setattr(record, field, None)
+
+
+def test_load_takes_its_fit_settings_whole_and_the_old_keywords_warn():
+    fitted = catalog.load(SAMPLE, fit=catalog.FitSettings(AIR, threads=1))
+    with pytest.warns(DeprecationWarning, match=r"load\(model=, threads=\) is deprecated"):
+        old = catalog.load(SAMPLE, fit=True, model=AIR, threads=1)
+    assert all(o.fit is not None for o in fitted)
+    assert [o.drag_parameter for o in old] == [o.drag_parameter for o in fitted]
+    assert fitted[0].fit.rms_total < 100.0  # a real fit to SGP4 (J2..J4: metres)
+    with pytest.raises(TypeError, match="got fit=FitSettings"):
+        catalog.load(SAMPLE, fit=catalog.FitSettings(AIR), model=AIR)
+    with pytest.raises(TypeError, match="fit must be True, False or a FitSettings"):
+        catalog.load(SAMPLE, fit="yes")
+    with pytest.raises(ValueError, match=r"dynamics\.integrator would be ignored"):
+        catalog.FitSettings(AIR, dynamics=rp.Dynamics(integrator="rk4"))
+    with pytest.raises(ValueError, match="field_degree"):
+        catalog.FitSettings(AIR, dynamics=rp.Dynamics(field_degree=8))
+    with pytest.raises(TypeError, match="model"):
+        catalog.FitSettings(None)
+
+
+def test_ensemble_takes_its_debias_whole_and_the_old_keywords_warn():
+    state, craft = rp.scenarios.paper_state(), rp.scenarios.paper_spacecraft()
+    models = {"ref": AIR, "dense": rp.density.Exponential(5e-12, 400e3, 58.515e3, 0.2)}
+    run = {"method": rp.Ccsp(), "duration": 7200.0}
+    new = rp.ensemble(state, craft, models, "ref", debias=rp.Debias(cds={"dense": 2.5}), **run)
+    with pytest.warns(DeprecationWarning, match=r"debias=rp\.Debias\(cds=\.\.\.\)"):
+        old = rp.ensemble(state, craft, models, "ref", cds={"dense": 2.5}, **run)
+    np.testing.assert_array_equal(old.component_covariances, new.component_covariances)
+    assert new.results["dense"].mean is not None
+    longer = rp.ensemble(state, craft, models, "ref", debias=rp.Debias(window=4 * 3600.0), **run)
+    assert not np.array_equal(longer.component_means, new.component_means)  # Cd debiased
+    with pytest.raises(ValueError, match=r"cds\['dense'\] must be > 0"):
+        rp.Debias(cds={"dense": 0.0})
+    with pytest.raises(TypeError, match="got debias= and cds="):
+        rp.ensemble(state, craft, models, "ref", debias=rp.Debias(), cds={"dense": 2.5}, **run)

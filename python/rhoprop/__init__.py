@@ -13,7 +13,7 @@ import typing as _typing
 from . import cache, constants, density, errors, frames, options, parallel, spaceweather, time
 from . import propagation as propagation
 from ._version import __version__
-from .ensemble import EnsembleResult, GaussianMixture, debias_drag_coefficient
+from .ensemble import Debias, EnsembleResult, GaussianMixture, debias_drag_coefficient
 from .ensemble import ensemble as ensemble  # the function; the package stays importable
 from .errors import (
     CovarianceError,
@@ -78,6 +78,7 @@ __all__ = [
     "Ccsp",
     "CcspResult",
     "CovarianceError",
+    "Debias",
     "DecayError",
     "DensityFieldError",
     "Dynamics",

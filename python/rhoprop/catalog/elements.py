@@ -18,17 +18,23 @@ import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, NoReturn
+from typing import TYPE_CHECKING, Any, Literal, NoReturn, TypedDict
 
 import numpy as np
 
 from .. import _validate
 from ..density.model import ModelLike
 from ..options import Errors
+from ..parallel import worker_count
 from ..propagation import OrbitState
+from ..propagation.dynamics import Dynamics
+from ..propagation.propagate import check_model
 from ..propagation.state import MAX_RADII, radii_beyond_reach
 from ..time import from_jd
 from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
 
 __all__ = [
     "DEFAULT_DRAG_PARAMETER",
@@ -336,19 +342,84 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
 HISTORY_DAYS = 1.0
 
 
+#: The dynamics of a fit at load: J2..J4, the degree of catalog runs.
+FIT_DYNAMICS = Dynamics(zonal_degree=4)
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """How :func:`load` fits each object's state and Cd*A/m to its element set
+    (``load(path, fit=FitSettings(model))``), checked when made.
+
+    Attributes:
+        model: the density model of the fit: a sampled model is sampled once into one
+            field covering every object's span and altitudes; a ``DensityField`` is used
+            as given.
+        span: fit span, s from each epoch (None: :func:`~rhoprop.catalog.fit.default_span`,
+            the day before the epoch, one day either side for deep-space orbits, three for
+            GPS and MEO).
+        dynamics: the fit's :class:`~rhoprop.Dynamics` (None: ``Dynamics(zonal_degree=4)``,
+            J2..J4, the degree of catalog runs; fit with the degree the objects will be
+            propagated with). The fit integrates on its own RK8 grid down to the default
+            floor: an ``integrator``, ``step``, ``rtol``, another ``floor_altitude``,
+            ``field_degree`` or ``third_bodies`` is refused (ValueError).
+        threads: objects fitted at once (None: every core).
+
+    Example:
+        >>> import rhoprop as rp
+        >>> rp.catalog.FitSettings(rp.density.Exponential.benchmark()).span is None
+        True
+    """
+
+    model: ModelLike
+    span: tuple[float, float] | None = None
+    dynamics: Dynamics | None = None
+    threads: int | None = None
+
+    def __post_init__(self) -> None:
+        check_model(self.model)
+        dyn = FIT_DYNAMICS if self.dynamics is None else self.dynamics
+        if not isinstance(dyn, Dynamics):
+            raise TypeError(f"dynamics must be a rhoprop.Dynamics, got {type(dyn).__name__}")
+        dyn.require_automatic_gravity("the fit")
+        moved = [
+            k
+            for k in ("integrator", "step", "rtol", "floor_altitude")
+            if getattr(dyn, k) != getattr(Dynamics(), k)
+        ]
+        if moved:
+            raise ValueError(
+                f"the fit integrates on its own RK8 grid down to the default floor: "
+                f"dynamics.{' and dynamics.'.join(moved)} would be ignored (leave "
+                f"{'it' if len(moved) == 1 else 'them'} unset)"
+            )
+        object.__setattr__(self, "dynamics", dyn)
+        if self.threads is not None:
+            object.__setattr__(
+                self, "threads", worker_count(_validate.count("threads", self.threads, minimum=1))
+            )
+
+
+class LoadKeywords(TypedDict, total=False):
+    """The deprecated keywords of :func:`load`, now in ``fit=FitSettings(model, span=,
+    dynamics=, threads=)`` (``zonal_degree`` in its ``dynamics``)."""
+
+    model: ModelLike | None
+    span: tuple[float, float] | None
+    threads: int | None
+    zonal_degree: int
+
+
 def load(
     path: str | Path | Sequence[str | Path],
     *,
     errors: Errors | Literal["skip"] = "raise",
     drag_parameters: dict[int, float] | None = None,
-    fit: bool = False,
-    model: ModelLike | None = None,
-    span: tuple[float, float] | None = None,
-    threads: int | None = None,
-    zonal_degree: int = 4,
+    fit: bool | FitSettings = False,
     nonpositive_bstar: Literal["error", "prior"] = "prior",
     history: Literal["newest", "fit", "each"] = "newest",
     far_orbits: Literal["skip", "error"] = "skip",
+    **deprecated: Unpack[LoadKeywords],
 ) -> Catalog:
     """Reads a TLE file (2- or 3-line) or a CCSDS OMM file (JSON, CSV or XML as CelesTrak
     serves them), detected by content, plain or gzip-compressed.
@@ -366,24 +437,16 @@ def load(
             still works with a DeprecationWarning).
         drag_parameters: optional {NORAD id: Cd*A/m (m^2/kg)} overriding B* (with
             ``fit=True``: the fit's starting value and prior).
-        fit: fit each object's state and Cd*A/m to its SGP4 positions over ``span`` with
-            rhoprop's dynamics and ``model`` (:func:`~rhoprop.catalog.fit.fit_element_set`,
-            about 0.1 s per object). Fitted objects carry ``fit`` (residuals, covariance)
-            and as ``covariance`` the TLE accuracy plus the fit's state covariance. Objects
-            with B* <= 0 load only this way. Where a fit fails (the orbit decays within the
-            span, SGP4 fails) the object keeps its B* state, and its note says why. The B*
-            conversion (``fit=False``) stays the default: it is instant, and a fit needs a
-            density model and space weather over the span.
-        model: density model for the fit (required with ``fit=True``): a sampled model
-            is sampled once into one field covering every object's span and altitudes;
-            a ``DensityField`` is used as given.
-        span: fit span, s from each epoch (default :func:`~rhoprop.catalog.fit.default_span`:
-            the day before the epoch, one day either side for deep-space orbits, three
-            for GPS and MEO).
-        threads: objects fitted at once (default: CPU count).
-        zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6 (default
-            4, the degree of catalog runs, ``propagate_catalog``); fit with the degree the
-            objects will be propagated with.
+        fit: a :class:`FitSettings` (its model, span, dynamics and threads): fit each
+            object's state and Cd*A/m to its SGP4 positions over the span with rhoprop's
+            dynamics and the model (:func:`~rhoprop.catalog.fit.fit_element_set`, about
+            0.1 s per object). Fitted objects carry ``fit`` (residuals, covariance) and as
+            ``covariance`` the TLE accuracy plus the fit's state covariance. Objects with
+            B* <= 0 load only this way. Where a fit fails (the orbit decays within the
+            span, SGP4 fails) the object keeps its B* state, and its note says why.
+            False (default): the B* conversion, instant (a fit needs a density model and
+            space weather over the span). ``fit=True`` with ``model=`` (deprecated) is
+            ``FitSettings(model)``.
         nonpositive_bstar: an element set with B* <= 0 (no drag parameter follows from it)
             without ``fit``: ``"prior"`` (default): it loads with the fit's starting value
             Cd*A/m = ``fit.DEFAULT_DRAG_PARAMETER`` (0.022 m^2/kg), its note says so,
@@ -410,22 +473,21 @@ def load(
             it is listed in ``Catalog.skipped`` (and with ``errors="raise"`` a
             RuntimeWarning says how many), so a published catalog loads as it comes;
             ``"error"``: a ValueError (recorded with ``errors="record"``).
+        **deprecated: ``model=``, ``span=``, ``threads=`` and ``zonal_degree=`` (with
+            ``fit=True``), now in ``fit=FitSettings(...)``, folded in with a
+            DeprecationWarning.
     """
+    settings = _fit_settings(fit, deprecated)
     if history not in ("newest", "fit", "each"):
         raise ValueError(f"history must be 'newest', 'fit' or 'each', got {history!r}")
-    if history == "fit" and not fit:
-        raise ValueError("history='fit' fits element sets together: it needs fit=True")
+    if history == "fit" and settings is None:
+        raise ValueError("history='fit' fits element sets together: it needs fit=FitSettings(...)")
     if far_orbits not in ("skip", "error"):
         raise ValueError(f"far_orbits must be 'skip' or 'error', got {far_orbits!r}")
     if nonpositive_bstar not in ("error", "prior"):
         raise ValueError(f"nonpositive_bstar must be 'error' or 'prior', got {nonpositive_bstar!r}")
 
     errors = _validate.errors_argument("load", errors)
-    if fit and model is None:
-        raise ValueError("fit=True needs a density model: load(path, fit=True, model=...)")
-    from ..propagation.dynamics import zonal_degree_argument
-
-    zonal_degree = zonal_degree_argument(zonal_degree)
     if drag_parameters is not None:
         if not isinstance(drag_parameters, Mapping):
             raise TypeError(
@@ -453,7 +515,7 @@ def load(
                     where,
                     drag,
                     elements,
-                    allow_nonpositive=fit or nonpositive_bstar == "prior",
+                    allow_nonpositive=settings is not None or nonpositive_bstar == "prior",
                 )
             )
         except ValueError as err:
@@ -473,9 +535,9 @@ def load(
     if history != "each":
         out.objects, older = _newest_of_each(out.objects)
         _drop_behind_far(out, older, far)
-    if fit and out.objects:
+    if settings is not None and out.objects:
         together = older if history == "fit" else None
-        _fit_all(out, model, span, errors, threads, zonal_degree, together)
+        _fit_all(out, settings, errors, together)
     if older and history == "newest":
         out.objects = _noted_histories(out.objects, older)
     return out
@@ -743,22 +805,64 @@ def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogO
     )
 
 
+def _fit_settings(fit: object, deprecated: Mapping[str, object]) -> FitSettings | None:
+    """:func:`load`'s ``fit=`` as settings (None: no fit), with the deprecated
+    ``model=``, ``span=``, ``threads=``, ``zonal_degree=`` folded in with a warning."""
+    loose = dict(deprecated)
+    wrong = sorted(set(loose) - set(LoadKeywords.__annotations__))
+    if wrong:
+        raise TypeError(f"load() got an unexpected keyword argument {wrong[0]!r}")
+    if isinstance(fit, FitSettings):
+        if loose:
+            raise TypeError(
+                f"load() got fit=FitSettings(...) and {', '.join(f'{k}=' for k in loose)}; "
+                "give the settings in one place"
+            )
+        return fit
+    if not isinstance(fit, (bool, np.bool_)):
+        raise TypeError(f"fit must be True, False or a FitSettings, got {type(fit).__name__}")
+    given = {k: v for k, v in loose.items() if v is not None}
+    if given:
+        warnings.warn(
+            f"load({', '.join(f'{k}=' for k in given)}) is deprecated; give "
+            "fit=rp.catalog.FitSettings(model, span=..., dynamics=rp.Dynamics(zonal_degree="
+            "...), threads=...)"
+            + ("" if fit else " (without fit=True they did nothing, as before)"),
+            DeprecationWarning,
+            stacklevel=3,
+        )
+    if not fit:
+        return None
+    if given.get("model") is None:
+        raise ValueError("a fit needs a density model: load(path, fit=FitSettings(model))")
+    degree = given.get("zonal_degree")
+    return FitSettings(
+        given["model"],  # type: ignore[arg-type]
+        span=given.get("span"),  # type: ignore[arg-type]
+        dynamics=None if degree is None else Dynamics(zonal_degree=degree),  # type: ignore[arg-type]
+        threads=given.get("threads"),  # type: ignore[arg-type]
+    )
+
+
 def _fit_all(
     cat: Catalog,
-    model: Any,
-    span: tuple[float, float] | None,
+    settings: FitSettings,
     errors: str,
-    threads: int | None,
-    zonal_degree: int = 2,
     history: Mapping[int, Sequence[CatalogObject]] | None = None,
 ) -> None:
-    """Replaces the objects of ``cat`` by fitted ones (in place, order kept), each with
-    its ``history`` of older element sets."""
+    """Replaces the objects of ``cat`` by fitted ones (in place, order kept) with
+    ``settings``, each with its ``history`` of older element sets."""
     import dataclasses
 
     objs = cat.objects
+    assert settings.dynamics is not None  # FitSettings sets it
     fitted = fit_objects(
-        objs, model, span=span, threads=threads, zonal_degree=zonal_degree, history=history
+        objs,
+        settings.model,
+        span=settings.span,
+        threads=settings.threads,
+        zonal_degree=settings.dynamics.zonal_degree,
+        history=history,
     )
     kept: list[CatalogObject] = []
     for obj, res in zip(objs, fitted, strict=True):

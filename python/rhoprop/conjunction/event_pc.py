@@ -33,7 +33,7 @@ from ..catalog.covariance import tle_covariance
 from ..catalog.elements import CatalogObject
 from ..catalog.run import OwnEpochsResult, propagate_to_own_epochs
 from ..ensemble.combine import default_spread, default_weights
-from ..ensemble.debias import backward_orbit
+from ..ensemble.debias import DEBIAS_WINDOW, backward_orbit
 from ..propagation import Spacecraft
 from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
 from ..time import seconds_between
@@ -50,8 +50,8 @@ __all__ = ["DEBIAS_CADENCE", "DEBIAS_WINDOW", "RADII", "object_radius"]
 #: debris 1 m (most tracked fragments are 10 cm to 1 m). Kind from the catalog name:
 #: "R/B" a rocket body, "DEB" debris, else a payload.
 RADII = {"payload": 5.0, "rocket body": 5.0, "debris": 1.0}
-#: Cd debiasing: window before each epoch and sample spacing along the reference orbit, s.
-DEBIAS_WINDOW = 8 * 3600.0
+#: Cd debiasing: sample spacing along the reference orbit, s (the window before each epoch
+#: is the ensemble's, :data:`~rhoprop.ensemble.debias.DEBIAS_WINDOW`).
 DEBIAS_CADENCE = 600.0
 #: Objects whose epochs lie within this of each other share one catalog run (their
 #: atmosphere's day tiles), s.

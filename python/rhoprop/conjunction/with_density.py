@@ -30,6 +30,7 @@ from ..constants import MU
 from ..density.model import ModelLike
 from ..ensemble import EnsembleResult
 from ..ensemble import ensemble as run_ensemble
+from ..ensemble.debias import Debias
 from ..frames import rtn_basis
 from ..options import HardBodyShape
 from ..propagation import Ccsp, Dynamics, MonteCarlo, OrbitState, Spacecraft, propagate
@@ -51,9 +52,11 @@ class EnsembleOptions(TypedDict, total=False):
     """The keywords of :func:`rhoprop.ensemble` that :func:`density_pc` passes on."""
 
     spread: float | None
+    debias: Debias | None
+    dynamics: Dynamics | None
+    # Deprecated: in ``debias`` (``window``, ``cds``), folded in with a warning.
     debias_window: float
     cds: dict[str, float] | None
-    dynamics: Dynamics | None
     # Deprecated: the method's settings, folded into ``method`` with a warning.
     n: int
     seed: int
@@ -399,7 +402,8 @@ def density_pc(
             sigma).
         shape: hard-body shape, as :func:`~rhoprop.conjunction.pc_2d`.
         **ensemble_options: passed on to :func:`rhoprop.ensemble` (``spread``,
-            ``debias_window``, ``cds``, ``dynamics``); the method's settings (``n``,
+            ``debias``, ``dynamics``; ``debias_window`` and ``cds`` are deprecated: give
+            them in ``debias``); the method's settings (``n``,
             ``seed``, ``update_interval``, ...) are deprecated here: give them in
             ``method``.
 

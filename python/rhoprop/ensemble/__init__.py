@@ -8,12 +8,14 @@ import GaussianMixture``).
 """
 
 from .combine import METHODS, EnsembleResult, ensemble
-from .debias import DEBIAS_CADENCE, backward_orbit, debias_drag_coefficient
+from .debias import DEBIAS_CADENCE, DEBIAS_WINDOW, Debias, backward_orbit, debias_drag_coefficient
 from .mixture import GaussianMixture
 
 __all__ = [
     "DEBIAS_CADENCE",
+    "DEBIAS_WINDOW",
     "METHODS",
+    "Debias",
     "EnsembleResult",
     "GaussianMixture",
     "backward_orbit",

@@ -12,6 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _validate
+from .._deprecated import fold_keywords
 from ..density import (
     JB2008_CALIBRATED,
     JR_CALIBRATED,
@@ -42,7 +43,7 @@ from ..propagation.results import (
     optional_import,
 )
 from ..time import offsets_to_epochs
-from .debias import debias_drag_coefficient
+from .debias import Debias, debias_drag_coefficient
 from .mixture import GaussianMixture
 
 if TYPE_CHECKING:
@@ -311,11 +312,10 @@ def ensemble(
     method: Method | MethodName = MonteCarlo(),
     weights: npt.ArrayLike | Mapping[str, float] | None = None,
     spread: float | None = None,
-    debias_window: float = 8 * 3600.0,
+    debias: Debias | None = None,
     duration: float = 259200.0,
-    cds: dict[str, float] | None = None,
     dynamics: Dynamics | None = None,
-    **method_options: object,  # deprecated: the method's settings, now in ``method``
+    **deprecated: object,
 ) -> EnsembleResult:
     """Propagates ``state`` through every model and combines them into a Gaussian mixture.
 
@@ -336,21 +336,34 @@ def ensemble(
             :class:`~rhoprop.density.SigmaScaled`); None (default): with the default
             weights :func:`default_spread` (the calibrated families' fitted factor), with
             weights given 1 (each model's own sigma).
-        debias_window: s before the epoch over which each model's Cd is debiased against
-            the reference (:func:`~rhoprop.debias_drag_coefficient`); ``cds`` overrides it
-            per model.
+        debias: a :class:`~rhoprop.Debias` (None: ``Debias()``): each model's Cd is
+            debiased against the reference over its ``window`` before the epoch (default
+            8 h; :func:`~rhoprop.debias_drag_coefficient`), except the models whose Cd its
+            ``cds`` gives.
         duration: s.
         dynamics: the :class:`~rhoprop.Dynamics` every model's run integrates with
             (None: the method's defaults).
-        **method_options: deprecated: the method's settings (``n=``, ``seed=``,
-            ``update_interval=``, ...) folded into ``method`` with a warning; give them
-            in the method object instead.
+        **deprecated: the method's settings (``n=``, ``seed=``, ``update_interval=``,
+            ...: give them in the method object) and ``debias_window=``, ``cds=`` (in
+            ``debias``: ``window``, ``cds``), folded in with a DeprecationWarning.
 
     Returns:
         :class:`EnsembleResult`; ``.mixture()`` and ``.along_track_pdf(x)`` give the PDF.
     """
     method = method_argument(method, "ensemble", MonteCarlo())
-    method = with_keywords(method, "ensemble", method_options)
+    loose = dict(deprecated)
+    moved: dict[str, object] = {k: loose.pop(k) for k in ("debias_window", "cds") if k in loose}
+    method = with_keywords(method, "ensemble", loose)
+    debias = fold_keywords(
+        "ensemble",
+        "debias",
+        debias,
+        Debias(),
+        moved,
+        "rp.Debias",
+        renamed={"debias_window": "window"},
+    )
+    cds = debias.cds
     if not models:
         raise ValueError("models must name at least one density model")
     if reference not in models:
@@ -385,7 +398,7 @@ def ensemble(
             cd[name] = spacecraft.cd
         else:
             cd[name] = debias_drag_coefficient(
-                state, spacecraft, models[reference], models[name], debias_window
+                state, spacecraft, models[reference], models[name], debias.window
             )
     results: dict[str, MonteCarloResult | CcspResult] = {}
     for name in names:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import _validate, frames
@@ -12,6 +15,35 @@ from ..time import offsets_to_epochs
 
 #: Cadence of the density samples along the backward orbit, s.
 DEBIAS_CADENCE = 60.0
+#: Default span before the epoch over which a model's Cd is debiased, s (8 hours).
+DEBIAS_WINDOW = 8 * 3600.0
+
+
+@dataclass(frozen=True)
+class Debias:
+    """How an ensemble gives each model its drag coefficient, checked when made: debiased
+    against the reference model over ``window`` s before the epoch
+    (:func:`debias_drag_coefficient`), except the models whose Cd ``cds`` gives
+    ({model name: Cd}, dimensionless, > 0).
+
+    Example:
+        >>> import rhoprop as rp
+        >>> rp.Debias(cds={"JB2008": 2.3}).window
+        28800.0
+    """
+
+    window: float = DEBIAS_WINDOW
+    cds: Mapping[str, float] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "window", _validate.positive("window", self.window))
+        if self.cds is not None:
+            if not isinstance(self.cds, Mapping):
+                raise TypeError(
+                    f"cds must be a mapping {{model name: Cd}}, got {type(self.cds).__name__}"
+                )
+            for name, cd in self.cds.items():
+                _validate.positive(f"cds[{name!r}]", cd)
 
 
 def backward_orbit(
@@ -46,7 +78,7 @@ def debias_drag_coefficient(
     spacecraft: Spacecraft,
     reference_model: DensityModel,
     model: DensityModel,
-    window: float = 8 * 3600.0,
+    window: float = DEBIAS_WINDOW,
     *,
     cadence: float = DEBIAS_CADENCE,
 ) -> float:

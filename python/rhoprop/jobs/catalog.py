@@ -12,7 +12,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..catalog.covariance import COVARIANCE_NAMES
-from ..catalog.elements import Catalog, load
+from ..catalog.elements import Catalog, FitSettings, load
 from ..catalog.objects import Initial
 from ..catalog.run import MAX_SPAN, STATUSES, CatalogResult, propagate_catalog
 from ..execution import Execution
@@ -254,10 +254,10 @@ class CatalogJob:
         cat = _load(
             self.file,
             self.skip_bad,
-            fit=self.fit is True,
-            model=atmosphere if self.fit is True else None,
+            fit=FitSettings(atmosphere, dynamics=Dynamics(zonal_degree=self.zonal_degree))
+            if self.fit is True
+            else False,
             drag_parameters=drag,
-            zonal_degree=self.zonal_degree,
             history="newest" if self.duplicates == "newest" else "each",
         )
         for where, message in cat.skipped:
