@@ -111,6 +111,39 @@ def dict_returns() -> list[str]:
     ]
 
 
+def wide_core_functions(limit: int = 9) -> list[str]:
+    """``_core`` functions whose stub takes more than ``limit`` parameters: a run's
+    settings cross the binding as one record (``Problem``, ``MonteCarloRun``,
+    ``CcspRun``, ``FitJob``, ``Tracks``), not as positional arguments."""
+    tree = ast.parse((PACKAGE / "_core.pyi").read_text())
+    out = []
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            a = node.args
+            n = len([*a.posonlyargs, *a.args, *a.kwonlyargs])
+            if n > limit:
+                out.append(f"{node.name}: {n}")
+    return out
+
+
+def core_tuple_returns() -> list[str]:
+    """``_core`` functions whose stub returns a tuple of more than two values (a record
+    names them)."""
+    tree = ast.parse((PACKAGE / "_core.pyi").read_text())
+    out = []
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef) and node.returns is not None:
+            ret = node.returns
+            if (
+                isinstance(ret, ast.Subscript)
+                and ast.unparse(ret.value) == "tuple"
+                and isinstance(ret.slice, ast.Tuple)
+                and len(ret.slice.elts) > 2
+            ):
+                out.append(node.name)
+    return out
+
+
 if __name__ == "__main__":
     for title, found in (
         ("public parameters typed Any", any_parameters()),
@@ -118,6 +151,8 @@ if __name__ == "__main__":
         ("functions over 80 lines in catalog/ and conjunction/", long_functions()),
         ("regular expressions on exception messages", message_regexes()),
         ("_core functions returning dict[str, Any]", dict_returns()),
+        ("_core functions with more than 9 parameters", wide_core_functions()),
+        ("_core functions returning a tuple of more than 2", core_tuple_returns()),
     ):
         print(f"{title}: {len(found)}")
         for item in found:

@@ -40,7 +40,8 @@ def test_core_matches_432_reference_calls(jb_dir: Path) -> None:
         [d[k] for k in ("sun_ra_rad", "sun_dec_rad", "sat_ra_rad", "sat_lat_rad", "alt_km")]
     )
     ix = np.column_stack([d[k] for k in COLUMNS])
-    tinf, temp, rho = _core.jb2008_core(d["AMJD"], geometry, ix)
+    out = _core.jb2008_core(d["AMJD"], geometry, ix)
+    tinf, temp, rho = out.exospheric_temperature, out.temperature, out.density
     np.testing.assert_allclose(rho, d["rho_kg_m3"], rtol=1e-6)
     np.testing.assert_allclose(tinf, d["tinf_K"], rtol=1e-9)
     np.testing.assert_allclose(temp, d["temp_K"], rtol=1e-9)
@@ -66,9 +67,8 @@ def test_model_matches_reference_grids(
     assert (std > 0).all()
     # Temperatures are printed to 0.1 K.
     t = np.full(len(grid), epoch)
-    tinf, temp, _ = _core.jb2008_geodetic(
-        modified_julian_date(t), lat, lon, alt_km * 1e3, indices.at(t)
-    )
+    out = _core.jb2008_geodetic(modified_julian_date(t), lat, lon, alt_km * 1e3, indices.at(t))
+    tinf, temp = out.exospheric_temperature, out.temperature
     np.testing.assert_allclose(tinf, tinf_ref, atol=0.051)
     np.testing.assert_allclose(temp, temp_ref, atol=0.051)
 

@@ -33,18 +33,16 @@ MISS = 300.0
 def _back(position, velocity, dt, at=T, craft=CRAFT):
     """The state ``dt`` s before ``at`` of the orbit through (position, velocity) then:
     the core's fixed-step RK8 backwards at a 10 s step (the only backward integrator)."""
-    _t, s, *_ = _core.propagate(
-        MODEL.atmosphere(None, 0.0),
-        ut1_seconds(at),
-        np.concatenate([position, velocity]),
-        craft.drag_parameter,
-        np.array([0.0, -dt]),
-        "rk8",
-        10.0,
-        None,
-        0.0,
-        2,
+    problem = _core.Problem(
+        epoch=ut1_seconds(at),
+        state=np.concatenate([position, velocity]),
+        drag=craft.drag_parameter,
+        floor_altitude=0.0,
+        zonal_degree=2,
     )
+    s = _core.propagate(
+        MODEL.atmosphere(None, 0.0), problem, np.array([0.0, -dt]), "rk8", 10.0
+    ).states
     # TEME: the core integrated in the axes given, the frame screens run in.
     return rp.OrbitState(add_seconds(at, -dt), s[-1, :3], s[-1, 3:], "TEME")
 

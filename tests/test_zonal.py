@@ -214,17 +214,8 @@ def test_degree_must_be_an_integer():
 def test_the_core_checks_the_degree_too():
     state = paper_teme()
     with pytest.raises(ValueError, match="zonal_degree = 7 is invalid"):
-        rp._core.propagate(
-            rp._core.ExponentialAtmosphere(3.725e-12, 400e3, 58.515e3, 0.0),
-            0.0,
-            state.state,
-            0.005,
-            np.array([0.0, 60.0]),
-            "rk8",
-            30.0,
-            None,
-            120e3,
-            7,
+        rp._core.Problem(
+            epoch=0.0, state=state.state, drag=0.005, floor_altitude=120e3, zonal_degree=7
         )
 
 

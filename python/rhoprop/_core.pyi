@@ -2,11 +2,11 @@
 core). Users call the documented ``rhoprop`` API instead; array arguments are float64."""
 
 from collections.abc import Callable
-from typing import NamedTuple, TypedDict, final
+from typing import final
 
 import numpy as np
 import numpy.typing as npt
-from typing_extensions import NotRequired, Self
+from typing_extensions import Self
 
 _F64 = npt.NDArray[np.float64]
 
@@ -23,10 +23,26 @@ __all__ = [
     "R_POLE",
     "SECONDS_PER_DAY",
     "WGS84_F",
+    "Approaches",
+    "Candidates",
+    "CcspOutput",
+    "CcspRun",
     "ExponentialAtmosphere",
     "FieldTile",
+    "FitConfig",
+    "FitJob",
+    "FitOutput",
     "GriddedAtmosphere",
+    "ModelPoints",
+    "MonteCarloOutput",
+    "MonteCarloRun",
+    "PairsPc",
+    "Pc2d",
+    "Problem",
+    "Propagated",
     "StreamedAtmosphere",
+    "Stretches",
+    "Tracks",
     "ccsp",
     "ccsp_many",
     "equinoctial_elements",
@@ -160,140 +176,242 @@ class FieldTile:
     def span(self) -> tuple[float, float]:
         """First and last time node, s."""
 
-class _Propagated(NamedTuple):
-    """What ``propagate`` returns (a plain tuple at runtime, in this order)."""
+@final
+class Problem:
+    """The initial-value problem every run shares, checked when made: epoch (UT1 s since
+    J2000), state (6,) m and m/s, Cd*A/m (m^2/kg), floor altitude (m), zonal degree and
+    forces (field degree, third bodies, Cr*A/m m^2/kg; None automatic by regime)."""
 
-    times: _F64
-    states: _F64
-    decayed_at: float | None
-    rhs_evaluations: int
-    clipped: int
+    def __new__(
+        cls,
+        *,
+        epoch: float,
+        state: _F64,
+        drag: float,
+        floor_altitude: float,
+        zonal_degree: int = 2,
+        forces: tuple[int | None, bool | None, float] = ...,
+    ) -> Problem: ...
 
-class _CcspOutput(TypedDict):
-    """What ``ccsp`` returns (and ``ccsp_many`` per object)."""
+@final
+class Propagated:
+    """What ``propagate`` returns."""
 
-    decayed_at: float | None
-    times: _F64
-    means: _F64
-    covariances: _F64
-    cross: _F64
-    drag_cross: _F64
-    element_means: NotRequired[_F64]
-    element_covariances: NotRequired[_F64]
+    @property
+    def times(self) -> _F64:
+        """Output times (n,), s."""
+    @property
+    def states(self) -> _F64:
+        """States (n, 6), m and m/s."""
+    @property
+    def decayed_at(self) -> float | None:
+        """When the orbit crossed the floor, s, or None."""
+    @property
+    def rhs_evaluations(self) -> int:
+        """Right-hand-side evaluations."""
+    @property
+    def clipped(self) -> int:
+        """Evaluations whose density was clipped at 0."""
 
-class _MonteCarloOutput(TypedDict):
+@final
+class MonteCarloRun:
+    """A Monte Carlo run, checked when made: its problem, output times (s), kappa
+    process (kind, parameters), perturbation, fixed-step method and largest step (s),
+    members, seed, optional initial covariance (6, 6), recorded densities, drag_sigma."""
+
+    def __new__(
+        cls,
+        problem: Problem,
+        *,
+        output_times: _F64,
+        kappa: tuple[str, list[float]],
+        perturbation: str,
+        method: str,
+        step: float,
+        members: int,
+        seed: int,
+        initial_covariance: _F64 | None = None,
+        record_density: bool = False,
+        drag_sigma: float = 0.0,
+    ) -> MonteCarloRun: ...
+
+@final
+class MonteCarloOutput:
     """What ``monte_carlo`` returns."""
 
-    positions: _F64
-    velocities: _F64
-    densities: _F64 | None
-    clipped: npt.NDArray[np.uint64]
-    decay_times: _F64
-    step: float
-    drag_factors: _F64
+    @property
+    def positions(self) -> _F64:
+        """(n, nt, 3), m."""
+    @property
+    def velocities(self) -> _F64:
+        """(n, nt, 3), m/s."""
+    @property
+    def densities(self) -> _F64 | None:
+        """(n, nt), kg/m^3, or None unless recorded."""
+    @property
+    def clipped(self) -> npt.NDArray[np.uint64]:
+        """Clipped evaluations per member (n,)."""
+    @property
+    def decay_times(self) -> _F64:
+        """Decay time per member (n,), s (inf: none)."""
+    @property
+    def step(self) -> float:
+        """The integration step used, s."""
+    @property
+    def drag_factors(self) -> _F64:
+        """Factor on Cd*A/m per member (n,), log-normal with log-sigma drag_sigma."""
+
+@final
+class CcspRun:
+    """A CCSP run, checked when made: its problem, initial covariance (6, 6), update
+    times (s), scaling (lambda1 + n, lambda2 + p), perturbation, largest RK8 step (s),
+    drag_sigma (the relative 1-sigma of Cd*A/m carried as the second consider
+    parameter), further output times between updates (the sigma points' moments in
+    flight, not re-drawn), coordinates, the weight of the per-update kappa and a slow
+    density term (scale, half-life s, inf: constant) held over each update and
+    correlated 2^(-dt / half-life) across updates, a third consider parameter."""
+
+    def __new__(
+        cls,
+        problem: Problem,
+        *,
+        initial_covariance: _F64,
+        update_times: _F64,
+        scaling: tuple[float, float],
+        perturbation: str,
+        step: float,
+        drag_sigma: float = 0.0,
+        output_times: _F64 | None = None,
+        coordinates: str = "equinoctial",
+        kappa_scale: float = 1.0,
+        slow: tuple[float, float] | None = None,
+    ) -> CcspRun: ...
+
+@final
+class CcspOutput:
+    """What ``ccsp`` returns (and ``ccsp_many`` per object)."""
+
+    @property
+    def decayed_at(self) -> float | None:
+        """When a sigma point crossed the floor, s (the outputs end before it), or None."""
+    @property
+    def times(self) -> _F64:
+        """(nt,), s."""
+    @property
+    def means(self) -> _F64:
+        """(nt, 6), m and m/s."""
+    @property
+    def covariances(self) -> _F64:
+        """(nt, 6, 6)."""
+    @property
+    def cross(self) -> _F64:
+        """Cross-covariance of the state and kappa (nt, 6)."""
+    @property
+    def drag_cross(self) -> _F64:
+        """Cross-covariance of the state and the Cd*A/m parameter (nt, 6)."""
+    @property
+    def element_means(self) -> _F64 | None:
+        """Equinoctial means (nt, 6) in equinoctial coordinates, else None."""
+    @property
+    def element_covariances(self) -> _F64 | None:
+        """Equinoctial covariances (nt, 6, 6) in equinoctial coordinates, else None."""
+
+@final
+class FitJob:
+    """One object of ``fit_orbits``, checked when made: epoch (UT1 s), p0 (7,) =
+    [r, v, Cd*A/m], the Cd*A/m prior and its sigma (m^2/kg), grid spacing (s), grid
+    steps back and forward, the observations' grid rows (k,), observed positions (k, 3)
+    m and weights (k, 9) 1/m (row-major 3x3)."""
+
+    def __new__(
+        cls,
+        *,
+        epoch: float,
+        p0: _F64,
+        prior: float,
+        prior_sigma: float,
+        spacing: float,
+        back: int,
+        forward: int,
+        rows: npt.NDArray[np.int64],
+        observed: _F64,
+        weights: _F64,
+    ) -> FitJob: ...
+
+@final
+class FitConfig:
+    """Settings every job of a ``fit_orbits`` call shares: grid step (s), zonal degree,
+    floor altitude (m), most iterations and the smallest Cd*A/m (m^2/kg)."""
+
+    def __new__(
+        cls,
+        *,
+        step: float,
+        zonal_degree: int,
+        floor_altitude: float,
+        max_iterations: int,
+        min_drag: float,
+    ) -> FitConfig: ...
+
+@final
+class FitOutput:
+    """What ``fit_orbits`` returns per job."""
+
+    @property
+    def p(self) -> _F64:
+        """[r, v, Cd*A/m] (7,) at the epoch."""
+    @property
+    def states(self) -> _F64:
+        """States on the grid (n, 6)."""
+    @property
+    def normal(self) -> _F64:
+        """J^T J of the weighted Jacobian (7, 7)."""
+    @property
+    def iterations(self) -> int:
+        """Gauss-Newton iterations."""
+    @property
+    def converged(self) -> bool:
+        """Whether the fit converged."""
 
 def propagate(
     atmosphere: _Atmosphere,
-    epoch: float,
-    state: _F64,
-    drag: float,
+    problem: Problem,
     output_times: _F64,
     method: str,
-    step: float | None,
-    rtol: float | None,
-    floor_altitude: float,
-    zonal_degree: int = 2,
-    forces: tuple[int | None, bool | None, float] = ...,
-) -> _Propagated:
-    """(times (n,), states (n, 6), decayed_at, RHS evaluations, clipped evaluations);
-    forces: (field degree, third bodies, Cr*A/m m^2/kg), default (None, None, 0.0), the
-    same in ccsp and monte_carlo: None automatic by regime, radiation 0 none."""
+    step: float | None = None,
+    rtol: float | None = None,
+) -> Propagated:
+    """One trajectory of ``problem`` to ``output_times`` (s) with ``method`` ("dop853",
+    "rk8", "rk4" or "abm"), its largest ``step`` (s) and DOP853's ``rtol``."""
 
-def ccsp(
-    atmosphere: _Atmosphere,
-    epoch: float,
-    state: _F64,
-    drag: float,
-    initial_covariance: _F64,
-    update_times: _F64,
-    scaling: tuple[float, float],
-    perturbation: str,
-    step: float,
-    floor_altitude: float,
-    zonal_degree: int = 2,
-    drag_sigma: float = 0.0,
-    output_times: _F64 | None = None,
-    coordinates: str = "equinoctial",
-    kappa_scale: float = 1.0,
-    slow: tuple[float, float] | None = None,
-    forces: tuple[int | None, bool | None, float] = ...,
-) -> _CcspOutput:
-    """CCSP filter: decayed_at (s or None), times (nt,), means (nt, 6), covariances
-    (nt, 6, 6), cross (nt, 6), drag_cross (nt, 6); drag_sigma is the relative 1-sigma of
-    Cd*A/m carried as the second consider parameter; output_times are further outputs
-    between updates (the sigma points' moments in flight, not re-drawn); kappa_scale
-    weighs the per-update kappa, slow (scale, half-life s, inf: constant) adds a slow
-    density term held over each update and correlated 2^(-dt / half-life) across
-    updates, a third consider parameter."""
+def ccsp(atmosphere: _Atmosphere, run: CcspRun) -> CcspOutput:
+    """The CCSP filter of ``run``."""
 
 def ccsp_many(
     atmosphere: _Atmosphere,
-    objects: list[tuple[float, _F64, float, _F64, _F64, float, float, _F64]],
-    scaling: tuple[float, float],
-    perturbation: str,
-    floor_altitude: float,
-    zonal_degree: int = 2,
+    runs: list[CcspRun],
     progress: Callable[[int], object] | None = None,
-    coordinates: str = "equinoctial",
-    kappa_scale: float = 1.0,
-    slow: tuple[float, float] | None = None,
-) -> list[_CcspOutput | Exception]:
-    """CCSP of several objects, each (epoch, state, drag, initial_covariance,
-    update_times, step, drag_sigma, output_times (empty: none)), in one call: per object
-    the dict of ``ccsp`` or the exception its run raised; kappa_scale and slow as in
-    ``ccsp``, shared."""
+) -> list[CcspOutput | Exception]:
+    """The CCSP of several objects in one call: per object its output or the exception
+    its run raised."""
 
 def fit_orbits(
     atmosphere: _Atmosphere,
-    jobs: list[
-        tuple[float, _F64, float, float, float, int, int, npt.NDArray[np.int64], _F64, _F64]
-    ],
-    step: float,
-    zonal_degree: int,
-    floor_altitude: float,
-    max_iterations: int,
-    min_drag: float,
+    jobs: list[FitJob],
+    config: FitConfig,
     progress: Callable[[int], object] | None = None,
-) -> list[tuple[_F64, _F64, _F64, int, bool] | Exception]:
-    """Least-squares fits of [r, v, Cd*A/m], each job (epoch UT1 s, p0 (7,), prior and
-    its sigma (m^2/kg), spacing (s), grid steps back and forward, observation rows (k,),
-    observed positions (k, 3) m, weights (k, 9) 1/m) in one call: per job (p (7,), grid
-    states (n, 6), J^T J (7, 7), iterations, converged) or the exception of that job."""
+) -> list[FitOutput | Exception]:
+    """Least-squares fits of [r, v, Cd*A/m], one per job, in one call: per job its
+    output or the exception of that job."""
 
 def monte_carlo(
     atmosphere: _Atmosphere,
-    epoch: float,
-    state: _F64,
-    drag: float,
-    output_times: _F64,
-    kappa: tuple[str, list[float]],
-    perturbation: str,
-    method: str,
-    step: float,
-    members: int,
-    seed: int,
-    initial_covariance: _F64 | None,
-    floor_altitude: float,
-    record_density: bool,
-    threads: int | None,
-    progress: Callable[[int], object] | None,
-    zonal_degree: int = 2,
-    drag_sigma: float = 0.0,
-    forces: tuple[int | None, bool | None, float] = ...,
-) -> _MonteCarloOutput:
-    """Ensemble run: positions/velocities (n, nt, 3), densities (n, nt) or None, clipped
-    (n,), decay_times (n,), step (s), drag_factors (n,) (factor on Cd*A/m per member,
-    log-normal with log-sigma drag_sigma)."""
+    run: MonteCarloRun,
+    threads: int | None = None,
+    progress: Callable[[int], object] | None = None,
+) -> MonteCarloOutput:
+    """The ensemble of ``run`` on ``threads`` workers (None: the core's pool);
+    ``progress(done)`` is called about every 50 ms."""
 
 def gmst(ut1: _F64) -> _F64:
     """GMST (IAU-82), rad, for UT1 seconds since J2000."""
@@ -319,20 +437,60 @@ def equinoctial_to_cartesian(
 ) -> _F64:
     """Equinoctial elements (n, 6) -> Cartesian states (n, 6) in the axes of `reference`."""
 
-def jb2008_core(amjd: _F64, geometry: _F64, indices: _F64) -> tuple[_F64, _F64, _F64]:
-    """JB2008 as the reference routine: amjd (n,), geometry (n, 5) [Sun RA, Sun Dec,
-    point RA, latitude rad, altitude km], indices (n, 9) -> (Tinf K, T K, rho kg/m^3)."""
+@final
+class ModelPoints:
+    """What the model functions return per point (n,)."""
 
-def jb2008_geodetic(
-    amjd: _F64, lat: _F64, lon: _F64, alt: _F64, indices: _F64
-) -> tuple[_F64, _F64, _F64]:
-    """JB2008 at MJD (UTC), geodetic lat/lon deg, alt m -> (Tinf K, T K, rho kg/m^3)."""
+    @property
+    def exospheric_temperature(self) -> _F64:
+        """K."""
+    @property
+    def temperature(self) -> _F64:
+        """Temperature at the point, K."""
+    @property
+    def density(self) -> _F64:
+        """kg/m^3."""
+
+def jb2008_core(amjd: _F64, geometry: _F64, indices: _F64) -> ModelPoints:
+    """JB2008 as the reference routine: amjd (n,), geometry (n, 5) [Sun RA, Sun Dec,
+    point RA, latitude rad, altitude km], indices (n, 9) -> per point the exospheric
+    and local temperatures and the density."""
+
+def jb2008_geodetic(amjd: _F64, lat: _F64, lon: _F64, alt: _F64, indices: _F64) -> ModelPoints:
+    """JB2008 at MJD (UTC), geodetic lat/lon deg, alt m -> per point the exospheric and
+    local temperatures and the density."""
 
 def jacchia_roberts_geodetic(
     mjd: _F64, lat: _F64, lon: _F64, alt: _F64, drivers: _F64
-) -> tuple[_F64, _F64, _F64]:
+) -> ModelPoints:
     """Jacchia-Roberts 1971 at MJD (UTC), lat/lon deg, alt m (>= 90 km), drivers (n, 3)
-    [F10.7, F10.7a, Kp] -> (Tinf K, T K, rho kg/m^3)."""
+    [F10.7, F10.7a, Kp] -> per point the exospheric and local temperatures and the density."""
+
+@final
+class Pc2d:
+    """What ``pc_2d`` returns."""
+
+    @property
+    def pc(self) -> float:
+        """Probability of collision."""
+    @property
+    def miss_distance(self) -> float:
+        """m."""
+    @property
+    def relative_speed(self) -> float:
+        """m/s."""
+    @property
+    def covariance(self) -> _F64:
+        """Encounter-plane covariance integrated (2, 2), m^2."""
+    @property
+    def repaired(self) -> bool:
+        """Whether the projected covariance was repaired."""
+    @property
+    def projected_covariance(self) -> _F64:
+        """Encounter-plane covariance before repair (2, 2), m^2."""
+    @property
+    def axes(self) -> _F64:
+        """Encounter axes (3, 3), rows x, y, z."""
 
 def pc_2d(
     r1: _F64,
@@ -344,36 +502,84 @@ def pc_2d(
     hard_body_radius: float,
     shape: str,
     npd: str,
-) -> tuple[float, float, float, _F64, bool, _F64, _F64]:
+) -> Pc2d:
     """Short-encounter 2-D Pc: inertial r (3,) m, v (3,) m/s, position covariances
-    (3, 3) m^2 -> (pc, miss distance m, relative speed m/s, covariance integrated (2, 2)
-    m^2, repaired, projected covariance (2, 2) m^2, encounter axes (3, 3) rows x, y, z)."""
+    (3, 3) m^2."""
+
+@final
+class Tracks:
+    """Sampled tracks of n objects on a common grid, checked when made: grid times
+    (nt,) s, positions and velocities (n, nt, 3) m and m/s (C-contiguous; held, not
+    copied) and the samples each object has (n,)."""
+
+    def __new__(
+        cls,
+        *,
+        times: _F64,
+        positions: _F64,
+        velocities: _F64,
+        samples: npt.NDArray[np.uint64],
+    ) -> Tracks: ...
+
+@final
+class Candidates:
+    """What ``screen_candidates`` returns."""
+
+    @property
+    def i(self) -> npt.NDArray[np.uint32]:
+        """First object of each candidate interval."""
+    @property
+    def j(self) -> npt.NDArray[np.uint32]:
+        """Second object."""
+    @property
+    def k(self) -> npt.NDArray[np.uint32]:
+        """Grid interval."""
+    @property
+    def spatial(self) -> int:
+        """Pair-intervals through the spatial grid."""
+    @property
+    def coarse(self) -> int:
+        """Pair-intervals through the coarse distance bound."""
+    @property
+    def interpolated(self) -> int:
+        """Pair-intervals through the interpolated distance bound."""
 
 def screen_candidates(
-    times: _F64,
-    positions: _F64,
-    velocities: _F64,
-    samples: npt.NDArray[np.uint64],
+    tracks: Tracks,
     fourth: _F64,
     distance: float,
     max_acceleration: float,
     hermite_samples: int,
     progress: Callable[[int], object] | None = None,
-) -> tuple[
-    npt.NDArray[np.uint32],
-    npt.NDArray[np.uint32],
-    npt.NDArray[np.uint32],
-    tuple[int, int, int],
-]:
-    """All-on-all sieve: times (nt,) s, positions/velocities (n, nt, 3) m, m/s, samples
-    (n,) valid per object, fourth (n,) -> candidate (i, j, k) sorted, and the pair-interval
-    counts (spatial, coarse, interpolated)."""
+) -> Candidates:
+    """All-on-all sieve of ``tracks`` with each object's interpolation coefficient
+    ``fourth`` (n,): the candidate intervals (i, j, k) sorted and the counts."""
+
+@final
+class Approaches:
+    """What ``screen_approaches`` returns."""
+
+    @property
+    def i(self) -> npt.NDArray[np.uint32]:
+        """First object of each minimum."""
+    @property
+    def j(self) -> npt.NDArray[np.uint32]:
+        """Second object."""
+    @property
+    def t(self) -> _F64:
+        """Time of the minimum, s."""
+    @property
+    def states1(self) -> _F64:
+        """State of i there (m, 6)."""
+    @property
+    def states2(self) -> _F64:
+        """State of j there (m, 6)."""
+    @property
+    def edge(self) -> npt.NDArray[np.uint8]:
+        """0 inside the window, 1 at its start, 2 at its end."""
 
 def screen_approaches(
-    times: _F64,
-    positions: _F64,
-    velocities: _F64,
-    samples: npt.NDArray[np.uint64],
+    tracks: Tracks,
     i: npt.NDArray[np.uint32],
     j: npt.NDArray[np.uint32],
     k: npt.NDArray[np.uint32],
@@ -382,33 +588,54 @@ def screen_approaches(
     progress: Callable[[int], object] | None = None,
     window_start: bool = False,
     window_end: bool = False,
-) -> tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32], _F64, _F64, _F64, npt.NDArray[np.uint8]]:
-    """Minima of the distance within ``distance`` in candidate intervals (i, j, k), on the
-    quintic Hermite interpolant with the gravity acceleration -> (i, j, t s, states of i
-    (m, 6), states of j (m, 6), edge: 0 inside, 1 at the window's start, 2 at its end;
-    the ends count where ``window_start`` / ``window_end`` say the grid's are the
-    window's own)."""
+) -> Approaches:
+    """Minima of the distance within ``distance`` in candidate intervals (i, j, k) of
+    ``tracks``, on the quintic Hermite interpolant with the gravity acceleration; the
+    ends count where ``window_start`` / ``window_end`` say the grid's are the window's
+    own."""
+
+@final
+class Stretches:
+    """What ``screen_stretches`` returns."""
+
+    @property
+    def first(self) -> _F64:
+        """First time within the distance, s."""
+    @property
+    def last(self) -> _F64:
+        """Last time within the distance, s."""
 
 def screen_stretches(
-    times: _F64,
-    positions: _F64,
-    velocities: _F64,
-    samples: npt.NDArray[np.uint64],
+    tracks: Tracks,
     i: npt.NDArray[np.uint32],
     j: npt.NDArray[np.uint32],
     t: _F64,
     distance: float,
     progress: Callable[[int], object] | None = None,
-) -> tuple[_F64, _F64]:
-    """Per minimum (i, j, t s) of tracks as for ``screen_approaches``, the (first, last)
-    times s between which the objects stay within ``distance`` m around it (cubic Hermite
-    relative motion, crossings by bisection)."""
+) -> Stretches:
+    """Per minimum (i, j, t s) of ``tracks``, the (first, last) times s between which
+    the objects stay within ``distance`` m around it (cubic Hermite relative motion,
+    crossings by bisection)."""
 
-def pc_pairs(
-    members1: _F64, members2: _F64, hard_body_radius: float
-) -> tuple[int, int, float, float]:
-    """Monte Carlo Pc over all pairs of member states (n1, 6), (n2, 6) (m, m/s) ->
-    (hits, pairs, pc, variance)."""
+@final
+class PairsPc:
+    """What ``pc_pairs`` returns."""
+
+    @property
+    def hits(self) -> int:
+        """Pairs whose relative motion passes within the hard-body radius."""
+    @property
+    def pairs(self) -> int:
+        """All pairs."""
+    @property
+    def pc(self) -> float:
+        """hits / pairs."""
+    @property
+    def variance(self) -> float:
+        """Variance of pc."""
+
+def pc_pairs(members1: _F64, members2: _F64, hard_body_radius: float) -> PairsPc:
+    """Monte Carlo Pc over all pairs of member states (n1, 6), (n2, 6) (m, m/s)."""
 
 def interval_hits(
     states: _F64,

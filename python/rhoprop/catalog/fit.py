@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -46,6 +46,9 @@ from ..density.model import AtmosphereLike, ModelLike
 from ..frames import rtn_basis
 from ..propagation import OrbitState
 from ..time import add_seconds, from_jd, offsets_to_epochs, ut1_seconds
+
+if TYPE_CHECKING:
+    from .. import _core
 
 #: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
 SGP4_RHO0 = 0.15696615
@@ -705,33 +708,31 @@ def _run_chunk(
     t0 = min(s[0] for s in spans)
     t1 = max(s[1] for s in spans)
     args = [
-        (
-            float(ut1_seconds(j.epoch)),
-            np.ascontiguousarray(j.p0, dtype=float),
-            float(j.prior),
-            float(j.prior_sigma),
-            float(spacing),
-            int(j.obs.back),
-            int(j.obs.forward),
-            np.ascontiguousarray(j.obs.rows, dtype=np.int64),
-            np.ascontiguousarray(j.obs.positions, dtype=float),
-            j.weights(),
+        _core.FitJob(
+            epoch=float(ut1_seconds(j.epoch)),
+            p0=np.ascontiguousarray(j.p0, dtype=float),
+            prior=float(j.prior),
+            prior_sigma=float(j.prior_sigma),
+            spacing=float(spacing),
+            back=int(j.obs.back),
+            forward=int(j.obs.forward),
+            rows=np.ascontiguousarray(j.obs.rows, dtype=np.int64),
+            observed=np.ascontiguousarray(j.obs.positions, dtype=float),
+            weights=j.weights(),
         )
         for j in jobs
     ]
     where = OrbitState(t0, jobs[0].p0[:3], jobs[0].p0[3:6], "TEME")
-    step = FIT_STEP
+    config = _core.FitConfig(
+        step=FIT_STEP,
+        zonal_degree=zonal_degree,
+        floor_altitude=DEFAULT_FLOOR_ALTITUDE,
+        max_iterations=max_iterations,
+        min_drag=MIN_DRAG_PARAMETER,
+    )
 
-    def run(atmosphere: AtmosphereLike) -> list[Any]:
-        return _core.fit_orbits(
-            atmosphere,
-            args,
-            step,
-            zonal_degree,
-            DEFAULT_FLOOR_ALTITUDE,
-            max_iterations,
-            MIN_DRAG_PARAMETER,
-        )
+    def run(atmosphere: AtmosphereLike) -> list[_core.FitOutput | Exception]:
+        return _core.fit_orbits(atmosphere, args, config)
 
     span = (t1 - t0) / np.timedelta64(1, "ns") / 1e9
     try:
@@ -756,11 +757,14 @@ class _Solution:
     converged: bool
 
 
-def _solution(ran: Any) -> _Solution:
-    """The :class:`_Solution` of a core fit's tuple."""
-    p, states, normal, iterations, converged = ran
+def _solution(ran: _core.FitOutput) -> _Solution:
+    """The :class:`_Solution` of a core fit's output."""
     return _Solution(
-        np.asarray(p), np.asarray(states), np.asarray(normal), int(iterations), bool(converged)
+        np.asarray(ran.p),
+        np.asarray(ran.states),
+        np.asarray(ran.normal),
+        int(ran.iterations),
+        bool(ran.converged),
     )
 
 

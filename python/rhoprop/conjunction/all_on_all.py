@@ -49,7 +49,7 @@ from .kernel import (
     secondaries_list,
     window_span,
 )
-from .screen_stages import DaskStages, Track, refine_slice, track_one
+from .screen_stages import DaskStages, Track, core_tracks, refine_slice, track_one
 from .screening import (
     HERMITE_SAMPLES,
     MAX_ACCELERATION,
@@ -771,17 +771,16 @@ class _Run:
                 chunk.times, chunk.pos, chunk.vel, chunk.samples, fourth, self.cfg.limit
             )
         else:
-            i, j, k, (spatial, coarse, interp) = _core.screen_candidates(
-                chunk.times,
-                chunk.pos,
-                chunk.vel,
-                chunk.samples,
+            out = _core.screen_candidates(
+                core_tracks(chunk.times, chunk.pos, chunk.vel, chunk.samples),
                 fourth,
                 self.cfg.limit,
                 MAX_ACCELERATION,
                 HERMITE_SAMPLES,
                 tick if self.report is not None else None,
             )
+            i, j, k = out.i, out.j, out.k
+            spatial, coarse, interp = out.spatial, out.coarse, out.interpolated
         self._tell("sieve", total, total)  # the core reports only while it runs long
         counts["spatial"] += int(spatial)
         counts["coarse_grid"] += int(coarse)

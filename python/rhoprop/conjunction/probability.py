@@ -110,7 +110,7 @@ class PcResult:
                     self.hard_body_radius,
                     self.shape,
                     "repair",
-                )[0]
+                ).pc
             )
             if pc > best:
                 best, at = pc, float(k2)
@@ -269,15 +269,15 @@ def _pc_core(
         shape,
         npd,
     )
-    pc, miss, speed, cov, repaired, projected, axes = out
+    cov, projected, axes = out.covariance, out.projected_covariance, out.axes
     for a in (cov, projected, axes):
         a.flags.writeable = False
     return PcResult(
-        pc=float(pc),
-        miss_distance=float(miss),
-        relative_speed=float(speed),
+        pc=float(out.pc),
+        miss_distance=float(out.miss_distance),
+        relative_speed=float(out.relative_speed),
         encounter_covariance=cov,
-        repaired=bool(repaired),
+        repaired=bool(out.repaired),
         projected_covariance=projected,
         encounter_axes=axes,
         hard_body_radius=hbr,
@@ -562,7 +562,8 @@ def pc_monte_carlo(
     for name, s in (("members1", s1), ("members2", s2)):
         if len(s) < 2:
             raise ValueError(f"{name} has {len(s)} member(s); at least 2 are needed")
-    hits, pairs, pc, variance = _core.pc_pairs(s1, s2, hbr)
+    out = _core.pc_pairs(s1, s2, hbr)
+    hits, pairs, pc, variance = out.hits, out.pairs, out.pc, out.variance
     n1, n2 = len(s1), len(s2)
     se = math.sqrt(variance)
     if hits == 0:

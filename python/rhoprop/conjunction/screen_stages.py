@@ -108,18 +108,10 @@ def sieve_range(
     of a chunk, given that range's samples (``times``, ``pos[:, ...]``, ``vel[:, ...]``
     and each object's ``samples`` there): k is the chunk's interval index."""
     c = np.ascontiguousarray
-    i, j, k, counts = _core.screen_candidates(
-        c(times),
-        c(pos),
-        c(vel),
-        c(samples),
-        c(fourth),
-        limit,
-        MAX_ACCELERATION,
-        HERMITE_SAMPLES,
-        None,
-    )
-    return i, j, np.asarray(k, dtype=np.int64) + k0, counts
+    tracks = core_tracks(c(times), c(pos), c(vel), c(samples))
+    out = _core.screen_candidates(tracks, c(fourth), limit, MAX_ACCELERATION, HERMITE_SAMPLES)
+    counts = (out.spatial, out.coarse, out.interpolated)
+    return out.i, out.j, np.asarray(out.k, dtype=np.int64) + k0, counts
 
 
 def refine_slice(
@@ -143,11 +135,9 @@ def refine_slice(
         np.array(chunk[key], copy=True, order="C") for key in ("times", "pos", "vel", "samples")
     )
     c = cand.astype(np.uint32)
-    i, j, t, s1, s2, edge = _core.screen_approaches(
-        times,
-        pos,
-        vel,
-        samples,
+    tracks = core_tracks(times, pos, vel, samples)
+    found = _core.screen_approaches(
+        tracks,
         np.ascontiguousarray(c[:, 0]),
         np.ascontiguousarray(c[:, 1]),
         np.ascontiguousarray(c[:, 2]),
@@ -157,8 +147,18 @@ def refine_slice(
         window_start=bool(times[0] == 0.0),
         window_end=bool(times[-1] == span),
     )
-    first, last = _core.screen_stretches(times, pos, vel, samples, i, j, t, limit)
-    return i, j, t, s1, s2, edge, first, last
+    i, j, t = found.i, found.j, found.t
+    stretch = _core.screen_stretches(tracks, i, j, t, limit)
+    return i, j, t, found.states1, found.states2, found.edge, stretch.first, stretch.last
+
+
+def core_tracks(
+    times: np.ndarray, pos: np.ndarray, vel: np.ndarray, samples: np.ndarray
+) -> _core.Tracks:
+    """The core's record of sampled tracks (held, not copied): grid ``times`` (nt,) s,
+    ``pos`` and ``vel`` (n, nt, 3) m and m/s, C-contiguous, and the ``samples`` each object
+    has (n,); checked by the core when made."""
+    return _core.Tracks(times=times, positions=pos, velocities=vel, samples=samples)
 
 
 def _parts(n: int, pieces: int) -> list[tuple[int, int]]:

@@ -111,7 +111,7 @@ class JacchiaRoberts(PointModel):
         alt: np.ndarray,
         drivers: np.ndarray,
     ) -> np.ndarray:
-        return np.asarray(_core.jacchia_roberts_geodetic(mjd, lat, lon, alt, drivers)[2])
+        return np.asarray(_core.jacchia_roberts_geodetic(mjd, lat, lon, alt, drivers).density)
 
     def _activity(self, drivers: np.ndarray) -> np.ndarray:
         return drivers[:, 2]  # Kp

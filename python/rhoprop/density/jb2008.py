@@ -462,7 +462,7 @@ class Jb2008(PointModel):
         drivers: np.ndarray,
     ) -> np.ndarray:
         inputs = np.ascontiguousarray(drivers[:, :9])
-        return np.asarray(_core.jb2008_geodetic(mjd, lat, lon, alt, inputs)[2])
+        return np.asarray(_core.jb2008_geodetic(mjd, lat, lon, alt, inputs).density)
 
     def _activity(self, drivers: np.ndarray) -> np.ndarray:
         if self.space_weather is None:

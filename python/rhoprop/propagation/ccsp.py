@@ -26,6 +26,7 @@ from .propagate import (
     check_memory,
     check_model,
     check_steps,
+    core_problem,
     explicit_times,
     fixed_step,
     mean_anomaly,
@@ -38,8 +39,6 @@ from .state import OrbitState, Spacecraft
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
-
-    from .._core import _CcspOutput
 
 #: The paper's near-zero initial covariance: 1 mm and 1 um/s (1 sigma) on each axis.
 DEFAULT_INITIAL_COVARIANCE = np.diag([1e-6, 1e-6, 1e-6, 1e-12, 1e-12, 1e-12])
@@ -221,26 +220,12 @@ def ccsp(
         kappa=kappa,
     )
 
-    def run(atmosphere: AtmosphereLike) -> _CcspOutput:
-        return _core.ccsp(
-            atmosphere,
-            args.epoch,
-            state.state,
-            spacecraft.drag_parameter,
-            args.p0,
-            args.times,
-            args.scaling,
-            perturbation,
-            args.step,
-            args.floor,
-            args.degree,
-            args.drag_sigma,
-            args.outputs if len(args.outputs) else None,
-            args.coordinates,
-            args.kappa_scale,
-            args.slow,
-            dyn.forces(spacecraft.radiation_parameter),
-        )
+    request = args.request(
+        state, spacecraft, perturbation, dyn.forces(spacecraft.radiation_parameter)
+    )
+
+    def run(atmosphere: AtmosphereLike) -> _core.CcspOutput:
+        return _core.ccsp(atmosphere, request)
 
     out = run_in_field(model, state, span, args.floor, run)
     return _result(state, out, args.drag_sigma, given.frame, rot, given, given_cov)
@@ -262,6 +247,30 @@ class _Arguments:
     coordinates: Coordinates
     kappa_scale: float = 1.0
     slow: tuple[float, float] | None = None  # (scale, half-life s) of a slow density term
+
+    def request(
+        self,
+        state: OrbitState,
+        spacecraft: Spacecraft,
+        perturbation: str = "additive",
+        forces: tuple[int | None, bool | None, float] = (None, None, 0.0),
+    ) -> _core.CcspRun:
+        """The core's record of this run from ``state`` (in the run's axes) with
+        ``spacecraft``'s Cd*A/m, checked by the core when made."""
+        problem = core_problem(state, spacecraft.drag_parameter, self.floor, self.degree, forces)
+        return _core.CcspRun(
+            problem,
+            initial_covariance=self.p0,
+            update_times=self.times,
+            scaling=self.scaling,
+            perturbation=perturbation,
+            step=self.step,
+            drag_sigma=self.drag_sigma,
+            output_times=self.outputs if len(self.outputs) else None,
+            coordinates=self.coordinates,
+            kappa_scale=self.kappa_scale,
+            slow=self.slow,
+        )
 
 
 def _arguments(
@@ -414,7 +423,7 @@ def consider_settings(
 
 def _result(
     state: OrbitState,
-    out: _CcspOutput,
+    out: _core.CcspOutput,
     drag_sigma: float,
     frame: str = "TEME",
     rot: np.ndarray | None = None,
@@ -425,13 +434,13 @@ def _result(
     run's axes), its outputs rotated by ``rot`` into ``frame`` (:mod:`.run_frame`); the
     first output is the ``given`` state and covariance as they were given."""
     # The binding reports decay as "decayed_at" (None when the filter ran to the end).
-    decayed = out.get("decayed_at")
-    mean = run_frame.vectors(rot, out["means"])
-    cov = run_frame.covariances(rot, out["covariances"])
+    decayed = out.decayed_at
+    mean = run_frame.vectors(rot, out.means)
+    cov = run_frame.covariances(rot, out.covariances)
     if rot is not None and given is not None:
         mean[0] = given.state
         cov[0] = DEFAULT_INITIAL_COVARIANCE if given_cov is None else given_cov
-    moments = StateMoments(state.epoch, out["times"], mean, cov)
+    moments = StateMoments(state.epoch, out.times, mean, cov)
     rtn = moments.rtn_covariance
     return CcspResult(
         epoch=state.epoch,
@@ -440,14 +449,14 @@ def _result(
         covariance=moments.covariance,
         rtn_covariance=rtn,
         along_track_std=np.sqrt(rtn[:, 1, 1]),
-        cross_covariance=run_frame.vectors(rot, out["cross"]),
+        cross_covariance=run_frame.vectors(rot, out.cross),
         decayed_at=None if decayed is None else float(decayed),
         drag_sigma=drag_sigma,
         drag_cross_covariance=None
-        if out["drag_cross"] is None
-        else run_frame.vectors(rot, out["drag_cross"]),
-        element_mean=out.get("element_means"),
-        element_covariance=out.get("element_covariances"),
+        if out.drag_cross is None
+        else run_frame.vectors(rot, out.drag_cross),
+        element_mean=out.element_means,
+        element_covariance=out.element_covariances,
         reference=np.array(state.state, dtype=float),
         frame=frame,
     )
@@ -527,6 +536,7 @@ def ccsp_many(
             zonal_degree=zonal_degree,
             drag_sigma=run.drag_sigma,
             output_times=run.output_times,
+            coordinates=coordinates,
             kappa=run.kappa,
         )
         prepared.append((state, run.spacecraft, args, as_atmosphere(model, state, span)))
@@ -539,23 +549,8 @@ def ccsp_many(
         groups.setdefault((id(atmosphere), a.scaling, a.kappa_scale, a.slow), []).append(i)
     for members in groups.values():
         atmosphere = prepared[members[0]][3]
-        first = prepared[members[0]][2]
-        objects = [
-            (a.epoch, s.state, c.drag_parameter, a.p0, a.times, a.step, a.drag_sigma, a.outputs)
-            for s, c, a, _ in (prepared[i] for i in members)
-        ]
-        outs = _core.ccsp_many(
-            atmosphere,
-            objects,
-            first.scaling,
-            "additive",
-            first.floor,
-            first.degree,
-            progress,
-            coordinates,
-            first.kappa_scale,
-            first.slow,
-        )
+        requests = [a.request(s, c) for s, c, a, _ in (prepared[i] for i in members)]
+        outs = _core.ccsp_many(atmosphere, requests, progress)
         for i, out in zip(members, outs, strict=True):
             state, _c, a, _atm = prepared[i]
             if isinstance(out, Exception):

@@ -14,7 +14,7 @@ from ..density.model import AtmosphereLike, ModelLike
 from ..options import Integrator, Perturbation
 from ..parallel import core_threads, worker_count
 from ..progress import ProgressBar
-from ..time import DurationLike, ut1_seconds
+from ..time import DurationLike
 from . import run_frame
 from .dynamics import Dynamics, LooseDynamics, deprecated_keywords, zonal_degree_argument
 from .kappa import KappaProcess, TwoScale
@@ -23,6 +23,7 @@ from .propagate import (
     check_memory,
     check_model,
     check_steps,
+    core_problem,
     core_propagate,
     explicit_times,
     fixed_step,
@@ -35,8 +36,6 @@ from .state import OrbitState, Spacecraft
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
-
-    from .._core import _MonteCarloOutput
 
 #: Methods of :func:`monte_carlo` (fixed step: kappa nodes fall on step boundaries).
 METHODS = ("rk8", "rk4", "abm")
@@ -248,35 +247,31 @@ def monte_carlo(
         if not np.isfinite(cov).all():
             i, j = np.argwhere(~np.isfinite(cov))[0]
             raise ValueError(f"initial_covariance[{i}][{j}] must be finite, got {cov[i, j]}")
-    epoch = ut1_seconds(state.epoch)
     given = state
     state, cov, rot = run_frame.into_run(state, cov)
 
-    def run(atmosphere: AtmosphereLike) -> tuple[_MonteCarloOutput, Trajectory]:
+    problem = core_problem(
+        state, spacecraft.drag_parameter, floor, degree, dyn.forces(spacecraft.radiation_parameter)
+    )
+    request = _core.MonteCarloRun(
+        problem,
+        output_times=times,
+        kappa=kappa._spec(),
+        perturbation=perturbation,
+        method=method,
+        step=h,
+        members=int(n),
+        seed=int(seed),
+        initial_covariance=cov,
+        record_density=bool(record_density),
+        drag_sigma=drag_sigma,
+    )
+
+    def run(atmosphere: AtmosphereLike) -> tuple[_core.MonteCarloOutput, Trajectory]:
         bar = ProgressBar(int(n), "Monte Carlo") if progress is True else None
         callback = bar if bar is not None else (progress if callable(progress) else None)
         try:
-            out = _core.monte_carlo(
-                atmosphere,
-                epoch,
-                state.state,
-                spacecraft.drag_parameter,
-                times,
-                kappa._spec(),
-                perturbation,
-                method,
-                h,
-                int(n),
-                int(seed),
-                cov,
-                floor,
-                bool(record_density),
-                threads,
-                callback,
-                degree,
-                drag_sigma,
-                dyn.forces(spacecraft.radiation_parameter),
-            )
+            out = _core.monte_carlo(atmosphere, request, threads, callback)
         finally:
             if bar is not None:
                 bar.close()
@@ -287,7 +282,7 @@ def monte_carlo(
             spacecraft.drag_parameter,
             times,
             integrator=method,
-            step=float(out["step"]),
+            step=float(out.step),
             floor_altitude=floor,
             zonal_degree=degree,
             forces=dyn.forces(spacecraft.radiation_parameter),
@@ -295,10 +290,10 @@ def monte_carlo(
         return out, trajectory_from_core(state.epoch, mean, state.frame)
 
     out, mean = run_in_field(model, state, span, floor, run)
-    decay = np.asarray(out["decay_times"], dtype=float)
+    decay = np.asarray(out.decay_times, dtype=float)
     alive = times[None, :] < decay[:, None]
-    positions = run_frame.vectors_in_place(rot, out["positions"])
-    velocities = run_frame.vectors_in_place(rot, out["velocities"])
+    positions = run_frame.vectors_in_place(rot, out.positions)
+    velocities = run_frame.vectors_in_place(rot, out.velocities)
     if rot is not None and cov is None and len(times) and times[0] == 0.0:
         positions[:, 0], velocities[:, 0] = given.position, given.velocity  # as given
     if rot is not None:
@@ -309,7 +304,7 @@ def monte_carlo(
     # A decayed member's frozen state would bias every statistic: NaN from its decay on.
     positions[~alive] = np.nan
     velocities[~alive] = np.nan
-    densities = out["densities"]
+    densities = out.densities
     if densities is not None:
         densities[~alive] = np.nan
     ref_p, ref_v = _reference(mean, positions, velocities, alive)
@@ -320,16 +315,16 @@ def monte_carlo(
         velocities=velocities,
         mean_orbit=mean,
         rtn_errors=_rtn(positions, ref_p, ref_v),
-        clipped=out["clipped"],
+        clipped=out.clipped,
         decay_times=decay,
         densities=densities,
         kappa=kappa,
         seed=int(seed),
-        step=float(out["step"]),
+        step=float(out.step),
         reference_positions=ref_p,
         reference_velocities=ref_v,
         drag_sigma=drag_sigma,
-        drag_factors=np.asarray(out["drag_factors"], dtype=float),
+        drag_factors=np.asarray(out.drag_factors, dtype=float),
         frame=given.frame,
     )
 

@@ -217,23 +217,34 @@ def core_propagate(
     clipped evaluations), the states in ``state.frame`` (:mod:`.run_frame`). ``forces``:
     :meth:`Dynamics.forces`."""
     inside, _cov, rot = run_frame.into_run(state)
-    t, states, decayed_at, evaluations, clipped = _core.propagate(
-        atmosphere,
-        ut1_seconds(state.epoch),
-        inside.state,
-        drag_parameter,
-        times,
-        integrator,
-        step,
-        rtol,
-        floor_altitude,
-        zonal_degree,
-        forces,
-    )
-    states = run_frame.vectors(rot, states)
+    problem = core_problem(inside, drag_parameter, floor_altitude, zonal_degree, forces)
+    out = _core.propagate(atmosphere, problem, times, integrator, step, rtol)
+    t = out.times
+    states = run_frame.vectors(rot, out.states)
     if rot is not None and len(t) and t[0] == 0.0:
         states[0] = state.state  # the initial state as given, not rotated there and back
-    return t, states, decayed_at, evaluations, clipped
+    return t, states, out.decayed_at, out.rhs_evaluations, out.clipped
+
+
+def core_problem(
+    state: OrbitState,
+    drag_parameter: float,
+    floor_altitude: float,
+    zonal_degree: int,
+    forces: tuple[int | None, bool | None, float] = (None, None, 0.0),
+) -> _core.Problem:
+    """The core's record of the problem every run shares: ``state`` (in the run's axes,
+    :mod:`.run_frame`) at its epoch, Cd*A/m ``drag_parameter`` (m^2/kg), the floor
+    altitude (m), the zonal degree and the other ``forces``
+    (:meth:`Dynamics.forces`), checked by the core when made."""
+    return _core.Problem(
+        epoch=ut1_seconds(state.epoch),
+        state=state.state,
+        drag=drag_parameter,
+        floor_altitude=floor_altitude,
+        zonal_degree=zonal_degree,
+        forces=forces,
+    )
 
 
 def run_in_field(

@@ -27,22 +27,23 @@ fn array2<const R: usize, const C: usize>(m: &[[f64; C]; R]) -> Array2<f64> {
     Array2::from_shape_fn((R, C), |(i, j)| m[i][j])
 }
 
-/// (pc, miss distance m, relative speed m/s, encounter covariance used (2, 2) m^2,
-/// repaired, projected covariance before repair (2, 2) m^2, encounter axes (3, 3)).
-type Pc2dOut<'py> = (
-    f64,
-    f64,
-    f64,
-    Bound<'py, PyArray2<f64>>,
-    bool,
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray2<f64>>,
-);
+/// What `pc_2d` returns: pc, miss distance (m), relative speed (m/s), the encounter-plane
+/// covariance integrated (2, 2) m^2, whether it was repaired, the projected covariance
+/// before repair (2, 2) m^2 and the encounter axes (3, 3), rows x, y, z.
+#[pyclass(frozen, get_all, name = "Pc2d", module = "rhoprop._core")]
+pub struct Pc2d {
+    pc: f64,
+    miss_distance: f64,
+    relative_speed: f64,
+    covariance: Py<PyArray2<f64>>,
+    repaired: bool,
+    projected_covariance: Py<PyArray2<f64>>,
+    axes: Py<PyArray2<f64>>,
+}
 
 /// Short-encounter 2-D Pc of two objects at TCA; see `rhoprop.conjunction.pc_2d` for the
 /// documented API. Inertial r (3,) m, v (3,) m/s, position covariances (3, 3) m^2.
-/// Returns (pc, miss_distance, relative_speed, covariance (2, 2), repaired,
-/// projected_covariance (2, 2), axes (3, 3) rows x, y, z).
+/// Returns a `Pc2d` record.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 pub fn pc_2d<'py>(
@@ -56,7 +57,7 @@ pub fn pc_2d<'py>(
     hard_body_radius: f64,
     shape: &str,
     npd: &str,
-) -> PyResult<Pc2dOut<'py>> {
+) -> PyResult<Pc2d> {
     let shape = HardBodyShape::from_name(shape).map_err(to_py)?;
     let npd = NpdPolicy::from_name(npd).map_err(to_py)?;
     let out = conjunction::pc_2d(
@@ -71,15 +72,15 @@ pub fn pc_2d<'py>(
         npd,
     )
     .map_err(to_py)?;
-    Ok((
-        out.pc,
-        out.encounter.miss_distance,
-        out.encounter.relative_speed,
-        array2(&out.covariance).into_pyarray(py),
-        out.repaired,
-        array2(&out.encounter.covariance).into_pyarray(py),
-        array2(&out.encounter.axes).into_pyarray(py),
-    ))
+    Ok(Pc2d {
+        pc: out.pc,
+        miss_distance: out.encounter.miss_distance,
+        relative_speed: out.encounter.relative_speed,
+        covariance: array2(&out.covariance).into_pyarray(py).unbind(),
+        repaired: out.repaired,
+        projected_covariance: array2(&out.encounter.covariance).into_pyarray(py).unbind(),
+        axes: array2(&out.encounter.axes).into_pyarray(py).unbind(),
+    })
 }
 
 /// Monte Carlo Pc over all pairs of member states (n1, 6) and (n2, 6) (m, m/s): the
@@ -92,7 +93,7 @@ pub fn pc_pairs(
     members1: PyReadonlyArray2<'_, f64>,
     members2: PyReadonlyArray2<'_, f64>,
     hard_body_radius: f64,
-) -> PyResult<(u64, u64, f64, f64)> {
+) -> PyResult<PairsPc> {
     let to_rows = |name: &str, a: &PyReadonlyArray2<'_, f64>| -> PyResult<Vec<[f64; 6]>> {
         let v = rows(name, a, 6)?;
         Ok((0..v.nrows())
@@ -104,7 +105,22 @@ pub fn pc_pairs(
     let out = long_call(py, None, |p| {
         conjunction::pc_pairs(&m1, &m2, hard_body_radius, p)
     })?;
-    Ok((out.hits, out.pairs, out.pc, out.variance))
+    Ok(PairsPc {
+        hits: out.hits,
+        pairs: out.pairs,
+        pc: out.pc,
+        variance: out.variance,
+    })
+}
+
+/// What `pc_pairs` returns: the pairs that hit, all pairs, their fraction (the Pc) and
+/// its variance.
+#[pyclass(frozen, get_all, name = "PairsPc", module = "rhoprop._core")]
+pub struct PairsPc {
+    hits: u64,
+    pairs: u64,
+    pc: f64,
+    variance: f64,
 }
 
 /// How many relative states (n, 6) (LVLH x y z m, u v w m/s at TCA) come within
@@ -140,6 +156,8 @@ pub fn interval_hits(
 
 /// Registers the conjunction functions (one line in `lib.rs`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Pc2d>()?;
+    m.add_class::<PairsPc>()?;
     m.add_function(wrap_pyfunction!(pc_2d, m)?)?;
     m.add_function(wrap_pyfunction!(interval_hits, m)?)?;
     m.add_function(wrap_pyfunction!(pc_pairs, m)?)?;

@@ -16,6 +16,7 @@ mod models;
 mod montecarlo;
 mod pool;
 mod propagation;
+mod records;
 mod sieve;
 
 use pyo3::prelude::*;
@@ -42,6 +43,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sieve::screen_candidates, m)?)?;
     m.add_function(wrap_pyfunction!(sieve::screen_approaches, m)?)?;
     m.add_function(wrap_pyfunction!(sieve::screen_stretches, m)?)?;
+    sieve::register(m)?;
+    records::register(m)?;
     models::register(m)?;
     conjunction::register(m)?;
     constants::register(m)?;

@@ -17,11 +17,14 @@ use rhoprop_core::CoreError;
 const CHUNK: usize = 256;
 
 /// (exospheric temperature K, local temperature K, density kg/m^3) arrays.
-type Triple<'py> = (
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-);
+/// What the model functions return per point (n,): the exospheric temperature (K), the
+/// temperature at the point (K) and the density (kg/m^3).
+#[pyclass(frozen, get_all, name = "ModelPoints", module = "rhoprop._core")]
+pub struct ModelPoints {
+    exospheric_temperature: Py<PyArray1<f64>>,
+    temperature: Py<PyArray1<f64>>,
+    density: Py<PyArray1<f64>>,
+}
 
 fn check_len(name: &str, got: usize, want: usize) -> PyResult<()> {
     if got == want {
@@ -64,15 +67,19 @@ fn indices_row(v: &ArrayView2<'_, f64>, i: usize) -> Jb2008Indices {
     Jb2008Indices::from_array(std::array::from_fn(|j| v[[i, j]]))
 }
 
-fn triple<'py>(py: Python<'py>, out: &[Jb2008Output]) -> Triple<'py> {
-    let tinf: Array1<f64> = out.iter().map(|o| o.tinf).collect();
-    let temp: Array1<f64> = out.iter().map(|o| o.temp).collect();
-    let rho: Array1<f64> = out.iter().map(|o| o.rho).collect();
-    (
-        tinf.into_pyarray(py),
-        temp.into_pyarray(py),
-        rho.into_pyarray(py),
-    )
+fn triple(py: Python<'_>, out: &[Jb2008Output]) -> ModelPoints {
+    let column = |f: fn(&Jb2008Output) -> f64| {
+        out.iter()
+            .map(f)
+            .collect::<Array1<f64>>()
+            .into_pyarray(py)
+            .unbind()
+    };
+    ModelPoints {
+        exospheric_temperature: column(|o| o.tinf),
+        temperature: column(|o| o.temp),
+        density: column(|o| o.rho),
+    }
 }
 
 /// Views of named point arrays (times, latitudes, longitudes, altitudes), all of the first
@@ -95,15 +102,14 @@ fn points<'a, 'py>(
 /// The JB2008 routine called as the reference is: modified Julian dates ``amjd`` (n,),
 /// ``geometry`` (n, 5) = Sun right ascension, Sun declination, point right ascension,
 /// point latitude (rad) and altitude (km), ``indices`` (n, 9) = F10, F10B, S10, S10B, M10,
-/// M10B, Y10, Y10B (sfu) and dTc (K). Returns (exospheric temperature K, temperature K,
-/// density kg/m^3), each (n,).
+/// M10B, Y10, Y10B (sfu) and dTc (K). Returns a `ModelPoints`.
 #[pyfunction]
 pub fn jb2008_core<'py>(
     py: Python<'py>,
     amjd: PyReadonlyArray1<'py, f64>,
     geometry: PyReadonlyArray2<'py, f64>,
     indices: PyReadonlyArray2<'py, f64>,
-) -> PyResult<Triple<'py>> {
+) -> PyResult<ModelPoints> {
     let t = vector("amjd", &amjd)?;
     let g = rows("geometry", &geometry, 5)?;
     let ix = rows("indices", &indices, 9)?;
@@ -125,8 +131,7 @@ pub fn jb2008_core<'py>(
 
 /// JB2008 at modified Julian dates ``amjd`` (n,) UTC, geodetic ``lat``/``lon`` (n,) deg and
 /// altitude ``alt`` (n,) m, with ``indices`` (n, 9) as in :func:`jb2008_core` and the
-/// reference driver's Sun position and Greenwich angle. Returns (exospheric temperature K,
-/// temperature K, density kg/m^3), each (n,).
+/// reference driver's Sun position and Greenwich angle. Returns a `ModelPoints`.
 #[pyfunction]
 pub fn jb2008_geodetic<'py>(
     py: Python<'py>,
@@ -135,7 +140,7 @@ pub fn jb2008_geodetic<'py>(
     lon: PyReadonlyArray1<'py, f64>,
     alt: PyReadonlyArray1<'py, f64>,
     indices: PyReadonlyArray2<'py, f64>,
-) -> PyResult<Triple<'py>> {
+) -> PyResult<ModelPoints> {
     let [t, la, lo, al] = points([("amjd", &amjd), ("lat", &lat), ("lon", &lon), ("alt", &alt)])?;
     let ix = rows("indices", &indices, 9)?;
     check_len("indices", ix.nrows(), t.len())?;
@@ -147,8 +152,7 @@ pub fn jb2008_geodetic<'py>(
 
 /// Jacchia-Roberts 1971 at modified Julian dates ``mjd`` (n,) UTC, geodetic ``lat``/``lon``
 /// (n,) deg, altitude ``alt`` (n,) m (>= 90 km) and ``drivers`` (n, 3) = F10.7, its 81-day
-/// centred mean (sfu) and Kp. Returns (exospheric temperature K, temperature K, density
-/// kg/m^3), each (n,).
+/// centred mean (sfu) and Kp. Returns a `ModelPoints`.
 #[pyfunction]
 pub fn jacchia_roberts_geodetic<'py>(
     py: Python<'py>,
@@ -157,7 +161,7 @@ pub fn jacchia_roberts_geodetic<'py>(
     lon: PyReadonlyArray1<'py, f64>,
     alt: PyReadonlyArray1<'py, f64>,
     drivers: PyReadonlyArray2<'py, f64>,
-) -> PyResult<Triple<'py>> {
+) -> PyResult<ModelPoints> {
     let [t, la, lo, al] = points([("mjd", &mjd), ("lat", &lat), ("lon", &lon), ("alt", &alt)])?;
     let d = rows("drivers", &drivers, 3)?;
     check_len("drivers", d.nrows(), t.len())?;
@@ -175,6 +179,7 @@ pub fn jacchia_roberts_geodetic<'py>(
 
 /// Registers the model functions (one line in `lib.rs`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<ModelPoints>()?;
     m.add_function(wrap_pyfunction!(jb2008_core, m)?)?;
     m.add_function(wrap_pyfunction!(jb2008_geodetic, m)?)?;
     m.add_function(wrap_pyfunction!(jacchia_roberts_geodetic, m)?)?;

@@ -1,33 +1,17 @@
 //! `screen_candidates`, `screen_approaches` and `screen_stretches`: the all-on-all
 //! screening sieve, its minima and their stretches within the distance (see
-//! `rhoprop_core::sieve`).
+//! `rhoprop_core::sieve`), on one `Tracks` record of sampled tracks, each returning a
+//! record.
 
 use crate::long_call::long_call;
 use numpy::ndarray::Array2;
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray3,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rhoprop_core::sieve::{self, SieveSettings, Tracks};
-
-/// (i, j, k) of the candidate intervals and the counts (spatial, coarse, interpolated).
-type CandidatesOut<'py> = (
-    Bound<'py, PyArray1<u32>>,
-    Bound<'py, PyArray1<u32>>,
-    Bound<'py, PyArray1<u32>>,
-    (u64, u64, u64),
-);
-
-/// (i, j, t, states of i (m, 6), states of j (m, 6)) of the approaches.
-type ApproachesOut<'py> = (
-    Bound<'py, PyArray1<u32>>,
-    Bound<'py, PyArray1<u32>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray1<u8>>,
-);
 
 /// A C-contiguous (n, nt, 3) array as rows of 3.
 fn triples<'a>(
@@ -47,107 +31,148 @@ fn triples<'a>(
     Ok(flat.as_chunks::<3>().0)
 }
 
-/// What both calls take besides the sample arrays, checked and owned: grid times (s),
-/// samples per object and the interpolation coefficient per object (zeros where unused).
-struct Grid {
+/// Sampled tracks of n objects on a common grid, checked when made: grid times (nt,) s,
+/// positions and velocities (n, nt, 3) m and m/s (C-contiguous; held, not copied) and
+/// the samples each object has (n,).
+#[pyclass(frozen, name = "Tracks", module = "rhoprop._core")]
+pub struct PyTracks {
     times: Vec<f64>,
     samples: Vec<usize>,
-    fourth: Vec<f64>,
+    positions: Py<PyArray3<f64>>,
+    velocities: Py<PyArray3<f64>>,
 }
 
-impl Grid {
+#[pymethods]
+impl PyTracks {
+    #[new]
+    #[pyo3(signature = (*, times, positions, velocities, samples))]
     fn new(
-        times: &PyReadonlyArray1<'_, f64>,
-        samples: &PyReadonlyArray1<'_, u64>,
-        positions: &PyReadonlyArray3<'_, f64>,
-        velocities: &PyReadonlyArray3<'_, f64>,
-        fourth: Option<&PyReadonlyArray1<'_, f64>>,
+        times: PyReadonlyArray1<'_, f64>,
+        positions: Bound<'_, PyArray3<f64>>,
+        velocities: Bound<'_, PyArray3<f64>>,
+        samples: PyReadonlyArray1<'_, u64>,
     ) -> PyResult<Self> {
         let n = samples.len();
-        if positions.shape()[0] != n
-            || velocities.shape()[0] != n
-            || fourth.is_some_and(|f| f.len() != n)
-        {
-            return Err(PyValueError::new_err(format!(
-                "positions, velocities (and fourth) must hold the {n} objects of samples"
-            )));
+        let nt = times.len();
+        for (name, a) in [("positions", &positions), ("velocities", &velocities)] {
+            if a.shape()[0] != n {
+                return Err(PyValueError::new_err(format!(
+                    "{name} must hold the {n} objects of samples, got {}",
+                    a.shape()[0]
+                )));
+            }
+            triples(name, &a.readonly(), nt)?;
         }
-        Ok(Grid {
+        Ok(Self {
             times: times.as_array().to_vec(),
             samples: samples.as_array().iter().map(|&s| s as usize).collect(),
-            fourth: fourth.map_or_else(|| vec![0.0; n], |f| f.as_array().to_vec()),
-        })
-    }
-
-    /// The core's view of the tracks (the sample arrays read in place).
-    fn tracks<'a>(
-        &'a self,
-        positions: &'a PyReadonlyArray3<'_, f64>,
-        velocities: &'a PyReadonlyArray3<'_, f64>,
-    ) -> PyResult<Tracks<'a>> {
-        Ok(Tracks {
-            times: &self.times,
-            positions: triples("positions", positions, self.times.len())?,
-            velocities: triples("velocities", velocities, self.times.len())?,
-            samples: &self.samples,
-            fourth: &self.fourth,
+            positions: positions.unbind(),
+            velocities: velocities.unbind(),
         })
     }
 }
 
-/// Candidate intervals of every object pair on a common grid; see
-/// `rhoprop.conjunction.screen_all`. times (nt,) s, positions and velocities
-/// (n, nt, 3) m and m/s, samples (n,) valid samples per object, fourth (n,). Runs with
-/// the GIL released; progress counts grid intervals; Ctrl-C cancels it.
+impl PyTracks {
+    /// Runs `f` on the core's view of these tracks with each object's coefficient
+    /// `fourth` (zeros where unused), the arrays borrowed read-only meanwhile.
+    fn with<R>(
+        &self,
+        py: Python<'_>,
+        fourth: &[f64],
+        f: impl FnOnce(&Tracks<'_>) -> PyResult<R>,
+    ) -> PyResult<R> {
+        let nt = self.times.len();
+        let positions = self.positions.bind(py).readonly();
+        let velocities = self.velocities.bind(py).readonly();
+        let tracks = Tracks {
+            times: &self.times,
+            positions: triples("positions", &positions, nt)?,
+            velocities: triples("velocities", &velocities, nt)?,
+            samples: &self.samples,
+            fourth,
+        };
+        f(&tracks)
+    }
+}
+
+/// What `screen_candidates` returns: the candidate intervals (i, j, k) sorted and the
+/// pair-interval counts of each stage (spatial, coarse, interpolated).
+#[pyclass(frozen, get_all, name = "Candidates", module = "rhoprop._core")]
+pub struct Candidates {
+    i: Py<PyArray1<u32>>,
+    j: Py<PyArray1<u32>>,
+    k: Py<PyArray1<u32>>,
+    spatial: u64,
+    coarse: u64,
+    interpolated: u64,
+}
+
+/// All-on-all sieve of `tracks` with each object's interpolation coefficient `fourth`
+/// (n,): the intervals where two objects may come within `distance` m.
 #[pyfunction]
-#[pyo3(signature = (times, positions, velocities, samples, fourth, distance, max_acceleration,
-    hermite_samples, progress=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (tracks, fourth, distance, max_acceleration, hermite_samples,
+    progress = None))]
 pub fn screen_candidates<'py>(
     py: Python<'py>,
-    times: PyReadonlyArray1<'py, f64>,
-    positions: PyReadonlyArray3<'py, f64>,
-    velocities: PyReadonlyArray3<'py, f64>,
-    samples: PyReadonlyArray1<'py, u64>,
+    tracks: &Bound<'py, PyTracks>,
     fourth: PyReadonlyArray1<'py, f64>,
     distance: f64,
     max_acceleration: f64,
     hermite_samples: usize,
     progress: Option<Py<PyAny>>,
-) -> PyResult<CandidatesOut<'py>> {
-    let g = Grid::new(&times, &samples, &positions, &velocities, Some(&fourth))?;
-    let tracks = g.tracks(&positions, &velocities)?;
+) -> PyResult<Candidates> {
+    let tr = tracks.get();
+    if fourth.len() != tr.samples.len() {
+        return Err(PyValueError::new_err(format!(
+            "fourth must hold the {} objects of the tracks, got {}",
+            tr.samples.len(),
+            fourth.len()
+        )));
+    }
+    let fourth = fourth.as_array().to_vec();
     let settings = SieveSettings {
         distance,
         max_acceleration,
         hermite_samples,
     };
-    let out = long_call(py, progress, |p| sieve::candidates(&tracks, &settings, p))?;
+    let out = tr.with(py, &fourth, |t| {
+        long_call(py, progress, |p| sieve::candidates(t, &settings, p))
+    })?;
     let c = out.counts;
-    Ok((
-        out.i.into_pyarray(py),
-        out.j.into_pyarray(py),
-        out.k.into_pyarray(py),
-        (c.spatial, c.coarse, c.interpolated),
-    ))
+    Ok(Candidates {
+        i: out.i.into_pyarray(py).unbind(),
+        j: out.j.into_pyarray(py).unbind(),
+        k: out.k.into_pyarray(py).unbind(),
+        spatial: c.spatial,
+        coarse: c.coarse,
+        interpolated: c.interpolated,
+    })
 }
 
-/// The minima of the distance within `distance` in candidate intervals (i, j, k) of
-/// tracks as for `screen_candidates`, on the quintic Hermite interpolant with the gravity
-/// acceleration of zonal degree `zonal_degree`. `window_start` / `window_end`: the grid's
-/// first / last time is the screening window's own, where a minimum at the end counts.
-/// Returns (i, j, t s, states of i (m, 6), states of j (m, 6), edge: 0 inside the window,
-/// 1 at its start, 2 at its end) in the candidates' order. GIL released; Ctrl-C cancels it.
+/// What `screen_approaches` returns: per minimum the objects (i, j), its time t (s),
+/// both states there (m, 6) and where it lies (edge: 0 inside, 1 at the window's start,
+/// 2 at its end).
+#[pyclass(frozen, get_all, name = "Approaches", module = "rhoprop._core")]
+pub struct Approaches {
+    i: Py<PyArray1<u32>>,
+    j: Py<PyArray1<u32>>,
+    t: Py<PyArray1<f64>>,
+    states1: Py<PyArray2<f64>>,
+    states2: Py<PyArray2<f64>>,
+    edge: Py<PyArray1<u8>>,
+}
+
+/// Minima of the distance within `distance` m in the candidate intervals (i, j, k) of
+/// `tracks`, on the quintic Hermite interpolant with the gravity acceleration of
+/// `zonal_degree`; the grid's ends are the window's own where `window_start` /
+/// `window_end` say so.
 #[pyfunction]
-#[pyo3(signature = (times, positions, velocities, samples, i, j, k, zonal_degree, distance,
-    progress=None, window_start=false, window_end=false))]
+#[pyo3(signature = (tracks, i, j, k, zonal_degree, distance, progress = None,
+    window_start = false, window_end = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn screen_approaches<'py>(
     py: Python<'py>,
-    times: PyReadonlyArray1<'py, f64>,
-    positions: PyReadonlyArray3<'py, f64>,
-    velocities: PyReadonlyArray3<'py, f64>,
-    samples: PyReadonlyArray1<'py, u64>,
+    tracks: &Bound<'py, PyTracks>,
     i: PyReadonlyArray1<'py, u32>,
     j: PyReadonlyArray1<'py, u32>,
     k: PyReadonlyArray1<'py, u32>,
@@ -156,85 +181,110 @@ pub fn screen_approaches<'py>(
     progress: Option<Py<PyAny>>,
     window_start: bool,
     window_end: bool,
-) -> PyResult<ApproachesOut<'py>> {
-    let g = Grid::new(&times, &samples, &positions, &velocities, None)?;
-    let tracks = g.tracks(&positions, &velocities)?;
+) -> PyResult<Approaches> {
+    let tr = tracks.get();
+    let zeros = vec![0.0; tr.samples.len()];
     let (ci, cj, ck) = (
         i.as_array().to_vec(),
         j.as_array().to_vec(),
         k.as_array().to_vec(),
     );
-    let found = long_call(py, progress, |p| {
-        let ends = sieve::WindowEnds {
-            start: window_start,
-            end: window_end,
-        };
-        sieve::approaches(&tracks, (&ci, &cj, &ck), zonal_degree, distance, ends, p)
+    let ends = sieve::WindowEnds {
+        start: window_start,
+        end: window_end,
+    };
+    let found = tr.with(py, &zeros, |t| {
+        long_call(py, progress, |p| {
+            sieve::approaches(t, (&ci, &cj, &ck), zonal_degree, distance, ends, p)
+        })
     })?;
     let states = |f: &dyn Fn(&sieve::Approach) -> [f64; 6]| {
         Array2::from_shape_fn((found.len(), 6), |(m, q)| f(&found[m])[q])
+            .into_pyarray(py)
+            .unbind()
     };
-    let (si, sj) = (states(&|a| a.state_i), states(&|a| a.state_j));
-    Ok((
+    let column = |f: &dyn Fn(&sieve::Approach) -> u32| {
         found
             .iter()
-            .map(|a| a.i)
+            .map(f)
             .collect::<Vec<_>>()
-            .into_pyarray(py),
-        found
-            .iter()
-            .map(|a| a.j)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-        found
+            .into_pyarray(py)
+            .unbind()
+    };
+    Ok(Approaches {
+        i: column(&|a| a.i),
+        j: column(&|a| a.j),
+        t: found
             .iter()
             .map(|a| a.t)
             .collect::<Vec<_>>()
-            .into_pyarray(py),
-        si.into_pyarray(py),
-        sj.into_pyarray(py),
-        found
+            .into_pyarray(py)
+            .unbind(),
+        states1: states(&|a| a.state_i),
+        states2: states(&|a| a.state_j),
+        edge: found
             .iter()
             .map(|a| a.edge as u8)
             .collect::<Vec<_>>()
-            .into_pyarray(py),
-    ))
+            .into_pyarray(py)
+            .unbind(),
+    })
 }
 
-/// (first, last) s of each minimum's stretch within the distance.
-type StretchesOut<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+/// What `screen_stretches` returns: per minimum the first and last times (s) between
+/// which the objects stay within the distance around it.
+#[pyclass(frozen, get_all, name = "Stretches", module = "rhoprop._core")]
+pub struct Stretches {
+    first: Py<PyArray1<f64>>,
+    last: Py<PyArray1<f64>>,
+}
 
-/// For each minimum (i, j, t s) of tracks as for `screen_approaches`, the (first, last)
-/// times s between which the objects stay within `distance` m around it (cubic Hermite
-/// relative motion, crossings by bisection). Returns (first (m,), last (m,)). GIL
-/// released; progress counts minima; Ctrl-C cancels it.
+/// Per minimum (i, j, t s) of `tracks`, the stretch within `distance` m around it (cubic
+/// Hermite relative motion, crossings by bisection).
 #[pyfunction]
-#[pyo3(signature = (times, positions, velocities, samples, i, j, t, distance, progress=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (tracks, i, j, t, distance, progress = None))]
 pub fn screen_stretches<'py>(
     py: Python<'py>,
-    times: PyReadonlyArray1<'py, f64>,
-    positions: PyReadonlyArray3<'py, f64>,
-    velocities: PyReadonlyArray3<'py, f64>,
-    samples: PyReadonlyArray1<'py, u64>,
+    tracks: &Bound<'py, PyTracks>,
     i: PyReadonlyArray1<'py, u32>,
     j: PyReadonlyArray1<'py, u32>,
     t: PyReadonlyArray1<'py, f64>,
     distance: f64,
     progress: Option<Py<PyAny>>,
-) -> PyResult<StretchesOut<'py>> {
-    let g = Grid::new(&times, &samples, &positions, &velocities, None)?;
-    let tracks = g.tracks(&positions, &velocities)?;
+) -> PyResult<Stretches> {
+    let tr = tracks.get();
+    let zeros = vec![0.0; tr.samples.len()];
     let (ci, cj, ct) = (
         i.as_array().to_vec(),
         j.as_array().to_vec(),
         t.as_array().to_vec(),
     );
-    let out = long_call(py, progress, |p| {
-        sieve::stretches(&tracks, &ci, &cj, &ct, distance, p)
+    let out = tr.with(py, &zeros, |tracks| {
+        long_call(py, progress, |p| {
+            sieve::stretches(tracks, &ci, &cj, &ct, distance, p)
+        })
     })?;
-    Ok((
-        out.iter().map(|s| s.0).collect::<Vec<_>>().into_pyarray(py),
-        out.iter().map(|s| s.1).collect::<Vec<_>>().into_pyarray(py),
-    ))
+    Ok(Stretches {
+        first: out
+            .iter()
+            .map(|s| s.0)
+            .collect::<Vec<_>>()
+            .into_pyarray(py)
+            .unbind(),
+        last: out
+            .iter()
+            .map(|s| s.1)
+            .collect::<Vec<_>>()
+            .into_pyarray(py)
+            .unbind(),
+    })
+}
+
+/// Adds the tracks and the sieve's records to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyTracks>()?;
+    m.add_class::<Candidates>()?;
+    m.add_class::<Approaches>()?;
+    m.add_class::<Stretches>()?;
+    Ok(())
 }
