@@ -154,7 +154,7 @@ def whole(snapshot: Path, days: float, dask: bool) -> None:
     model.atlas.field(epochs.min() - np.timedelta64(1, "D"), end)
     stages["field tiles"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    objs = fit_catalog_objects(list(cat), model, "auto", 4)
+    objs = fit_catalog_objects(list(cat), model, "auto", rp.Dynamics(zonal_degree=4))
     stages["fit"] = time.perf_counter() - t0
     fitted = sum(o.fit is not None for o in objs)
     t0 = time.perf_counter()

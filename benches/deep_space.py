@@ -74,7 +74,11 @@ def deep_space_classes(
             if len(picked) == per_class:
                 break
         objs = list(rp.catalog.load(write([p[0] for p in picked], folder, f"{name}.tle")))
-        fitted = rp.catalog.fit_objects(objs, model, zonal_degree=4)
+        fitted = rp.catalog.fit_objects(
+            objs,
+            model,
+            dynamics=rp.Dynamics(zonal_degree=4),
+        )
         errors, sgp4 = [], []
         for obj, (entry, later_entry) in zip(fitted, picked, strict=True):
             if isinstance(obj, Exception):

@@ -55,12 +55,20 @@ def main() -> None:
     print(describe())
     objs = leo_objects(Path(args.data), args.objects)
     model = rp.density.Msis("2.1")
-    catalog.fit_objects(objs[:4], model, zonal_degree=4)  # tiles of the days: warm
+    catalog.fit_objects(
+        objs[:4],
+        model,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )  # tiles of the days: warm
     day = np.timedelta64(1, "D")
     for o in objs:
         model.atlas.field(o.state.epoch - day, o.state.epoch + day)
     t0 = time.perf_counter()
-    fitted = catalog.fit_objects(objs, model, zonal_degree=4)
+    fitted = catalog.fit_objects(
+        objs,
+        model,
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
     core_wall = time.perf_counter() - t0
     failed = sum(isinstance(f, Exception) for f in fitted)
     core_rate = len(objs) / core_wall

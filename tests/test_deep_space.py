@@ -61,7 +61,11 @@ def test_fitted_deep_space_orbits_reach_their_next_element_sets(
     path.write_text("".join("\n".join(sets) + "\n" for sets, _ in pairs))
     objs = list(catalog.load(path))
     assert all(fit_choice(o, "auto") for o in objs)  # deep space: fitted by default
-    fitted = catalog.fit_objects(objs, rp.density.Msis("2.1"), zonal_degree=4)
+    fitted = catalog.fit_objects(
+        objs,
+        rp.density.Msis("2.1"),
+        dynamics=rp.Dynamics(zonal_degree=4),
+    )
     errors = []
     for obj, (_, later) in zip(fitted, pairs, strict=True):
         assert not isinstance(obj, Exception), obj

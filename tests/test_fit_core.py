@@ -14,7 +14,7 @@ import pytest
 from reference_fit import reference_fit
 from sgp4.api import Satrec
 
-from rhoprop import Execution
+from rhoprop import Dynamics, Execution
 from rhoprop.catalog import Initial
 from rhoprop.catalog import fit as fit_module
 from rhoprop.catalog.fit import fit_element_set, fit_histories
@@ -47,7 +47,11 @@ def model():
 
 def test_the_batched_fit_is_the_reference_fit_within_a_tenth_of_its_sigma(sats, model):
     for sat in sats:
-        core = fit_element_set(sat, model, zonal_degree=4)
+        core = fit_element_set(
+            sat,
+            model,
+            dynamics=Dynamics(zonal_degree=4),
+        )
         p_ref, cov_ref = reference_fit(sat, model, span=fit_module.DEFAULT_SPAN, zonal=4)
         p = np.concatenate([core.state.state, [core.drag_parameter]])
         sigma = np.sqrt(np.diag(core.covariance))
@@ -59,12 +63,20 @@ def test_the_batched_fit_is_the_reference_fit_within_a_tenth_of_its_sigma(sats, 
 
 
 def test_each_fit_is_the_same_alone_together_and_on_one_thread(sats, model, monkeypatch):
-    together = fit_histories([[s] for s in sats], model, zonal_degree=4)
-    alone = fit_element_set(sats[2], model, zonal_degree=4)
+    together = fit_histories(
+        [[s] for s in sats],
+        model,
+        dynamics=Dynamics(zonal_degree=4),
+    )
+    alone = fit_element_set(
+        sats[2],
+        model,
+        dynamics=Dynamics(zonal_degree=4),
+    )
     assert np.array_equal(together[2].state.state, alone.state.state)
     monkeypatch.setattr(fit_module, "CALL_JOBS", 2)  # several calls at once
     monkeypatch.setenv("RAYON_NUM_THREADS", "1")
-    one = fit_histories([[s] for s in sats], model, zonal_degree=4, threads=1)
+    one = fit_histories([[s] for s in sats], model, dynamics=Dynamics(zonal_degree=4), threads=1)
     for a, b in zip(together, one, strict=True):
         assert np.array_equal(a.state.state, b.state.state)
         assert a.drag_parameter == b.drag_parameter
@@ -75,7 +87,11 @@ def test_a_bad_object_fails_alone(sats, model):
         "1 99999U 23001A   23317.50000000  .00000000  00000-0  10000-3 0  9990",
         "2 99999  51.6000 100.0000 0001000  90.0000 270.0000 17.50000000    08",
     )  # 17.5 rev/day: below the surface
-    out = fit_histories([[sats[0]], [bad], [sats[1]]], model, zonal_degree=4)
+    out = fit_histories(
+        [[sats[0]], [bad], [sats[1]]],
+        model,
+        dynamics=Dynamics(zonal_degree=4),
+    )
     assert isinstance(out[1], ValueError)
     assert not isinstance(out[0], Exception) and not isinstance(out[2], Exception)
 
@@ -107,10 +123,18 @@ def test_propagate_catalog_fits_near_earth_objects_at_every_altitude_by_default(
         execution=Execution(progress=False),
     )
     assert [o.fit is not None for o in res.objects] == [True, True, True]
-    high_alone = catalog.fit_objects(high, model, zonal_degree=4)[0]
+    high_alone = catalog.fit_objects(
+        high,
+        model,
+        dynamics=Dynamics(zonal_degree=4),
+    )[0]
     assert np.array_equal(res.objects[2].state.state, high_alone.state.state)
     # the fitted state and Cd*A/m are the fit's (what fit_objects gives)
-    alone = catalog.fit_objects(low[:1], model, zonal_degree=4)[0]
+    alone = catalog.fit_objects(
+        low[:1],
+        model,
+        dynamics=Dynamics(zonal_degree=4),
+    )[0]
     assert np.array_equal(res.objects[0].state.state, alone.state.state)
     assert res.objects[0].drag_parameter == alone.drag_parameter
     plain = catalog.propagate_catalog(

@@ -31,7 +31,13 @@ from ..propagation.dynamics import Dynamics
 from ..propagation.propagate import check_model
 from ..propagation.state import MAX_RADII, radii_beyond_reach
 from ..time import from_jd
-from .fit import DEFAULT_DRAG_PARAMETER, SGP4_RHO0, drag_parameter_from_bstar
+from .fit import (
+    DEFAULT_DRAG_PARAMETER,
+    SGP4_RHO0,
+    LooseDegree,
+    drag_parameter_from_bstar,
+    fit_dynamics,
+)
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -378,21 +384,7 @@ class FitSettings:
 
     def __post_init__(self) -> None:
         check_model(self.model)
-        dyn = FIT_DYNAMICS if self.dynamics is None else self.dynamics
-        if not isinstance(dyn, Dynamics):
-            raise TypeError(f"dynamics must be a rhoprop.Dynamics, got {type(dyn).__name__}")
-        dyn.require_automatic_gravity("the fit")
-        moved = [
-            k
-            for k in ("integrator", "step", "rtol", "floor_altitude")
-            if getattr(dyn, k) != getattr(Dynamics(), k)
-        ]
-        if moved:
-            raise ValueError(
-                f"the fit integrates on its own RK8 grid down to the default floor: "
-                f"dynamics.{' and dynamics.'.join(moved)} would be ignored (leave "
-                f"{'it' if len(moved) == 1 else 'them'} unset)"
-            )
+        dyn = fit_dynamics("FitSettings", self.dynamics, default=FIT_DYNAMICS)
         object.__setattr__(self, "dynamics", dyn)
         if self.threads is not None:
             object.__setattr__(
@@ -703,9 +695,10 @@ def fit_objects(
     *,
     span: tuple[float, float] | None = None,
     threads: int | None = None,
-    zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
     history: Mapping[int, Sequence[CatalogObject]] | None = None,
     progress: Callable[[int], object] | None = None,
+    **deprecated: Unpack[LooseDegree],
 ) -> list[CatalogObject | Exception]:
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
@@ -718,12 +711,15 @@ def fit_objects(
     id: older element sets} fitted together with the object's (those within
     :data:`HISTORY_DAYS` of it). A fit that leaves an RMS residual above
     :data:`MAX_FIT_RMS` (diverged) counts as failed. ``progress(done)`` is told the
-    objects finished after each group of fits.
+    objects finished after each group of fits. ``dynamics``: the fits'
+    (:func:`~rhoprop.catalog.fit.fit_dynamics`: a zonal degree, None J2 only;
+    ``zonal_degree=`` is deprecated).
     Returns, in input order, the fitted object (``fit`` set, covariance the TLE accuracy
     plus the fit's) or the exception of a fit that failed."""
     from ..density import SampledModel
     from .fit import DEFAULT_SPAN, default_span, fit_histories
 
+    dyn = fit_dynamics("fit_objects", dynamics, deprecated)
     history = history or {}
     atmosphere = model.atlas if isinstance(model, SampledModel) else model
     histories = []
@@ -747,7 +743,7 @@ def fit_objects(
                 [histories[i] for i in todo],
                 atmosphere,
                 span=window,
-                zonal_degree=zonal_degree,
+                dynamics=dyn,
                 threads=threads,
             )
             for i, f in zip(todo, runs, strict=True):
@@ -861,7 +857,7 @@ def _fit_all(
         settings.model,
         span=settings.span,
         threads=settings.threads,
-        zonal_degree=settings.dynamics.zonal_degree,
+        dynamics=settings.dynamics,
         history=history,
     )
     kept: list[CatalogObject] = []

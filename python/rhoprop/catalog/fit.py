@@ -36,18 +36,21 @@ above ``MIN_DRAG_PARAMETER``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
 from ..density.model import AtmosphereLike, ModelLike
 from ..frames import rtn_basis
 from ..propagation import OrbitState
+from ..propagation.dynamics import Dynamics, deprecated_keywords
 from ..time import add_seconds, from_jd, offsets_to_epochs, ut1_seconds
 
 if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
     from .. import _core
 
 #: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
@@ -377,7 +380,8 @@ def fit_element_set(
     span: tuple[float, float] = DEFAULT_SPAN,
     spacing: float = DEFAULT_SPACING,
     max_iterations: int = 8,
-    zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
+    **deprecated: Unpack[LooseDegree],
 ) -> FitResult:
     """Fits state and Cd*A/m of one element set to its SGP4 positions.
 
@@ -392,8 +396,12 @@ def fit_element_set(
             both multiples of ``spacing``. Default the day before the epoch.
         spacing: observation spacing, s (default 600).
         max_iterations: Gauss-Newton iterations at most.
-        zonal_degree: highest zonal harmonic of the fit's dynamics, 2 (J2) to 6; use the
-            degree the fitted state will be propagated with.
+        dynamics: the fit's :class:`~rhoprop.Dynamics` (None: J2 only): its zonal
+            degree, 2 (J2) to 6 (use the degree the fitted state will be propagated with).
+            The fit integrates on its own RK8 grid down to the default floor: an
+            ``integrator``, ``step``, ``rtol``, another ``floor_altitude``,
+            ``field_degree`` or ``third_bodies`` is refused (ValueError).
+        **deprecated: ``zonal_degree=``, now in ``dynamics``, with a DeprecationWarning.
 
     Returns:
         :class:`FitResult`. Raises ValueError if SGP4 fails over the span or the orbit
@@ -406,7 +414,7 @@ def fit_element_set(
         span=span,
         spacing=spacing,
         max_iterations=max_iterations,
-        zonal_degree=zonal_degree,
+        dynamics=fit_dynamics("fit_element_set", dynamics, deprecated),
     )
 
 
@@ -461,7 +469,8 @@ def fit_element_sets(
     span: tuple[float, float] = DEFAULT_SPAN,
     spacing: float = DEFAULT_SPACING,
     max_iterations: int = 8,
-    zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
+    **deprecated: Unpack[LooseDegree],
 ) -> FitResult:
     """Fits one state and Cd*A/m to several element sets of one object (a history), each
     speaking near its own epoch (module docstring); the state is at the newest epoch.
@@ -472,7 +481,7 @@ def fit_element_sets(
     Args:
         sats: ``Satrec`` objects or :class:`~rhoprop.catalog.CatalogObject` of one object,
             any order (sorted by epoch; repeated epochs count once).
-        model, drag_parameter, span, spacing, max_iterations, zonal_degree: as
+        model, drag_parameter, span, spacing, max_iterations, dynamics: as
             :func:`fit_element_set` (``span`` is each element set's window, s from its own
             epoch, cut halfway to its neighbours; the newest one's B* gives the prior).
 
@@ -487,7 +496,7 @@ def fit_element_sets(
         span=span,
         spacing=spacing,
         max_iterations=max_iterations,
-        zonal_degree=zonal_degree,
+        dynamics=fit_dynamics("fit_element_sets", dynamics, deprecated),
     )[0]
     if isinstance(out, Exception):
         raise out
@@ -502,8 +511,9 @@ def fit_histories(
     span: tuple[float, float] = DEFAULT_SPAN,
     spacing: float = DEFAULT_SPACING,
     max_iterations: int = 8,
-    zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
     threads: int | None = None,
+    **deprecated: Unpack[LooseDegree],
 ) -> list[FitResult | Exception]:
     """:func:`fit_element_sets` of many objects at once: the fits run in the core, many
     objects per call in parallel (``threads``, default all cores), each trial's nominal
@@ -513,7 +523,7 @@ def fit_histories(
     Args:
         histories: per object, its element sets (``Satrec`` or
             :class:`~rhoprop.catalog.CatalogObject`, any order).
-        model, drag_parameter, span, spacing, max_iterations, zonal_degree: as
+        model, drag_parameter, span, spacing, max_iterations, dynamics: as
             :func:`fit_element_sets`.
         threads: core threads (default: ``rhoprop.parallel``'s setting).
 
@@ -529,6 +539,7 @@ def fit_histories(
         except ValueError as err:
             ordered.append(err)
     results: list[Any] = [o if isinstance(o, Exception) else None for o in ordered]
+    zonal_degree = fit_dynamics("fit_histories", dynamics, deprecated).zonal_degree
     settings = (model, (start, end), spacing, max_iterations, zonal_degree, threads)
     todo = [i for i, o in enumerate(ordered) if not isinstance(o, Exception)]
     runs = _fit_round(
@@ -743,6 +754,41 @@ def _run_chunk(
         r if isinstance(r, Exception) else _result(_solution(r), j)
         for r, j in zip(ran, jobs, strict=True)
     ]
+
+
+class LooseDegree(TypedDict, total=False):
+    """The deprecated keyword of the fits: ``zonal_degree``, now in ``dynamics``."""
+
+    zonal_degree: int
+
+
+def fit_dynamics(
+    function: str,
+    dynamics: Dynamics | None,
+    loose: Mapping[str, object] | None = None,
+    default: Dynamics | None = None,
+) -> Dynamics:
+    """The :class:`~rhoprop.Dynamics` of a fit by ``function``: ``dynamics`` (None:
+    ``default``, itself None: ``Dynamics()``, J2 only) with its deprecated
+    ``zonal_degree=`` folded in (``loose``, with a warning). A fit honours the zonal
+    degree and integrates on its own RK8 grid down to the default floor: anything else
+    set is a ValueError, never ignored."""
+    dyn = deprecated_keywords(
+        function, dynamics, loose or {}, default, names=("zonal_degree",), stacklevel=4
+    )
+    dyn.require_automatic_gravity(function)
+    moved = [
+        k
+        for k in ("integrator", "step", "rtol", "floor_altitude")
+        if getattr(dyn, k) != getattr(Dynamics(), k)
+    ]
+    if moved:
+        raise ValueError(
+            f"{function}(): the fit integrates on its own RK8 grid down to the default "
+            f"floor: dynamics.{' and dynamics.'.join(moved)} would be ignored (leave "
+            f"{'it' if len(moved) == 1 else 'them'} unset)"
+        )
+    return dyn
 
 
 @dataclass

@@ -563,12 +563,13 @@ def fit_catalog_objects(
     objs: list[CatalogObject],
     model: ModelLike,
     fit: FitChoice,
-    zonal_degree: int,
+    dynamics: Dynamics,
     progress: bool = False,
 ) -> list[CatalogObject]:
     """``objs`` with those :func:`fit_choice` picks fitted to their element sets with
     ``model`` (real-atmosphere models only; batched in the core,
-    :func:`~rhoprop.catalog.fit_objects`). An object whose fit fails stays as it was,
+    :func:`~rhoprop.catalog.fit_objects`) at the zonal degree of the run's ``dynamics``
+    (the fit keeps its own RK8 grid and floor). An object whose fit fails stays as it was,
     the failure in its ``covariance_note``. ``progress``: a progress bar (or log lines)
     of the objects fitted."""
     import dataclasses
@@ -586,7 +587,10 @@ def fit_catalog_objects(
     bar = ProgressBar(len(picked), "catalog: fitting", unit="objects") if progress else None
     try:
         fitted = fit_objects(
-            [objs[i] for i in picked], model, zonal_degree=zonal_degree, progress=bar
+            [objs[i] for i in picked],
+            model,
+            dynamics=Dynamics(zonal_degree=dynamics.zonal_degree),
+            progress=bar,
         )
     finally:
         if bar is not None:
@@ -844,8 +848,7 @@ def _ccsp_chunk(
             outs = ccsp_many(
                 runs,
                 _with_spread(model, cfg),
-                floor_altitude=cfg.floor_altitude,
-                zonal_degree=cfg.zonal_degree,
+                dynamics=Dynamics(zonal_degree=cfg.zonal_degree, floor_altitude=cfg.floor_altitude),
                 progress=check,
             )
         except Exception:

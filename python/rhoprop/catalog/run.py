@@ -17,7 +17,6 @@ import numpy as np
 
 from .. import _validate
 from .._deprecated import fold_keywords
-from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density import DensityModel, SampledModel
 from ..execution import Execution, execution_argument
 from ..options import Errors
@@ -428,7 +427,7 @@ def propagate_catalog(
         [objs[i] for i in fresh],
         model,
         init.fit,
-        cfg.zonal_degree,
+        cfg.dynamics,
         progress=run_on.progress is True,
     )
     for i, obj in zip(fresh, fitted, strict=True):
@@ -460,6 +459,12 @@ def propagate_catalog(
         if shown is not None:
             shown.close()
     return _result(objs, epochs, cfg.method.name, results, plans, notes)
+
+
+class OwnEpochsKeywords(LooseFloorAndDegree, total=False):
+    """The deprecated keywords of :func:`propagate_to_own_epochs`, now in ``dynamics``."""
+
+    step: float | None
 
 
 #: Where each deprecated keyword of :func:`propagate_catalog` goes now.
@@ -530,12 +535,11 @@ def propagate_to_own_epochs(
     model: DensityModel,
     epochs: list[np.ndarray],
     *,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    zonal_degree: int = CATALOG_ZONAL_DEGREE,
-    step: float | None = None,
+    dynamics: Dynamics | None = None,
     sigma_scale: float = 1.0,
     client: object = None,  # a distributed.Client
     errors: Errors = "record",
+    **deprecated: Unpack[OwnEpochsKeywords],
 ) -> OwnEpochsResult:
     """The CCSP of every object to its own output epochs (``epochs[i]``: increasing,
     from the object's epoch on, UTC), with :func:`propagate_catalog`'s defaults (no fit,
@@ -543,9 +547,12 @@ def propagate_to_own_epochs(
     output; objects in chunks on threads or on Dask). Why: a run needing each object
     at a few epochs of its own (a screen's Pc at each event's TCA) would otherwise
     update every object's CCSP at the union of them all (a 300-s grid cost 3.5x an
-    hourly run: benches/README.md, "All-on-all"). ``step``: every object's RK8 step, s
-    (None: its :func:`~rhoprop.catalog.objects.catalog_step`); ``sigma_scale``: the
-    factor on the model's density sigma (a mixture's spread: screen_all's Pc stage)."""
+    hourly run: benches/README.md, "All-on-all"). ``dynamics``: as
+    :func:`propagate_catalog`'s (None: ``Dynamics(zonal_degree=4)``; its ``step`` every
+    object's RK8 step, s, None: its :func:`~rhoprop.catalog.objects.catalog_step`;
+    ``floor_altitude=``, ``zonal_degree=``, ``step=`` are deprecated); ``sigma_scale``:
+    the factor on the model's density sigma (a mixture's spread: screen_all's Pc
+    stage)."""
     objs = list(objects)
     if len(epochs) != len(objs):
         raise ValueError(f"epochs must give one array per object ({len(objs)}), got {len(epochs)}")
@@ -556,13 +563,15 @@ def propagate_to_own_epochs(
         if e[0] < o.state.epoch:
             raise ValueError(f"object {o.norad_id}: epoch {e[0]} is before its own")
     errors = _validate.errors_and_client("propagate_to_own_epochs", errors, client)
-    cfg = RunSettings.checked(
-        Ccsp(),
-        Dynamics(zonal_degree=zonal_degree, floor_altitude=floor_altitude, step=step),
-        errors,
-        sigma_scale,
-        function="propagate_to_own_epochs",
+    dyn = deprecated_keywords(
+        "propagate_to_own_epochs",
+        dynamics,
+        deprecated,
+        Dynamics(zonal_degree=CATALOG_ZONAL_DEGREE),
+        names=("floor_altitude", "zonal_degree", "step"),
     )
+    dyn.require_automatic_gravity("propagate_to_own_epochs")
+    cfg = RunSettings.checked(Ccsp(), dyn, errors, sigma_scale, function="propagate_to_own_epochs")
     plans = [
         dataclasses.replace(p, epochs=e)
         for p, e in zip(_plans(objs, "object", "auto", model, cfg.step), own, strict=True)

@@ -34,7 +34,7 @@ from ..catalog.elements import CatalogObject
 from ..catalog.run import OwnEpochsResult, propagate_to_own_epochs
 from ..ensemble.combine import default_spread, default_weights
 from ..ensemble.debias import DEBIAS_WINDOW, backward_orbit
-from ..propagation import Spacecraft
+from ..propagation import Dynamics, Spacecraft
 from ..propagation.results import rtn_basis as nan_tolerant_rtn_basis
 from ..time import seconds_between
 from .encounter import encounter_check, pc_interval
@@ -342,9 +342,11 @@ def _model_moments(
                     ],
                     model,
                     [tcas[m] for m in running],
-                    floor_altitude=cfg.dynamics.floor_altitude,
-                    zonal_degree=cfg.dynamics.zonal_degree,
-                    step=cfg.dynamics.step,
+                    dynamics=Dynamics(
+                        zonal_degree=cfg.dynamics.zonal_degree,
+                        floor_altitude=cfg.dynamics.floor_altitude,
+                        step=cfg.dynamics.step,
+                    ),
                     sigma_scale=spread,
                     client=client,
                 )

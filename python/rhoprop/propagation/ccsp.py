@@ -12,12 +12,11 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _core, _validate
-from ..constants import DEFAULT_FLOOR_ALTITUDE
 from ..density.model import AtmosphereLike, ModelLike, as_atmosphere
 from ..options import Perturbation
 from ..time import DurationLike, ut1_seconds
 from . import run_frame
-from .dynamics import Dynamics, deprecated_keywords, zonal_degree_argument
+from .dynamics import Dynamics, LooseFloorAndDegree, deprecated_keywords, zonal_degree_argument
 from .kappa import Constant, GaussMarkov, KappaProcess, PiecewiseConstant, TwoScale
 from .montecarlo import drag_sigma_argument
 from .propagate import (
@@ -494,10 +493,10 @@ def ccsp_many(
     runs: Sequence[CcspRun],
     model: ModelLike,
     *,
-    floor_altitude: float = DEFAULT_FLOOR_ALTITUDE,
-    zonal_degree: int = 2,
+    dynamics: Dynamics | None = None,
     progress: Callable[[int], None] | None = None,
     coordinates: Coordinates = "equinoctial",
+    **deprecated: Unpack[LooseFloorAndDegree],
 ) -> list[CcspResult | Exception]:
     """The CCSP of several objects in one core call (a catalog chunk): each of ``runs``
     (a :class:`CcspRun`) holds the keywords of :func:`ccsp` that differ per object
@@ -509,8 +508,22 @@ def ccsp_many(
     raised: the caller decides, e.g. repeats the object with :func:`ccsp`, which widens
     a field an object left). ``progress(updates_done)`` is called about every 50 ms; an
     exception from it stops the call and is raised, as is Ctrl-C. ``coordinates``: as
-    in :func:`ccsp`, shared by every object."""
+    in :func:`ccsp`, shared by every object. ``dynamics``: the zonal degree and floor
+    altitude every object shares (None: ``Dynamics()``); each run's RK8 step is its own
+    ``step``, so ``dynamics.step``, an integrator other than RK8, ``rtol`` and the
+    tesseral field or third bodies are refused (ValueError); ``floor_altitude=`` and
+    ``zonal_degree=`` are deprecated."""
     coordinates = coordinates_argument(coordinates)
+    dyn = deprecated_keywords(
+        "ccsp_many", dynamics, deprecated, names=("floor_altitude", "zonal_degree")
+    )
+    dyn.require_automatic_gravity("ccsp_many")
+    dyn.require_integrator("ccsp_many", ("rk8",))
+    if dyn.step is not None:
+        raise ValueError(
+            "ccsp_many(): each run's RK8 step is its CcspRun's own step; leave dynamics.step None"
+        )
+    floor_altitude, zonal_degree = dyn.floor_altitude, dyn.zonal_degree
     prepared = []
     frames_of: list[tuple[str, np.ndarray | None, OrbitState, Any]] = []
     for k, run in enumerate(runs):

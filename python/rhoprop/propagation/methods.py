@@ -297,13 +297,8 @@ class Ccsp:
                     kappa=self.kappa,
                 )
             )
-        done = ccsp_many(
-            runs,
-            model,
-            floor_altitude=dyn.floor_altitude,
-            zonal_degree=dyn.zonal_degree,
-            coordinates=self.coordinates,
-        )
+        shared = Dynamics(zonal_degree=dyn.zonal_degree, floor_altitude=dyn.floor_altitude)
+        done = ccsp_many(runs, model, dynamics=shared, coordinates=self.coordinates)
         for k, result in zip(where, done, strict=True):
             out[k] = result
         return out
