@@ -86,10 +86,6 @@ class Execution:
             )
 
 
-#: The loose keywords the many-object functions took before ``execution=``, deprecated.
-LOOSE = ("threads", "client", "chunk_size", "progress", "errors", "max_memory")
-
-
 def execution_argument(
     function: str,
     execution: Execution | None,

@@ -10,16 +10,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from numbers import Real
 
 import numpy as np
 
+from .. import _validate
+
 _LOG_2PI = math.log(2.0 * math.pi)
 _erfc = np.vectorize(math.erfc, otypes=[float])
-
-
-def _is_real(value: object) -> bool:
-    return isinstance(value, (Real, np.integer, np.floating)) and not isinstance(value, bool)
 
 
 def _float_array(name: str, value: object) -> np.ndarray:
@@ -29,7 +26,7 @@ def _float_array(name: str, value: object) -> np.ndarray:
     except ValueError as err:  # ragged nested sequences
         raise ValueError(f"{name} must be a rectangular array of numbers: {err}") from err
     if arr.dtype.kind == "O":  # e.g. Fractions, Decimals, None
-        if not all(_is_real(v) for v in arr.flat):
+        if not all(_validate.is_real(v) for v in arr.flat):
             raise TypeError(f"{name} must be real numbers, got {value!r}")
         arr = arr.astype(float)
     if arr.dtype.kind not in "iuf":
