@@ -336,8 +336,9 @@ def as_of_options(text: str | None) -> dict[str, Any]:
     library's defaults)."""
     if not text:
         return {}
-    f, a, r = text.split(",")
-    return {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+    f, a, r, *target = text.split(",")
+    out = {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+    return out | ({"ap_target": target[0]} if target else {})
 
 
 def run_week(

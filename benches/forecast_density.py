@@ -13,12 +13,19 @@ forecast) and RMS of delta_k, per rule, and beside them the change of the drag i
 misses, as SGP4's static density does). The rule with the smallest RMS forecasts the
 density's level best for predictions started at S.
 
+Last, whether the error known at S foresees its change: the first rule's c estimated from
+the intervals that ended by S alone (what a forecaster has), its last day's departure from
+its mean over those days, against delta_k: the correlation and the RMS of delta_k left
+after the best line, beside its standard deviation (a correction relaxing to the model
+would use the slope).
+
 Run:  python benches/forecast_density.py [--rules "1,1,2;1,1,1"] [--every 2]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import time
@@ -56,9 +63,25 @@ def held(iv: catalog.DecayIntervals, start: np.datetime64) -> np.ndarray | None:
     return np.array([np.median(p) for p in per])
 
 
-def deltas(sets: list, start: np.datetime64, rule: dict) -> tuple[np.ndarray, np.ndarray] | None:
-    """(delta_k, held change) (k = 1..3) of one start under one as_of rule, or None
-    where a day lacks."""
+def departure(iv: catalog.DecayIntervals, start: np.datetime64) -> float | None:
+    """The model's error on the day before ``start`` less its mean over the days before,
+    from the intervals that ended by ``start`` (known then), or None where it lacks."""
+    known = iv.end <= start
+    past = catalog.DecayIntervals(
+        *(getattr(iv, f.name)[known] for f in dataclasses.fields(catalog.DecayIntervals))
+    )
+    c = catalog.estimate_density_correction(past, start)
+    last = start.astype("datetime64[D]") - np.timedelta64(1, "D")
+    if len(c.days) < 4 or c.days[-1] != last:
+        return None
+    return float(c.level[-1] - c.level.mean())
+
+
+def deltas(
+    sets: list, start: np.datetime64, rule: dict
+) -> tuple[np.ndarray, np.ndarray, float | None] | None:
+    """(delta_k, held change, departure known at the start) (k = 1..3) of one start under
+    one as_of rule, or None where a day lacks."""
     model = Msis("2.1", space_weather=rp.SpaceWeather().as_of(start, **rule))
     later = start + np.timedelta64(3 * 86400 + 43200, "s")
     since = start - np.timedelta64(10, "D")
@@ -70,7 +93,8 @@ def deltas(sets: list, start: np.datetime64, rule: dict) -> tuple[np.ndarray, np
     hold = held(iv, start)
     if not all(d in level for d in want) or hold is None:
         return None
-    return np.array([level[d] - level[want[0]] for d in want[1:]]), hold
+    change = np.array([level[d] - level[want[0]] for d in want[1:]])
+    return change, hold, departure(iv, start)
 
 
 def main() -> None:
@@ -94,8 +118,9 @@ def main() -> None:
     sets = catalog.load(data / HISTORY, history="each", errors="record").objects
     rules = {}
     for text in args.rules.split(";"):
-        f, a, r = text.split(",")
+        f, a, r, *target = text.split(",")
         rules[text] = {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+        rules[text] |= {"ap_target": target[0]} if target else {}
     starts = np.arange(
         np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
     )
@@ -105,15 +130,18 @@ def main() -> None:
     )
     found: dict[str, list[np.ndarray]] = {k: [] for k in rules}
     kept: list[np.ndarray] = []
+    known: list[tuple[float, np.ndarray]] = []
     for start in starts:
         t0 = time.perf_counter()
         for name, rule in rules.items():
             got = deltas(sets, np.datetime64(start, "ns"), rule)
             if got is not None:
-                d, hold = got
+                d, hold, dep = got
                 found[name].append(d)
                 if name == next(iter(rules)):
                     kept.append(hold)
+                    if dep is not None:
+                        known.append((dep, d))
                 print(
                     f"| {start} | {name} | "
                     + " / ".join(f"{x:+.3f}" for x in d)
@@ -150,9 +178,27 @@ def main() -> None:
         + " / ".join(f"{x:.3f}" for x in rms_hold)
         + " |"
     )
+    x = np.array([k[0] for k in known])
+    y = np.array([k[1] for k in known])
+    print(
+        f"\nthe error known at the start ({len(x)} starts, rule {next(iter(rules))}): its "
+        "departure from its mean over the days before, against delta_k"
+    )
+    print("| day | correlation | best slope | SD delta_k | SD left after the slope |")
+    print("| ---: | ---: | ---: | ---: | ---: |")
+    reversion = []
+    for k in range(3):
+        slope = float(np.polyfit(x, y[:, k], 1)[0])
+        left = y[:, k] - np.polyval(np.polyfit(x, y[:, k], 1), x)
+        r = float(np.corrcoef(x, y[:, k])[0, 1])
+        rms, rms_left = float(np.std(y[:, k])), float(np.sqrt(np.mean(left**2)))
+        reversion.append({"correlation": r, "slope": slope, "sd": rms, "sd_left": rms_left})
+        print(f"| {k + 1} | {r:+.2f} | {slope:+.2f} | {rms:.3f} | {rms_left:.3f} |")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "forecast_density.json").write_text(json.dumps({**info(), "rules": summary}, indent=1))
+    (out / "forecast_density.json").write_text(
+        json.dumps({**info(), "rules": summary, "known_error": reversion}, indent=1)
+    )
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ from rhoprop.cli import main
 from rhoprop.density import Msis
 from rhoprop.errors import OutsideRecordError, PredictedDriversWarning
 from rhoprop.jobs import models as job
-from rhoprop.spaceweather import forecast_sigma
+from rhoprop.spaceweather import f107a_forecast_sigma, forecast_sigma
 
 
 @pytest.fixture(scope="module")
@@ -62,6 +62,55 @@ def test_predicted_epochs_work_with_a_warning_and_growing_sigma(records):
     f, a = forecast_sigma([0, 1, 3, 27, 1000])
     assert f[0] == 0 and a[0] == 0 and (np.diff(f) >= 0).all() and (np.diff(a) >= 0).all()
     assert fc.span[1] > np.datetime64("2030-01-01")
+
+
+@pytest.mark.parametrize("lead", [1, 3, 7, 14])
+def test_forecast_sigmas_are_the_records_persistence_errors(records, lead):
+    # Independent of the tables: the RMS log change over the lead of the daily flux and
+    # of its centred 81-day average, 1995-2023, read from the record's observed rows.
+    # The tables hold them to 2 digits (interpolated between nodes): 10 %.
+    sw, _ = records
+    rows = (sw.section == 0) & (sw.date >= np.datetime64("1995-01-01"))
+    rows &= sw.date <= np.datetime64("2023-12-31")
+    for series, table in (
+        (sw.f107_obs[rows], forecast_sigma(lead)[0]),
+        (sw.f107_obs_ctr81[rows], f107a_forecast_sigma(lead)),
+    ):
+        r = np.log(series[lead:] / series[:-lead])
+        rms = np.sqrt(np.mean(r[np.isfinite(r)] ** 2))
+        assert float(table) == pytest.approx(rms, rel=0.1)
+
+
+def test_a_weeks_lead_perturbs_the_average_flux_by_its_own_sigma():
+    # At 7 days' lead the daily F10.7 is known to 17 %, its 81-day average to 1.7 %:
+    # each is perturbed by its own sigma (with the 2 % calibration), ap by its 100 %.
+    # Expected from pymsis directly, with the drivers read from the forecast record.
+    # Perturbing both by 17 % (before 2026-12-06) gave 2.0x the flux part here.
+    import pymsis
+
+    from rhoprop.density import DriverUncertainty
+
+    sw = rp.SpaceWeather().as_of("2023-11-13T00:00")
+    t = "2023-11-20T01:00"
+    only = DriverUncertainty(f107_relative=0.02, ap_scale=0.0, model_floor=0.0, ap_relative=0.0)
+    with pytest.warns(PredictedDriversWarning):
+        d = sw.drivers(t)
+        _, std = Msis("2.1", space_weather=sw, uncertainty=only).mean_std(t, 0.0, 0.0, 450e3)
+    lead = float(d.lead_time[0])
+    s_f = float(np.hypot(0.02, forecast_sigma(lead)[0]))
+    s_a = float(np.hypot(0.02, f107a_forecast_sigma(lead)))
+    f, fa, ap = float(d.f107[0]), float(d.f107a[0]), d.ap
+
+    def rho(f107, f107a, aps):
+        out = pymsis.calculate(np.datetime64(t), 0.0, 0.0, 450.0, f107, f107a, aps, version=2.1)
+        return float(out[..., 0].squeeze())
+
+    flux = (rho(f * (1 + s_f), fa * (1 + s_a), ap) - rho(f * (1 - s_f), fa * (1 - s_a), ap)) / 2
+    storm = (rho(f, fa, 2 * ap) - rho(f, fa, 0 * ap)) / 2
+    assert 6.9 < lead < 7.1 and s_a < 0.03
+    assert float(std) == pytest.approx(np.hypot(flux, storm), rel=1e-9)
+    both = (rho(f * (1 + s_f), fa * (1 + s_f), ap) - rho(f * (1 - s_f), fa * (1 - s_f), ap)) / 2
+    assert abs(both) > 1.5 * abs(flux)
 
 
 def test_a_state_after_the_observed_days_propagates_three_days_with_the_warning(records):

@@ -217,7 +217,7 @@ def test_indices_as_of_an_epoch_read_nothing_after_it(indices, tmp_path: Path) -
     # the days before the epoch's day as observed, then the last observed day's F10, S10,
     # M10 and Y10 held, the centred 81-day means that reach past the epoch replaced by the
     # mean of the last 81 observed days, dTc relaxing from the epoch's hour to the last 27
-    # days' mean (e-folding 2 days). Checked from the raw files' numbers, and by
+    # days' typical level (e-folding 2 days). Checked from the raw files' numbers, and by
     # scrambling every value after the epoch, which must change nothing.
     epoch = np.datetime64("2009-05-18T07:19")
     ahead = indices.as_of(epoch)
@@ -245,6 +245,13 @@ def test_indices_as_of_an_epoch_read_nothing_after_it(indices, tmp_path: Path) -
     hour = np.datetime64("2009-05-18T07")
     dtc = indices.at(np.array([hour]))[0, 8]
     assert ahead.at(np.array([hour]))[0, 8] == dtc
+    # ... relaxing towards the median of the 27 days' daily means (as ap's), read here
+    # from the observed indices of the 27 * 24 hours up to the epoch's.
+    past = hour - np.arange(27 * 24)[::-1] * np.timedelta64(1, "h")
+    level = np.median(indices.at(past)[:, 8].reshape(27, 24).mean(axis=1))
+    three = hour + np.timedelta64(72, "h")
+    expected = level + (dtc - level) * np.exp(-72 / 48)  # 28.09 K; to the mean: 29.49
+    assert ahead.at(np.array([three]))[0, 8] == np.round(expected)  # at() rounds dTc
     row_before = int((np.datetime64("2009-05-17") - indices._sol_first).astype(int))
     scrambled = rp.density.Jb2008Indices._from_arrays(
         indices,

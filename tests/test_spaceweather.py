@@ -574,18 +574,22 @@ def test_as_of_is_what_a_forecaster_had(sw):
     late = f.drivers(np.array(["2002-09-05T12:00"], dtype="datetime64[ns]"))
     assert late.f107a[0] == d.f107a[0] != sw.drivers(np.array(["2002-09-05T12:00"])).f107a[0]
     assert "as of 2002-09-08T06:00:00" in f.source
-    # Relaxing (default 2 days): from the last 3 days' 23.75 towards the mean of the 27
-    # observed days before the epoch, e-folding 2 days from the epoch to an interval's
-    # centre (here 3 days + 1.5 h - 6 h after the epoch).
-    relaxed = sw.as_of("2002-09-08T06:00", ap_days=3)
+    # Relaxing (default 2 days): from the last 3 days' 23.75 towards the median of the
+    # daily means of the 27 observed days before the epoch (default ap_target), e-folding
+    # 2 days from the epoch to an interval's centre (here 3 days + 1.5 h - 6 h after it).
     month = sw.ap[
         (sw.date >= np.datetime64("2002-08-12")) & (sw.date <= np.datetime64("2002-09-07"))
     ]
     lead = 3.0 + (1.5 - 6.0) / 24.0
-    expected = month.mean() + (23.75 - month.mean()) * np.exp(-lead / 2.0)
-    with pytest.warns(PredictedDriversWarning):
-        got_ap = relaxed.drivers(np.array(["2002-09-11T01:00"], dtype="datetime64[ns]")).ap
-    assert got_ap[0, 1] == pytest.approx(expected, rel=1e-12)
+    typical = np.median(month.mean(axis=1))
+    assert typical < month.mean()  # a storm month: the mean is above most days
+    when = np.array(["2002-09-11T01:00"], dtype="datetime64[ns]")
+    for kwargs, level in (({}, typical), ({"ap_target": "mean"}, month.mean())):
+        relaxed = sw.as_of("2002-09-08T06:00", ap_days=3, **kwargs)
+        with pytest.warns(PredictedDriversWarning):
+            got_ap = relaxed.drivers(when).ap
+        expected = level + (23.75 - level) * np.exp(-lead / 2.0)
+        assert got_ap[0, 1] == pytest.approx(expected, rel=1e-12), kwargs
     # Nothing past the forecast: the record ends 60 days (default) after the epoch.
     assert sw.as_of("2002-09-08T06:00").span[1] < np.datetime64("2002-11-08")
 
@@ -597,6 +601,7 @@ def test_as_of_is_what_a_forecaster_had(sw):
         ({"epoch": "2002-09-08", "ap_days": 0}, ValueError, "ap_days must lie in 1-81"),
         ({"epoch": "2002-09-08", "ap_days": 2.5}, TypeError, "ap_days must be an integer"),
         ({"epoch": "2002-09-08", "days": -1}, ValueError, "days must lie in 0-3660"),
+        ({"epoch": "2002-09-08", "ap_target": "mode"}, ValueError, "ap_target must be one"),
     ],
 )
 def test_as_of_refuses(sw, kwargs, error, match):

@@ -39,7 +39,7 @@ from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
 from ..spaceweather import SpaceWeather, space_weather_argument
-from ..spaceweather.record import AS_OF_AP_RELAX_DAYS, AS_OF_DAYS
+from ..spaceweather.record import AS_OF_AP_RELAX_DAYS, AS_OF_AP_TARGET, AS_OF_DAYS
 from ..time import EpochLike, EpochsLike, to_datetime64
 from . import calibrated as cal
 from .calibrated import Preset
@@ -260,7 +260,8 @@ class Jb2008Indices:
         (default 60) of persistence of the last observed day's F10, S10, M10 and Y10; the
         81-day centred means whose window reaches past the epoch replaced by each
         index's mean over the last 81 observed days; dTc observed to the epoch's hour,
-        then relaxing from it to the last 27 days' mean with an e-folding time of
+        then relaxing from it to the last 27 days' level (as ap's:
+        :data:`~rhoprop.spaceweather.record.AS_OF_AP_TARGET`) with an e-folding time of
         :data:`~rhoprop.spaceweather.record.AS_OF_AP_RELAX_DAYS` (2 days). Nothing after
         the epoch is read. Raises :class:`~rhoprop.OutsideRecordError` when the files do
         not hold the 81 days before the epoch."""
@@ -289,7 +290,12 @@ class Jb2008Indices:
         dtc_hours = seen + int(24 * n_new)
         dtc = np.empty(dtc_hours)
         dtc[:seen] = self._dtc[:seen]
-        last, month = self._dtc[seen - 1], self._dtc[seen - 27 * 24 : seen].mean()
+        last, hours = self._dtc[seen - 1], self._dtc[seen - 27 * 24 : seen]
+        # The last 27 days' level as SpaceWeather.as_of takes ap's: the mean, or the
+        # median of the daily means (AS_OF_AP_TARGET).
+        month = (
+            hours.mean() if AS_OF_AP_TARGET == "mean" else np.median(hours.reshape(27, 24).mean(1))
+        )
         lead_h = np.arange(1, dtc_hours - seen + 1, dtype=float)
         relax = 24.0 * AS_OF_AP_RELAX_DAYS
         dtc[seen:] = month + (last - month) * np.exp(-lead_h / relax)

@@ -94,7 +94,10 @@ class DriverUncertainty:
     derivatives taken by central differences through the same NRLMSIS version:
     F10.7 and F10.7a perturbed together by +-``f107_relative`` (relative), all seven ap
     entries by +-sigma_ap = sqrt((``ap_scale`` * :func:`ap_sigma`)^2 + (``ap_relative`` *
-    ap)^2) (clipped at 0).
+    ap)^2) (clipped at 0). Predicted drivers (a forecast record) add their lead-time
+    sigma to each: the daily flux's (:func:`~rhoprop.spaceweather.forecast_sigma`) to
+    F10.7, the 81-day average's, a tenth of it
+    (:func:`~rhoprop.spaceweather.f107a_forecast_sigma`), to F10.7a, and ap's to ap.
 
     Figures and sources:
       * ``f107_relative = 0.02``: the absolute calibration of the Penticton 10.7 cm flux
@@ -247,14 +250,18 @@ class Msis(SampledModel):
         u = self.uncertainty
         if isinstance(u, RelativeSigma):
             return mean, var
-        # Predicted drivers (a forecast record) add their lead-time sigma; observed ones
-        # keep exactly the observed-driver perturbation.
+        # Predicted drivers (a forecast record) add their lead-time sigma, the daily flux
+        # and its 81-day average each their own (the average's a tenth of the daily's);
+        # observed ones keep exactly the observed-driver perturbation.
         f_rel: Any = u.f107_relative
+        fa_rel: Any = u.f107_relative
         if drivers.f107_forecast_sigma is not None and np.any(drivers.f107_forecast_sigma > 0):
             f_rel = np.minimum(np.hypot(u.f107_relative, drivers.f107_forecast_sigma), 0.9)
+            if drivers.f107a_forecast_sigma is not None:
+                fa_rel = np.minimum(np.hypot(u.f107_relative, drivers.f107a_forecast_sigma), 0.9)
         if np.any(np.asarray(f_rel) > 0):
-            hi = call(f107 * (1 + f_rel), f107a * (1 + f_rel), ap)
-            lo = call(f107 * (1 - f_rel), f107a * (1 - f_rel), ap)
+            hi = call(f107 * (1 + f_rel), f107a * (1 + fa_rel), ap)
+            lo = call(f107 * (1 - f_rel), f107a * (1 - fa_rel), ap)
             var += ((hi - lo) / 2.0) ** 2
         ap_lead = drivers.ap_forecast_sigma
         if u.ap_scale > 0 or u.ap_relative > 0 or (ap_lead is not None and np.any(ap_lead > 0)):
@@ -322,7 +329,7 @@ class Msis(SampledModel):
         digest = hashlib.sha256()
         for a in (d.f107, d.f107a, d.ap):
             digest.update(np.ascontiguousarray(a, dtype=float).tobytes())
-        for extra in (d.f107_forecast_sigma, d.ap_forecast_sigma):
+        for extra in (d.f107_forecast_sigma, d.ap_forecast_sigma, d.f107a_forecast_sigma):
             if extra is not None and np.any(extra > 0):  # predicted drivers: their sigma
                 digest.update(np.ascontiguousarray(extra, dtype=float).tobytes())
         return {

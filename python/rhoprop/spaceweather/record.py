@@ -68,6 +68,23 @@ F107_FORECAST_SIGMA = (
     (14.0, 0.2),
     (365.0, 0.3),
 )
+#: Relative 1-sigma of a held 81-day average F10.7 (F10.7a) at lead time (days), same
+#: layout: the RMS log change of the centred 81-day average over the lead, 1995-2023
+#: (``benches/forecast_error.py``). About a tenth of the daily flux's: the average of 81
+#: days hardly moves in a week.
+F107A_FORECAST_SIGMA = (
+    (0.0, 0.0),
+    (1.0, 0.0033),
+    (2.0, 0.0059),
+    (3.0, 0.0083),
+    (5.0, 0.013),
+    (7.0, 0.017),
+    (10.0, 0.023),
+    (14.0, 0.030),
+    (27.0, 0.047),
+    (45.0, 0.071),
+    (365.0, 0.3),
+)
 #: Relative 1-sigma of predicted ap, same layout.
 AP_FORECAST_SIGMA = ((0.0, 0.0), (1.0, 0.5), (3.0, 1.0))
 
@@ -82,6 +99,12 @@ AS_OF_F107_DAYS = 1
 #: days' activity to the last 27 days' mean (inf: held; docs/catalog-realism.md,
 #: "Forecast mode").
 AS_OF_AP_RELAX_DAYS = 2.0
+#: What :meth:`SpaceWeather.as_of`'s ap relaxes to: the last 27 days' "mean" of the
+#: 3-hourly values or the "median" of their daily means (a typical day: ap's storms put
+#: the mean above most days: relaxing to it, the observed daily Ap lay about 25 % below
+#: the forecast at the median, 1995-2023; ``benches/forecast_error.py``).
+AS_OF_AP_TARGET = "median"
+AP_TARGETS = ("mean", "median")
 
 
 def _validate_days(name: str, value: object) -> float:
@@ -113,6 +136,19 @@ def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     return np.interp(lead, fx, fy), np.interp(lead, ax, ay)
 
 
+def f107a_forecast_sigma(lead_days: npt.ArrayLike) -> np.ndarray:
+    """Relative 1-sigma of a held 81-day average F10.7 at ``lead_days`` (days past the
+    last observed day; <= 0: observed, sigma 0), interpolated in
+    :data:`F107A_FORECAST_SIGMA`: the RMS log change of the centred 81-day average over
+    the lead (0.3 / 0.8 / 1.7 % at 1 / 3 / 7 days), a tenth of the daily flux's
+    (:func:`forecast_sigma`). NRLMSIS perturbs its F10.7a by this, not by the daily
+    flux's sigma (which doubled the flux's part of its density sigma at a week's lead,
+    450 km)."""
+    lead = np.clip(np.asarray(lead_days, dtype=float), 0.0, None)
+    x, y = zip(*F107A_FORECAST_SIGMA, strict=True)
+    return np.asarray(np.interp(lead, x, y), dtype=float)
+
+
 # -- public classes ----------------------------------------------------------------------
 
 
@@ -132,8 +168,10 @@ class Drivers:
         lead_time: (n,) days past the end of the last observed day (0 for observed
             epochs), from a forecast record (:meth:`SpaceWeather.with_forecast`); else None.
         f107_forecast_sigma, ap_forecast_sigma: (n,) relative 1-sigma of the predicted
-            F10.7 (and F10.7a) and ap at that lead time (:func:`forecast_sigma`; 0 for
-            observed epochs), or None; NRLMSIS adds them to its driver uncertainty.
+            daily F10.7 and ap at that lead time (:func:`forecast_sigma`; 0 for observed
+            epochs), or None; NRLMSIS adds them to its driver uncertainty.
+        f107a_forecast_sigma: (n,) relative 1-sigma of the held F10.7a at that lead time
+            (:func:`f107a_forecast_sigma`), or None.
     """
 
     epochs: np.ndarray
@@ -143,6 +181,7 @@ class Drivers:
     lead_time: np.ndarray | None = None
     f107_forecast_sigma: np.ndarray | None = None
     ap_forecast_sigma: np.ndarray | None = None
+    f107a_forecast_sigma: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.epochs)
@@ -411,7 +450,14 @@ class SpaceWeather:
             lead = np.maximum((t - start) / np.timedelta64(1, "D"), 0.0)
             f_sigma, a_sigma = forecast_sigma(lead)
             drivers = Drivers(
-                t, self.f107_obs[day - 1], self.f107_obs_ctr81[day], ap, lead, f_sigma, a_sigma
+                t,
+                self.f107_obs[day - 1],
+                self.f107_obs_ctr81[day],
+                ap,
+                lead,
+                f_sigma,
+                a_sigma,
+                f107a_forecast_sigma(lead),
             )
             if len(t) and lead.max() > 0:
                 self._warn_predicted()
@@ -496,6 +542,7 @@ class SpaceWeather:
         ap_days: int = AS_OF_AP_DAYS,
         f107_days: int = AS_OF_F107_DAYS,
         ap_relax_days: float = AS_OF_AP_RELAX_DAYS,
+        ap_target: str = AS_OF_AP_TARGET,
     ) -> SpaceWeather:
         """The record as a forecaster had it at ``epoch`` (UTC): what was observed before
         it, then ``days`` days (default 60) of a forecast made only from that.
@@ -510,10 +557,12 @@ class SpaceWeather:
           epoch, held (the trailing average a forecaster has); the trailing averages of
           the forecast days likewise.
         - ap and Kp (3-hourly): the mean of the last ``ap_days`` observed days (default
-          1: the last day's activity), relaxing to the last 27 days' mean with an
-          e-folding time of ``ap_relax_days`` (default 2 days; ``float("inf")`` holds
-          it) counted from the epoch: a storm under way is not carried through the
-          week. Daily Ap is the mean of the day's eight; Cp and C9 the last days'.
+          1: the last day's activity), relaxing to the last 27 days' typical level
+          with an e-folding time of ``ap_relax_days`` (default 2 days; ``float("inf")``
+          holds it) counted from the epoch: a storm under way is not carried through
+          the week. The level is ``ap_target``: the ``"median"`` of the daily means
+          (the default) or the ``"mean"`` of the 3-hourly values. Daily Ap is the mean
+          of the day's eight; Cp and C9 the last days'.
 
         Chosen on the development data together: the four weeks of
         ``benches/catalog_realism.py`` and the starts of ``benches/history_days.py``
@@ -534,6 +583,8 @@ class SpaceWeather:
                 raise TypeError(f"{name} must be an integer, got {type(n).__name__}")
             if not 1 <= n <= 81:
                 raise ValueError(f"{name} must lie in 1-81, got {n}")
+        if ap_target not in AP_TARGETS:
+            raise ValueError(f"ap_target must be one of {AP_TARGETS}, got {ap_target!r}")
         day = t.astype("datetime64[D]")
         cols = self._columns()
         observed = (cols["date"] < day) & (cols["section"] == 0)
@@ -554,8 +605,12 @@ class SpaceWeather:
         ap_last = float(np.nanmean(cols["ap"][recent]))
         kp_last = float(np.nanmean(cols["kp"][recent]))
         month = known[-27:]
-        ap_month = float(np.nanmean(cols["ap"][month]))
-        kp_month = float(np.nanmean(cols["kp"][month]))
+        if ap_target == "mean":
+            ap_month = float(np.nanmean(cols["ap"][month]))
+            kp_month = float(np.nanmean(cols["kp"][month]))
+        else:
+            ap_month = float(np.nanmedian(np.nanmean(cols["ap"][month], axis=1)))
+            kp_month = float(np.nanmedian(np.nanmean(cols["kp"][month], axis=1)))
         n_new = int(np.ceil(horizon)) + 1
         dates = day + np.arange(n_new) * _DAY
         # Each 3-hour interval relaxes from the last days' activity to the last 27 days'
