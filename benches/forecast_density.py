@@ -25,7 +25,6 @@ Run:  python benches/forecast_density.py [--rules "1,1,2;1,1,1"] [--every 2]
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import time
@@ -33,6 +32,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from catalog_realism import as_of_options
 
 import rhoprop as rp
 from machine import describe, info
@@ -65,12 +65,9 @@ def held(iv: catalog.DecayIntervals, start: np.datetime64) -> np.ndarray | None:
 
 def departure(iv: catalog.DecayIntervals, start: np.datetime64) -> float | None:
     """The model's error on the day before ``start`` less its mean over the days before,
-    from the intervals that ended by ``start`` (known then), or None where it lacks."""
-    known = iv.end <= start
-    past = catalog.DecayIntervals(
-        *(getattr(iv, f.name)[known] for f in dataclasses.fields(catalog.DecayIntervals))
-    )
-    c = catalog.estimate_density_correction(past, start)
+    from the intervals that ended by ``start`` (known then; the estimate takes only
+    those), or None where it lacks."""
+    c = catalog.estimate_density_correction(iv, start)
     last = start.astype("datetime64[D]") - np.timedelta64(1, "D")
     if len(c.days) < 4 or c.days[-1] != last:
         return None
@@ -118,9 +115,7 @@ def main() -> None:
     sets = catalog.load(data / HISTORY, history="each", errors="record").objects
     rules = {}
     for text in args.rules.split(";"):
-        f, a, r, *target = text.split(",")
-        rules[text] = {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
-        rules[text] |= {"ap_target": target[0]} if target else {}
+        rules[text] = as_of_options(text)
     starts = np.arange(
         np.datetime64(args.first, "D"), np.datetime64(args.last, "D") + 1, args.every
     )

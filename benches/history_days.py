@@ -173,6 +173,25 @@ def row(label: str, f: dict[str, Any]) -> str:
     )
 
 
+def goal_days(per_start: dict[str, Any], suffix: str) -> dict[str, float]:
+    """Issue 45's per-start-day goals over the starts whose key ends with ``suffix``
+    (e.g. "forecast 3 d"): the share of days with the along-track share inside 2 sigma
+    in 85-98 % (and the days above and below), inside 3 sigma >= 95 %, and RTN 2 sigma
+    >= 85 %."""
+    days = [v for k, v in per_start.items() if k.endswith(suffix)]
+    two = np.array([v["inside_2sigma"]["along_track"] for v in days])
+    three = np.array([v["inside_3sigma"]["along_track"] for v in days])
+    rtn = np.array([v["inside_2sigma"]["mahalanobis_rtn"] for v in days])
+    return {
+        "days": len(days),
+        "along_2sigma_in_85_98": float(np.mean((two >= 0.85) & (two <= 0.98))),
+        "along_2sigma_above_98": int(np.sum(two > 0.98)),
+        "along_2sigma_below_85": int(np.sum(two < 0.85)),
+        "along_3sigma_at_least_95": float(np.mean(three >= 0.95)),
+        "rtn_2sigma_at_least_85": float(np.mean(rtn >= 0.85)),
+    }
+
+
 def main() -> None:
     print(describe())
     parser = argparse.ArgumentParser(
@@ -303,6 +322,16 @@ def main() -> None:
             print(
                 f"  start days with median <= SGP4's: {100 * f['start_days_at_most_sgp4']:.0f} %"
                 f" of {len(days)}"
+            )
+            g = goal_days(per_start, f"{mode} {h:g} d")
+            f["goal_days"] = g
+            print(
+                f"  start days with along-track inside 2 sigma in 85-98 %: "
+                f"{100 * g['along_2sigma_in_85_98']:.0f} % ({g['along_2sigma_above_98']} "
+                f"above, {g['along_2sigma_below_85']} below); inside 3 sigma >= 95 %: "
+                f"{100 * g['along_3sigma_at_least_95']:.0f} %; RTN 2 sigma >= 85 %: "
+                f"{100 * g['rtn_2sigma_at_least_85']:.0f} %; median |error| / sigma "
+                "along-track: " + f"{f['median_error_over_sigma_rtn'][1]:.2f} (Gaussian 0.67)"
             )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
