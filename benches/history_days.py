@@ -174,7 +174,7 @@ def row(label: str, f: dict[str, Any]) -> str:
 
 
 def goal_days(per_start: dict[str, Any], suffix: str) -> dict[str, float]:
-    """Issue 45's per-start-day goals over the starts whose key ends with ``suffix``
+    """The per-start-day coverage goals over the starts whose key ends with ``suffix``
     (e.g. "forecast 3 d"): the share of days with the along-track share inside 2 sigma
     in 85-98 % (and the days above and below), inside 3 sigma >= 95 %, and RTN 2 sigma
     >= 85 %."""
