@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -130,10 +131,7 @@ def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     large as ap itself, 100 %, from 3 days). These add to the observed-driver sigma of
     :class:`~rhoprop.density.DriverUncertainty`.
     """
-    lead = np.clip(np.asarray(lead_days, dtype=float), 0.0, None)
-    fx, fy = zip(*F107_FORECAST_SIGMA, strict=True)
-    ax, ay = zip(*AP_FORECAST_SIGMA, strict=True)
-    return np.interp(lead, fx, fy), np.interp(lead, ax, ay)
+    return _from_table(F107_FORECAST_SIGMA, lead_days), _from_table(AP_FORECAST_SIGMA, lead_days)
 
 
 def f107a_forecast_sigma(lead_days: npt.ArrayLike) -> np.ndarray:
@@ -144,8 +142,14 @@ def f107a_forecast_sigma(lead_days: npt.ArrayLike) -> np.ndarray:
     (:func:`forecast_sigma`). NRLMSIS perturbs its F10.7a by this, not by the daily
     flux's sigma (which doubled the flux's part of its density sigma at a week's lead,
     450 km)."""
+    return _from_table(F107A_FORECAST_SIGMA, lead_days)
+
+
+def _from_table(table: Sequence[tuple[float, float]], lead_days: npt.ArrayLike) -> np.ndarray:
+    """A (lead in days, sigma) table interpolated at ``lead_days``; leads <= 0 are
+    observed days (the table's first row, sigma 0)."""
     lead = np.clip(np.asarray(lead_days, dtype=float), 0.0, None)
-    x, y = zip(*F107A_FORECAST_SIGMA, strict=True)
+    x, y = zip(*table, strict=True)
     return np.asarray(np.interp(lead, x, y), dtype=float)
 
 
