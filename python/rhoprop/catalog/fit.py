@@ -72,23 +72,23 @@ MIN_DRAG_PARAMETER = 1e-4
 #: (docs/catalog-realism.md, "The day before the epoch"): every week's median along-track
 #: error fell against one day either side, the default until 2026-12-03.
 DEFAULT_SPAN = (-86400.0, 0.0)
-#: Default fit span of a deep-space orbit (period of 225 min or more, SDP4's), s: one day
-#: either side. Drag does not matter there, and a state in the middle of its arc is better
-#: pinned: 20 GEO / 20 GPS objects of 2023-11-13 fitted and run 6 days to their 2023-11-19
-#: element sets came within a median 13.2 / 2.2 km, against 17.2 / 2.4 km with the day
-#: before (``tests/test_deep_space.py``).
+#: Default fit span of an eccentric (e >= 0.1) deep-space orbit (period of 225 min or
+#: more, SDP4's), s: one day either side. Drag does not matter there, and a state in the
+#: middle of its arc is better pinned: 20 GEO / 20 GPS objects of 2023-11-13 fitted and
+#: run 6 days to their 2023-11-19 element sets came within a median 13.2 / 2.2 km,
+#: against 17.2 / 2.4 km with the day before (``tests/test_deep_space.py``, when this
+#: span was every deep-space orbit's).
 DEEP_SPACE_SPAN = (-86400.0, 86400.0)
-#: Fit span of a near-circular (e < 0.1) deep-space orbit with a period under 16 hours
-#: (GPS and other MEO), s: three days either side. Chosen on the four development weeks
-#: together (docs/catalog-realism.md, "Deep-space fit span"): against one day either
-#: side, GPS medians fell or held in every week, other MEO ones in three and held in the
-#: fourth; GEO ones rose in one week of four, so GEO keeps one day.
-MEO_SPAN = (-3 * 86400.0, 3 * 86400.0)
+#: Fit span of a near-circular (e < 0.1) deep-space orbit (GPS, other MEO, GEO), s: three
+#: days either side. Chosen on the four development weeks together (docs/catalog-realism.md,
+#: "Deep-space fit span"): against one day either side, GPS medians fell or held in every
+#: week, other MEO ones in three and held in the fourth (2026-12-03). GEO kept one day
+#: until its fits stopped holding SDP4's radius (:data:`LOOSE_RADIUS_REGIMES`); then
+#: three days brought its errors against BeiDou's precise orbits down at 6-47 h (47 h:
+#: 0.65 -> 0.53 km) and its weekly medians from 32.4 to 31.4 km summed (2026-12-06).
+NEAR_CIRCULAR_SPAN = (-3 * 86400.0, 3 * 86400.0)
 #: SDP4's deep-space limit of the period, min.
 DEEP_SPACE_PERIOD_MIN = 225.0
-#: Longest period of :data:`MEO_SPAN`, min (16 hours, the MEO/GEO split of the TLE
-#: accuracy regimes).
-MEO_PERIOD_MAX_MIN = 16 * 60.0
 #: TLE-accuracy regimes whose fits weight SDP4's radius only as its along-track position
 #: (the regime's along-track accuracy, 5 km for GEO, not its 2 km radial). In
 #: geosynchronous orbits SDP4's radius and its period disagree by about 130 m of
@@ -103,14 +103,14 @@ LOOSE_RADIUS_REGIMES = ("GEO",)
 
 
 def default_span(sat: Any) -> tuple[float, float]:
-    """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch): :data:`MEO_SPAN` for a
-    near-circular deep-space orbit under 16 hours, :data:`DEEP_SPACE_SPAN` for another
-    deep-space orbit, else :data:`DEFAULT_SPAN`."""
+    """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch): :data:`NEAR_CIRCULAR_SPAN`
+    for a near-circular deep-space orbit, :data:`DEEP_SPACE_SPAN` for another deep-space
+    orbit, else :data:`DEFAULT_SPAN`."""
     period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
     if period < DEEP_SPACE_PERIOD_MIN:
         return DEFAULT_SPAN
-    if period < MEO_PERIOD_MAX_MIN and sat.ecco < 0.1:
-        return MEO_SPAN
+    if sat.ecco < 0.1:
+        return NEAR_CIRCULAR_SPAN
     return DEEP_SPACE_SPAN
 
 
