@@ -48,11 +48,11 @@ def _pairs(test_data, revs: tuple[float, float], count: int):
     # Measured on 40 objects each: GEO 12.0 km since 2026-12-06, when GEO fits stopped
     # holding SDP4's radius and took three days either side (8.6 km before: closer to
     # these later element sets, which are SDP4's too, and 5x worse against precise
-    # orbits, the test below; 13.4 with the single
-    # "above LEO" TLE accuracy weighting the fit, 13.2 with C22/S22 alone, 15.3 with it
-    # 1.55x too strong, 20.6 km before the deep-space forces), GPS 1.23 km (1.75 fitted
-    # over one day either side; 1.9; 2.2; 2.3; 5.0 km before); SGP4 itself 8.1 and 1.0 km.
-    # On these 20: 12.8 (8.5 before) and 1.47 km.
+    # orbits, the test below; 13.4 with the single "above LEO" TLE accuracy weighting
+    # the fit, 13.2 with C22/S22 alone, 15.3 with it 1.55x too strong, 20.6 km before
+    # the deep-space forces), GPS 1.23 km (1.75 fitted over one day either side; 1.9;
+    # 2.2; 2.3; 5.0 km before); SGP4 itself 8.1 and 1.0 km. On these 20: 12.8 (8.5
+    # before) and 1.47 km.
     [((0.99, 1.01), 15.0), ((1.9, 2.1), 3.5)],
     ids=["GEO", "GPS"],
 )
@@ -175,7 +175,8 @@ def test_geostationary_fits_follow_their_period_against_precise_orbits(test_data
         true = np.asarray(
             itrs.transform_to(coordinates.GCRS(obstime=t)).cartesian.xyz.to_value(units.m)
         )
-        mine = rp.frames.teme_to_gcrf(end_utc, res.mean[i, -1])[:3]
+        # the run's axes are the TEME of the object's epoch
+        mine = rp.frames.teme_to_gcrf(cat[i].state.epoch, res.mean[i, -1])[:3]
         sat = Satrec.twoline2rv(*newest[prn][1].splitlines()[1:])
         whole = float(np.floor(t.jd))
         _, r, v = sat.sgp4(whole, t.jd - whole)
