@@ -271,3 +271,17 @@ def test_indices_as_of_an_epoch_read_nothing_after_it(indices, tmp_path: Path) -
         indices.as_of(indices._sol_first.astype("datetime64[ns]") + np.timedelta64(30, "D"))
     with pytest.raises(ValueError, match="days must be"):
         indices.as_of(epoch, days=0.0)
+    # The other rules of SpaceWeather.as_of: to the 27 days' mean of the hours, or held.
+    to_mean = indices.as_of(epoch, dtc_target="mean").at(np.array([three]))[0, 8]
+    mean_level = indices.at(past)[:, 8].mean()
+    assert to_mean == np.round(mean_level + (dtc - mean_level) * np.exp(-72 / 48))
+    held = indices.as_of(epoch, dtc_relax_days=float("inf"))
+    assert held.at(np.array([hour + np.timedelta64(24 * 9, "h")]))[0, 8] == dtc
+    slow = indices.as_of(epoch, dtc_relax_days=6.0).at(np.array([three]))[0, 8]
+    assert slow == np.round(level + (dtc - level) * np.exp(-72 / 144))
+    with pytest.raises(ValueError, match="dtc_target must be one of"):
+        indices.as_of(epoch, dtc_target="mode")
+    with pytest.raises(ValueError, match="dtc_relax_days must lie"):
+        indices.as_of(epoch, dtc_relax_days=-1.0)
+    with pytest.raises(TypeError, match="dtc_relax_days must be a number of days"):
+        indices.as_of(epoch, dtc_relax_days="2")

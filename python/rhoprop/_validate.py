@@ -60,6 +60,17 @@ def count(name: str, value: object, minimum: int = 0) -> int:
     return int(value)
 
 
+def days(name: str, value: object) -> float:
+    """A number of days in 0-3660 (ten years), as a float; TypeError or ValueError
+    naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number of days, got {type(value).__name__}")
+    out = float(value)
+    if not np.isfinite(out) or not 0.0 <= out <= 3660.0:
+        raise ValueError(f"{name} must lie in 0-3660 days, got {value}")
+    return out
+
+
 def seconds(name: str, value: object) -> float:
     """A finite duration in seconds from a number, ``datetime.timedelta`` or
     ``timedelta64`` (NaT is a ValueError naming ``name``)."""

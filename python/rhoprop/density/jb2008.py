@@ -39,7 +39,12 @@ from .. import _core, _validate
 from ..cache import cache_dir
 from ..errors import OutsideRecordError
 from ..spaceweather import SpaceWeather, space_weather_argument
-from ..spaceweather.record import AS_OF_AP_RELAX_DAYS, AS_OF_AP_TARGET, AS_OF_DAYS
+from ..spaceweather.record import (
+    AP_TARGETS,
+    AS_OF_AP_RELAX_DAYS,
+    AS_OF_AP_TARGET,
+    AS_OF_DAYS,
+)
 from ..time import EpochLike, EpochsLike, to_datetime64
 from . import calibrated as cal
 from .calibrated import Preset
@@ -253,21 +258,34 @@ class Jb2008Indices:
         out._note = note
         return out
 
-    def as_of(self, epoch: EpochLike, days: float = AS_OF_DAYS) -> Jb2008Indices:
+    def as_of(
+        self,
+        epoch: EpochLike,
+        days: float = AS_OF_DAYS,
+        dtc_relax_days: float = AS_OF_AP_RELAX_DAYS,
+        dtc_target: str = AS_OF_AP_TARGET,
+    ) -> Jb2008Indices:
         """The indices as a forecaster had them at ``epoch`` (UTC), by the rules of
         :meth:`rhoprop.SpaceWeather.as_of` (one forecast rule for every model): the
         solar rows of the days before the epoch's day as observed, then ``days`` days
         (default 60) of persistence of the last observed day's F10, S10, M10 and Y10; the
         81-day centred means whose window reaches past the epoch replaced by each
-        index's mean over the last 81 observed days; dTc observed to the epoch's hour,
-        then relaxing from it to the last 27 days' level (as ap's:
-        :data:`~rhoprop.spaceweather.record.AS_OF_AP_TARGET`) with an e-folding time of
-        :data:`~rhoprop.spaceweather.record.AS_OF_AP_RELAX_DAYS` (2 days). Nothing after
-        the epoch is read. Raises :class:`~rhoprop.OutsideRecordError` when the files do
-        not hold the 81 days before the epoch."""
+        index's mean over the last 81 observed days; dTc (K) observed to the epoch's
+        hour, then relaxing from it to the last 27 days' level with an e-folding time of
+        ``dtc_relax_days`` (default 2 days; ``float("inf")`` holds it), the level being
+        ``dtc_target``: the ``"median"`` of the 27 daily means (the default) or the
+        ``"mean"`` of the hours, as ``SpaceWeather.as_of`` takes ap's
+        (``ap_relax_days``, ``ap_target``). Nothing after the epoch is read. Raises
+        :class:`~rhoprop.OutsideRecordError` when the files do not hold the 81 days
+        before the epoch."""
         t = to_datetime64(epoch, "epoch")
         if not np.isfinite(days) or not 0 < days <= 366:
             raise ValueError(f"days must be a number of days in (0, 366], got {days!r}")
+        if dtc_target not in AP_TARGETS:
+            raise ValueError(f"dtc_target must be one of {AP_TARGETS}, got {dtc_target!r}")
+        relax_days = (
+            np.inf if dtc_relax_days == np.inf else _validate.days("dtc_relax_days", dtc_relax_days)
+        )
         day = t.astype("datetime64[D]")
         observed = int((day - self._sol_first).astype(int))  # rows before the epoch's day
         hour = t.astype("datetime64[h]")
@@ -292,13 +310,10 @@ class Jb2008Indices:
         dtc[:seen] = self._dtc[:seen]
         last, hours = self._dtc[seen - 1], self._dtc[seen - 27 * 24 : seen]
         # The last 27 days' level as SpaceWeather.as_of takes ap's: the mean, or the
-        # median of the daily means (AS_OF_AP_TARGET).
-        month = (
-            hours.mean() if AS_OF_AP_TARGET == "mean" else np.median(hours.reshape(27, 24).mean(1))
-        )
+        # median of the daily means.
+        month = hours.mean() if dtc_target == "mean" else np.median(hours.reshape(27, 24).mean(1))
         lead_h = np.arange(1, dtc_hours - seen + 1, dtype=float)
-        relax = 24.0 * AS_OF_AP_RELAX_DAYS
-        dtc[seen:] = month + (last - month) * np.exp(-lead_h / relax)
+        dtc[seen:] = month + (last - month) * np.exp(-lead_h / (24.0 * relax_days))
         stamp = np.datetime_as_string(t, unit="s")
         return Jb2008Indices._from_arrays(
             self, self._sol_first, sol, self._dtc_first, dtc, f"as of {stamp}"

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .. import _validate
 from ..errors import OutsideRecordError, PredictedDriversWarning
 from ..time import EpochLike, EpochsLike, to_datetime64, to_datetime64_array
 from .celestrak import GEOMAGNETIC, MONTHLY_PREDICTED, SCALARS, SECTIONS, check_record, read
@@ -106,15 +107,6 @@ AS_OF_AP_RELAX_DAYS = 2.0
 #: the forecast at the median, 1995-2023; ``benches/forecast_error.py``).
 AS_OF_AP_TARGET = "median"
 AP_TARGETS = ("mean", "median")
-
-
-def _validate_days(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a number of days, got {type(value).__name__}")
-    days = float(value)
-    if not np.isfinite(days) or not 0.0 <= days <= 3660.0:
-        raise ValueError(f"{name} must lie in 0-3660 days, got {value}")
-    return days
 
 
 def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -578,9 +570,9 @@ class SpaceWeather:
         epoch's day. Raises :class:`~rhoprop.OutsideRecordError` when fewer than 81 observed days
         precede the epoch."""
         t = to_datetime64(epoch, "epoch")
-        horizon = _validate_days("days", days)
+        horizon = _validate.days("days", days)
         relax = (
-            np.inf if ap_relax_days == np.inf else _validate_days("ap_relax_days", ap_relax_days)
+            np.inf if ap_relax_days == np.inf else _validate.days("ap_relax_days", ap_relax_days)
         )
         for name, n in (("ap_days", ap_days), ("f107_days", f107_days)):
             if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
