@@ -433,7 +433,8 @@ def build_parser() -> argparse.ArgumentParser:
         const=True,
         default="auto",
         help="fit every object's state and Cd*A/m to its SGP4 positions over the day "
-        "before its epoch (one day either side for deep-space orbits) with rhoprop's "
+        "before its epoch (deep-space orbits: three days either side, one if eccentric) "
+        "with rhoprop's "
         "dynamics and the model (over 100 objects/s on 2 cores). Default: every object "
         "whose drag comes from the element set, at any altitude",
     )

@@ -362,8 +362,8 @@ class FitSettings:
             field covering every object's span and altitudes; a ``DensityField`` is used
             as given.
         span: fit span, s from each epoch (None: :func:`~rhoprop.catalog.fit.default_span`,
-            the day before the epoch, one day either side for deep-space orbits, three for
-            GPS and MEO).
+            the day before the epoch; for deep-space orbits three days either side of it
+            when near-circular, one when eccentric).
         dynamics: the fit's :class:`~rhoprop.Dynamics` (None: ``Dynamics(zonal_degree=4)``,
             J2..J4, the degree of catalog runs; fit with the degree the objects will be
             propagated with). The fit integrates on its own RK8 grid down to the default
@@ -702,9 +702,10 @@ def fit_objects(
 ) -> list[CatalogObject | Exception]:
     """Each object's state and Cd*A/m fitted to its element set's SGP4 positions
     (:func:`~rhoprop.catalog.fit.fit_element_sets`, ``span`` s around the epoch, default
-    :func:`~rhoprop.catalog.fit.default_span`: the day before it, one day either side for
-    deep-space orbits, three for GPS and MEO; with a span reaching past the epoch, an
-    orbit that comes down within it is fitted to the part before the epoch instead), in
+    :func:`~rhoprop.catalog.fit.default_span`: the day before it; for deep-space orbits
+    three days either side when near-circular, one when eccentric; with a span reaching
+    past the epoch, an orbit that comes down within it is fitted to the part before the
+    epoch instead), in
     the core many objects per call (:func:`~rhoprop.catalog.fit.fit_histories`;
     ``threads`` calls at once), in
     epoch order so that the fits of a call share their day tiles. ``history``: {NORAD
