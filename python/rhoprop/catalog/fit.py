@@ -103,17 +103,15 @@ DEEP_SPACE_PERIOD_MIN = 225.0
 LOOSE_RADIUS_REGIMES = ("GEO",)
 
 
-def _near_circular_deep_space(state: np.ndarray) -> bool:
-    """Whether the TEME state ``state`` (m, m/s) is a near-circular (e < 0.1) deep-space
-    orbit (period of :data:`DEEP_SPACE_PERIOD_MIN` or more), as :func:`default_span`
-    tells them."""
-    r, v = np.asarray(state[:3], dtype=float), np.asarray(state[3:6], dtype=float)
-    inverse_a = 2.0 / float(np.linalg.norm(r)) - float(v @ v) / MU
-    if inverse_a <= 0:
-        return False
-    period_min = 2 * np.pi * np.sqrt(inverse_a**-3 / MU) / 60.0
-    e = np.linalg.norm(np.cross(v, np.cross(r, v)) / MU - r / np.linalg.norm(r))
-    return bool(period_min >= DEEP_SPACE_PERIOD_MIN and e < 0.1)
+def _near_circular_deep_space(epoch: np.datetime64, state: np.ndarray) -> bool:
+    """Whether the TEME state ``state`` (m, m/s) at ``epoch`` is a near-circular (e < 0.1)
+    deep-space orbit (period of :data:`DEEP_SPACE_PERIOD_MIN` or more), as
+    :func:`default_span` tells them."""
+    from ..propagation.propagate import axis_and_eccentricity
+
+    a, e = axis_and_eccentricity(OrbitState(epoch, state[:3], state[3:6], "TEME"))
+    period_min = 2 * np.pi * np.sqrt(a**3 / MU) / 60.0
+    return bool(np.isfinite(a) and period_min >= DEEP_SPACE_PERIOD_MIN and e < 0.1)
 
 
 def default_span(sat: Any) -> tuple[float, float]:
@@ -767,7 +765,7 @@ def _run_chunk(
     ]
     where = OrbitState(t0, jobs[0].p0[:3], jobs[0].p0[3:6], "TEME")
     # A call holds the objects of one fit span, so these orbits come alone.
-    deep = all(_near_circular_deep_space(j.p0) for j in jobs)
+    deep = all(_near_circular_deep_space(j.epoch, j.p0) for j in jobs)
     config = _core.FitConfig(
         step=DEEP_SPACE_FIT_STEP if deep else FIT_STEP,
         zonal_degree=zonal_degree,
