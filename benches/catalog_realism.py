@@ -332,13 +332,19 @@ def week_paths(start: str, truth: str) -> tuple[list[Path], Path]:
 
 
 def as_of_options(text: str | None) -> dict[str, Any]:
-    """``SpaceWeather.as_of`` keywords from "F107_DAYS,AP_DAYS,AP_RELAX_DAYS" (None: the
-    library's defaults)."""
+    """``SpaceWeather.as_of`` keywords from "F107_DAYS,AP_DAYS,AP_RELAX_DAYS[,AP_TARGET
+    [,recurrence]]" (None: the library's defaults)."""
     if not text:
         return {}
-    f, a, r, *target = text.split(",")
-    out = {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
-    return out | ({"ap_target": target[0]} if target else {})
+    f, a, r, *rest = text.split(",")
+    out: dict[str, Any] = {"f107_days": int(f), "ap_days": int(a), "ap_relax_days": float(r)}
+    if rest:
+        out["ap_target"] = rest[0]
+    if rest[1:]:
+        if rest[1] != "recurrence":
+            raise ValueError(f"the fifth field of --as-of is 'recurrence', got {rest[1]!r}")
+        out["recurrence"] = True
+    return out
 
 
 def run_week(
@@ -643,8 +649,8 @@ def main() -> None:
     parser.add_argument(
         "--as-of",
         default=None,
-        help="F107_DAYS,AP_DAYS,AP_RELAX_DAYS of the forecast mode's SpaceWeather.as_of "
-        "(default: the library's)",
+        help="F107_DAYS,AP_DAYS,AP_RELAX_DAYS[,AP_TARGET[,recurrence]] of the forecast "
+        "mode's SpaceWeather.as_of (default: the library's)",
     )
     parser.add_argument(
         "--per-object",

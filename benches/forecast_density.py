@@ -105,8 +105,8 @@ def main() -> None:
     parser.add_argument(
         "--rules",
         default="1,1,2",
-        help="as_of rules F107_DAYS,AP_DAYS,AP_RELAX_DAYS separated by ';' (1,1,2: the "
-        "library's default)",
+        help="as_of rules F107_DAYS,AP_DAYS,AP_RELAX_DAYS[,AP_TARGET[,recurrence]] "
+        "separated by ';' (1,1,2: the library's default)",
     )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = parser.parse_args()

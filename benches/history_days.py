@@ -244,7 +244,8 @@ def main() -> None:
     parser.add_argument(
         "--as-of",
         default=None,
-        help="F107_DAYS,AP_DAYS,AP_RELAX_DAYS of SpaceWeather.as_of (default: the library's)",
+        help="F107_DAYS,AP_DAYS,AP_RELAX_DAYS[,AP_TARGET[,recurrence]] of SpaceWeather.as_of "
+        "(default: the library's)",
     )
     parser.add_argument(
         "--sensor",

@@ -285,3 +285,39 @@ def test_indices_as_of_an_epoch_read_nothing_after_it(indices, tmp_path: Path) -
         indices.as_of(epoch, dtc_relax_days=-1.0)
     with pytest.raises(TypeError, match="dtc_relax_days must be a number of days"):
         indices.as_of(epoch, dtc_relax_days="2")
+
+
+def test_indices_as_of_with_the_27_day_recurrence(indices) -> None:
+    # recurrence=True, from the raw file's rows: F10 of forecast day 2009-05-20 (3 days
+    # after the last observed, 05-17) is 05-17's times (F10 of 04-23 / F10 of 04-20) ** w(3)
+    # (F10.7's weight, 0.16 at 3 days); dTc relaxes to the 27 days' typical
+    # level moved 0.4 of the way towards the mean of the days 27 +- 1 before the hour's.
+    from rhoprop.spaceweather.record import AP_RECURRENCE_WEIGHT, F107_RECURRENCE_WEIGHT
+
+    epoch = np.datetime64("2009-05-18T07:19")
+    ahead = indices.as_of(epoch, recurrence=True)
+    rows = {
+        (int(f[0]), int(f[1])): [float(v) for v in f[3:11]]
+        for f in (ln.split() for ln in indices.solfsmy.read_text().splitlines())
+        if f and f[0].isdigit()
+    }
+    weight = dict(F107_RECURRENCE_WEIGHT)[3.0]
+    expected = rows[(2009, 137)][0] * (rows[(2009, 113)][0] / rows[(2009, 110)][0]) ** weight
+    f10 = ahead.at(np.array([np.datetime64("2009-05-21T12:00")]))[0, 0]  # F10 lags a day
+    assert f10 == pytest.approx(expected, rel=1e-12)
+    assert (
+        indices.as_of(epoch).at(np.array([np.datetime64("2009-05-21T12:00")]))[0, 0]
+        == (rows[(2009, 137)][0])
+    )
+    hour = np.datetime64("2009-05-18T07")
+    dtc = indices.at(np.array([hour]))[0, 8]
+    past = hour - np.arange(27 * 24)[::-1] * np.timedelta64(1, "h")
+    typical = np.median(indices.at(past)[:, 8].reshape(27, 24).mean(axis=1))
+    back = np.datetime64("2009-04-23T00") + np.arange(72) * np.timedelta64(1, "h")
+    level = typical + AP_RECURRENCE_WEIGHT * (indices.at(back)[:, 8].mean() - typical)
+    three = hour + np.timedelta64(72, "h")
+    want = np.round(level + (dtc - level) * np.exp(-72 / 48))
+    assert ahead.at(np.array([three]))[0, 8] == want
+    assert want != indices.as_of(epoch).at(np.array([three]))[0, 8]  # 29 K against 28 K
+    with pytest.raises(TypeError, match="recurrence must be a bool"):
+        indices.as_of(epoch, recurrence=1)

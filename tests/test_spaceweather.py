@@ -594,6 +594,47 @@ def test_as_of_is_what_a_forecaster_had(sw):
     assert sw.as_of("2002-09-08T06:00").span[1] < np.datetime64("2002-11-08")
 
 
+def test_as_of_recurrence_repeats_one_solar_rotation_earlier():
+    # recurrence=True, checked against the bundled record's rows read by date: F10.7 of
+    # forecast day D (L days after the last observed day, 2023-11-12) is the last day's
+    # times (F(D - 27) / F(2023-10-16)) ** w(L); ap relaxes (2 days) from the last day's
+    # mean to the 27 days' median day moved 0.4 of the way, in log(ap + 4), to the mean
+    # of the days D - 28..D - 26.
+    from rhoprop.spaceweather.record import AP_RECURRENCE_WEIGHT, F107_RECURRENCE_WEIGHT
+
+    record = SpaceWeather()
+    rows = record.section == 0
+
+    def row(day: str) -> int:
+        return int(np.flatnonzero(rows & (record.date == np.datetime64(day)))[0])
+
+    f = record.as_of("2023-11-13T00:00", recurrence=True)
+    plain = record.as_of("2023-11-13T00:00")
+    weights = dict(F107_RECURRENCE_WEIGHT)
+    last = np.datetime64("2023-11-12")
+    month = record.ap[row("2023-10-17") : row("2023-11-12") + 1]
+    median = np.median(month.mean(axis=1))
+    ap_last = record.ap[row("2023-11-12")].mean()
+    for lead in (1, 3, 5):
+        day = last + np.timedelta64(lead, "D")
+        got = np.flatnonzero(f.date == day)[0]
+        before = record.f107_obs[row(str(day - 27))] / record.f107_obs[row("2023-10-16")]
+        expected = record.f107_obs[row("2023-11-12")] * before ** weights[float(lead)]
+        assert f.f107_obs[got] == pytest.approx(expected, rel=1e-12), lead
+        assert plain.f107_obs[got] == record.f107_obs[row("2023-11-12")]
+        back = record.ap[row(str(day - 28)) : row(str(day - 26)) + 1].mean()
+        level = (median + 4) * ((back + 4) / (median + 4)) ** AP_RECURRENCE_WEIGHT - 4
+        hours = 24.0 * (lead - 1) + 3.0 * np.arange(8) + 1.5
+        expected_ap = level + (ap_last - level) * np.exp(-hours / 48.0)
+        np.testing.assert_allclose(f.ap[got], expected_ap, rtol=1e-12, err_msg=str(lead))
+    # The days observed before the epoch are the record's.
+    early = row("2023-11-01")
+    assert (
+        f.f107_obs[np.flatnonzero(f.date == np.datetime64("2023-11-01"))[0]]
+        == (record.f107_obs[early])
+    )
+
+
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
@@ -602,6 +643,7 @@ def test_as_of_is_what_a_forecaster_had(sw):
         ({"epoch": "2002-09-08", "ap_days": 2.5}, TypeError, "ap_days must be an integer"),
         ({"epoch": "2002-09-08", "days": -1}, ValueError, "days must lie in 0-3660"),
         ({"epoch": "2002-09-08", "ap_target": "mode"}, ValueError, "ap_target must be one"),
+        ({"epoch": "2002-09-08", "recurrence": "yes"}, TypeError, "recurrence must be a bool"),
     ],
 )
 def test_as_of_refuses(sw, kwargs, error, match):

@@ -40,10 +40,13 @@ from ..cache import cache_dir
 from ..errors import OutsideRecordError
 from ..spaceweather import SpaceWeather, space_weather_argument
 from ..spaceweather.record import (
+    AP_RECURRENCE_WEIGHT,
     AP_TARGETS,
     AS_OF_AP_RELAX_DAYS,
     AS_OF_AP_TARGET,
     AS_OF_DAYS,
+    F107_RECURRENCE_WEIGHT,
+    _from_table,
 )
 from ..time import EpochLike, EpochsLike, to_datetime64
 from . import calibrated as cal
@@ -264,6 +267,7 @@ class Jb2008Indices:
         days: float = AS_OF_DAYS,
         dtc_relax_days: float = AS_OF_AP_RELAX_DAYS,
         dtc_target: str = AS_OF_AP_TARGET,
+        recurrence: bool = False,
     ) -> Jb2008Indices:
         """The indices as a forecaster had them at ``epoch`` (UTC), by the rules of
         :meth:`rhoprop.SpaceWeather.as_of` (one forecast rule for every model): the
@@ -275,7 +279,11 @@ class Jb2008Indices:
         ``dtc_relax_days`` (default 2 days; ``float("inf")`` holds it), the level being
         ``dtc_target``: the ``"median"`` of the 27 daily means (the default) or the
         ``"mean"`` of the hours, as ``SpaceWeather.as_of`` takes ap's
-        (``ap_relax_days``, ``ap_target``). Nothing after the epoch is read. Raises
+        (``ap_relax_days``, ``ap_target``). ``recurrence=True`` adds the 27-day
+        recurrence as ``SpaceWeather.as_of(recurrence=True)`` does: each daily index
+        moved by F10.7's weights of its own change one rotation earlier, dTc's level
+        moved linearly towards the days 27 +- 1 before by ap's weight. Nothing after the
+        epoch is read. Raises
         :class:`~rhoprop.OutsideRecordError` when the files do not hold the 81 days
         before the epoch."""
         t = to_datetime64(epoch, "epoch")
@@ -283,6 +291,8 @@ class Jb2008Indices:
             raise ValueError(f"days must be a number of days in (0, 366], got {days!r}")
         if dtc_target not in AP_TARGETS:
             raise ValueError(f"dtc_target must be one of {AP_TARGETS}, got {dtc_target!r}")
+        if not isinstance(recurrence, (bool, np.bool_)):
+            raise TypeError(f"recurrence must be a bool, got {type(recurrence).__name__}")
         relax_days = (
             np.inf if dtc_relax_days == np.inf else _validate.days("dtc_relax_days", dtc_relax_days)
         )
@@ -301,8 +311,13 @@ class Jb2008Indices:
         sol[:observed] = self._sol[:observed]
         past = self._sol[:observed]
         daily, means = (0, 2, 4, 6), (1, 3, 5, 7)
+        # Forecast day j lies j + 1 days after the last observed one (recurrence: one
+        # rotation earlier is observed up to j = 26; later days keep j = 26's change).
+        lead_d = np.minimum(np.arange(n_new) + 1, 27)
+        weight = _from_table(F107_RECURRENCE_WEIGHT, lead_d) if recurrence else 0.0 * lead_d
         for d, m in zip(daily, means, strict=True):
-            sol[observed:, d] = past[-1, d]
+            change = past[observed - 28 + lead_d, d] / past[-28, d]
+            sol[observed:, d] = past[-1, d] * np.where(np.isfinite(change), change, 1.0) ** weight
             # Centred 81-day means whose window reaches past the epoch are not known yet.
             sol[observed - 40 :, m] = past[-81:, d].mean()
         dtc_hours = seen + int(24 * n_new)
@@ -313,7 +328,16 @@ class Jb2008Indices:
         # median of the daily means.
         month = hours.mean() if dtc_target == "mean" else np.median(hours.reshape(27, 24).mean(1))
         lead_h = np.arange(1, dtc_hours - seen + 1, dtype=float)
-        dtc[seen:] = month + (last - month) * np.exp(-lead_h / (24.0 * relax_days))
+        level = np.full(len(lead_h), month)
+        if recurrence:
+            # Each hour's day one rotation earlier and the days either side, complete
+            # days before the epoch's (hours past 25 days ahead keep that day's).
+            today = (seen - 1) // 24
+            target = np.minimum((seen - 1 + lead_h.astype(int)) // 24, today + 25)
+            days_dtc = self._dtc[: today * 24].reshape(today, 24).mean(1)
+            back = target[:, None] - 27 + np.arange(-1, 2)[None, :]
+            level = month + AP_RECURRENCE_WEIGHT * (days_dtc[back].mean(1) - month)
+        dtc[seen:] = level + (last - level) * np.exp(-lead_h / (24.0 * relax_days))
         stamp = np.datetime_as_string(t, unit="s")
         return Jb2008Indices._from_arrays(
             self, self._sol_first, sol, self._dtc_first, dtc, f"as of {stamp}"
