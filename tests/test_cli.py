@@ -20,6 +20,19 @@ def test_help_lists_commands(capsys):
     assert "paper" in out and "usage: rhoprop" in out
 
 
+@pytest.mark.parametrize("command", ["catalog", "reentry", "screen"])
+def test_as_of_must_be_an_epoch(command, capsys, tmp_path):
+    # Refused by the parser (exit 2, the option named), before any output folder exists.
+    args = [command, "x.tle", "--as-of", "last tuesday", "--out", str(tmp_path / "o")]
+    if command != "reentry":
+        args += ["--end", "2023-11-16"]
+    with pytest.raises(SystemExit) as info:
+        main(args)
+    assert info.value.code == 2
+    assert "argument --as-of: epoch 'last tuesday' is not an ISO-8601" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
 def test_every_option_with_a_default_names_it_in_the_help():
     # A newcomer reads --help for what a run does without an option: every option with a
     # default (other than on/off switches and None) says it, once.

@@ -178,3 +178,34 @@ def test_data_refresh_command(monkeypatch, capsys):
 def test_catalog_models_use_the_forecast_record():
     model = job.model_by_name("2.1")
     assert "forecast from" in repr(model.space_weather)
+
+
+def test_command_models_as_of_an_epoch_are_what_a_forecaster_had():
+    # --as-of of rhoprop catalog / reentry / screen: every model on the record as of the
+    # epoch, its drivers after the epoch those of SpaceWeather.as_of, before it the
+    # record's own; the benchmark exponential reads no space weather and refuses it.
+    epoch = "2023-11-13T00:00Z"
+    model = job.model_by_name("2.1", as_of=epoch)
+    assert "as of 2023-11-13T00:00:00" in model.space_weather.source
+    expected = rp.SpaceWeather.cached().as_of(epoch)
+    after = np.array(["2023-11-15T12:00"], dtype="datetime64[ns]")
+    before = np.array(["2023-11-01T12:00"], dtype="datetime64[ns]")
+    with pytest.warns(rp.errors.PredictedDriversWarning, match=r"as of 2023-11-13T00:00:00"):
+        got = model.space_weather.drivers(after)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", rp.errors.PredictedDriversWarning)
+        assert got.f107[0] == expected.drivers(after).f107[0]
+    assert got.f107[0] != rp.SpaceWeather.cached().drivers(after).f107[0]  # 137.2 against 123.8
+    assert (
+        model.space_weather.drivers(before).ap[0, 0]
+        == (rp.SpaceWeather.cached().drivers(before).ap[0, 0])
+    )
+    families = job.models_by_name("families", as_of=epoch)
+    assert len(families) == 3
+    for name, m in families.items():
+        sw = getattr(m, "space_weather", None)
+        assert sw is not None and "as of 2023-11-13" in sw.source, name
+    if "JB2008" in families:  # with JB2008's index files: its indices as of the epoch too
+        assert "as of 2023-11-13T00:00:00" in repr(families["JB2008"].indices)
+    with pytest.raises(ValueError, match="'exponential' reads no space weather"):
+        job.model_by_name("exponential", as_of=epoch)

@@ -61,6 +61,7 @@ def _catalog(args: argparse.Namespace) -> int:
         start=args.start,
         oem=args.oem,
         table_format=args.format,
+        as_of=args.as_of,
     ).run()
     return 0
 
@@ -112,6 +113,7 @@ def _reentry(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         command=args.command_line,
         table_format=args.format,
+        as_of=args.as_of,
     ).run()
     return 0
 
@@ -223,6 +225,31 @@ def _table_format(parser: argparse.ArgumentParser, default: str, tables: str) ->
         choices=TABLE_FORMATS,
         default=default,
         help=f"format of {tables}: parquet (typed columns, compressed) or csv (any spreadsheet)",
+    )
+
+
+def _utc_epoch(text: str) -> str:
+    """An argparse type: a UTC ISO epoch (argparse names the option in its error)."""
+    from .time import to_datetime64
+
+    try:
+        to_datetime64(text, "epoch")
+    except (TypeError, ValueError) as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return text
+
+
+def _as_of(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--as-of",
+        type=_utc_epoch,
+        default=None,
+        metavar="EPOCH",
+        help="run as a forecaster would have at EPOCH (UTC ISO): the space weather observed "
+        "before it, the library's forecast after (persistence of F10.7, ap relaxing to the "
+        "last 27 days' typical day, with their forecast sigmas). Default: the record as "
+        "refreshed, observed and then its predictions; for past epochs that is a "
+        "hindcast, which flatters the density model",
     )
 
 
@@ -476,6 +503,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the ephemeris and the summary (csv: the ephemeris's metadata in ephemeris.meta.json)",
     )
     _overwrite(cat)
+    _as_of(cat)
     cat.set_defaults(run=_catalog)
     reentry = sub.add_parser(
         "reentry",
@@ -526,6 +554,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _table_format(reentry, "csv", "the reentry table (csv: epochs as ISO text)")
     _overwrite(reentry)
+    _as_of(reentry)
     reentry.set_defaults(run=_reentry)
     conj = sub.add_parser(
         "conjunction",
@@ -651,6 +680,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _table_format(scr, "parquet", "the event table")
     _overwrite(scr)
+    _as_of(scr)
     scr.set_defaults(run=_screen)
     data = sub.add_parser("data", help="manage data files (space weather, JB2008 indices)")
     data_sub = data.add_subparsers(dest="data_command", metavar="ACTION")

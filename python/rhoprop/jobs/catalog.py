@@ -213,7 +213,9 @@ class CatalogJob:
     after: the newer few have no valid output before their epoch). ``table_format``:
     ``"parquet"`` (default) or ``"csv"``, the format of the ephemeris and the summary
     (``ephemeris.csv``, ``summary.csv``; the ephemeris's metadata then in
-    ``ephemeris.meta.json``). Returns the paths written."""
+    ``ephemeris.meta.json``). ``as_of`` (UTC ISO): the space weather as a forecaster had
+    it then (:func:`~rhoprop.jobs.models.record_as_of`; default: the record as refreshed,
+    observed and predicted). Returns the paths written."""
 
     file: str | Path
     end: str
@@ -237,6 +239,7 @@ class CatalogJob:
     start: str | None = None
     oem: bool = False
     table_format: TableFormat = "parquet"
+    as_of: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "table_format", format_argument(self.table_format))
@@ -250,7 +253,7 @@ class CatalogJob:
             raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
         if self.scheduler:
             need_dask()
-        atmosphere = model_by_name(self.model)
+        atmosphere = model_by_name(self.model, self.as_of)
         cat = _load(
             self.file,
             self.skip_bad,
@@ -392,7 +395,8 @@ class ReentryJob:
     (:func:`~rhoprop.catalog.reentry`). ``table_format``: ``"csv"`` (default, the epochs
     as ISO text) or ``"parquet"`` (``out/reentry.parquet``, the columns of
     :meth:`~rhoprop.catalog.ReentryResult.table`: epochs typed, NaT beyond the horizon).
-    Returns the paths written."""
+    ``as_of`` (UTC ISO): the space weather as a forecaster had it then (default: the
+    record as refreshed). Returns the paths written."""
 
     file: str | Path
     out: str | Path
@@ -406,6 +410,7 @@ class ReentryJob:
     overwrite: bool = False
     command: str | None = None
     table_format: TableFormat = "csv"
+    as_of: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "table_format", format_argument(self.table_format))
@@ -417,7 +422,7 @@ class ReentryJob:
 
         from ..catalog.reentry_windows import reentry, resolved_history
 
-        atmosphere = model_by_name(self.model)
+        atmosphere = model_by_name(self.model, self.as_of)
         # reentry() itself predicts a self.history once (history="newest") or each element set
         cat = _load(self.file, self.skip_bad, history="each")
         for where, message in cat.skipped:

@@ -12,22 +12,36 @@ from ..propagation.methods import NAMES as METHOD_NAMES
 from ..propagation.methods import Method
 from ..propagation.methods import from_name as _method_from_name
 from ..spaceweather import SpaceWeather
+from ..time import EpochLike
 
 #: The ``--model`` names of one model: NRLMSIS versions and the benchmark exponential.
 MODEL_NAMES = ("2.1", "2.0", "00", "exponential")
 
 
-def model_by_name(name: str) -> DensityModel:
-    """An NRLMSIS version ("2.1", "2.0", "00") or the benchmark exponential atmosphere with
-    20 % relative sigma ("exponential")."""
+def record_as_of(as_of: EpochLike | None = None) -> SpaceWeather:
+    """The space weather of the commands: the last refreshed record (else the bundled
+    one) with its predictions usable as forecast drivers (uncertainty growing with lead
+    time, PredictedDriversWarning); with ``as_of`` (UTC) the record as a forecaster had
+    it then (:meth:`~rhoprop.SpaceWeather.as_of`: observed before it, the library's
+    forecast after), to run a past epoch as it could have been run."""
+    record = SpaceWeather.cached()
+    return record.with_forecast() if as_of is None else record.as_of(as_of)
+
+
+def model_by_name(name: str, as_of: EpochLike | None = None) -> DensityModel:
+    """An NRLMSIS version ("2.1", "2.0", "00") on :func:`record_as_of`'s space weather or
+    the benchmark exponential atmosphere with 20 % relative sigma ("exponential", which
+    reads none: ``as_of`` is then a ValueError)."""
     if name == "exponential":
+        if as_of is not None:
+            raise ValueError(
+                "--as-of applies to the NRLMSIS models; 'exponential' reads no space weather"
+            )
         return Exponential.benchmark(0.2)
     if name not in MODEL_NAMES:
         raise ValueError(f"unknown model {name!r}; expected one of {', '.join(MODEL_NAMES)}")
-    # The last refreshed record (else the bundled one), with its predictions usable as
-    # forecast drivers (uncertainty growing with lead time, PredictedDriversWarning).
     version = cast(Literal["2.1", "2.0", "00"], name)  # checked against MODEL_NAMES above
-    return Msis(version, space_weather=SpaceWeather.cached().with_forecast())
+    return Msis(version, space_weather=record_as_of(as_of))
 
 
 #: The name of the default density-model families (``rhoprop screen``'s default).
@@ -36,16 +50,18 @@ FAMILIES = "families"
 SCREEN_MODEL_NAMES = (FAMILIES, *MODEL_NAMES)
 
 
-def models_by_name(name: str) -> dict[str, DensityModel]:
+def models_by_name(name: str, as_of: EpochLike | None = None) -> dict[str, DensityModel]:
     """{model name: model} for ``name``: :data:`FAMILIES`, the default families (NRLMSIS
-    2.1, JB2008 or NRLMSISE-00, Jacchia-Roberts 1971; :func:`rhoprop.scenarios.default_models`,
-    the refreshed record's predictions as forecast drivers), or one of :data:`MODEL_NAMES`
-    (:func:`model_by_name`)."""
+    2.1, JB2008 or NRLMSISE-00, Jacchia-Roberts 1971; :func:`rhoprop.scenarios.default_models`
+    on :func:`record_as_of`'s space weather, JB2008's indices as of ``as_of`` too), or one
+    of :data:`MODEL_NAMES` (:func:`model_by_name`)."""
     if name == FAMILIES:
         from ..studies.scenarios import default_models
 
-        return default_models(SpaceWeather.cached().with_forecast())
-    return {name: model_by_name(name)}
+        if as_of is None:
+            return default_models(record_as_of())
+        return default_models(SpaceWeather.cached(), as_of=as_of)
+    return {name: model_by_name(name, as_of)}
 
 
 def method_by_name(name: str, **settings: object) -> Method:
@@ -63,4 +79,5 @@ __all__ = [
     "method_by_name",
     "model_by_name",
     "models_by_name",
+    "record_as_of",
 ]

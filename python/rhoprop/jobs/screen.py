@@ -193,7 +193,9 @@ class ScreenJob:
     window are listed as skipped, not screened (0 or None: no limit). ``scheduler``: a
     Dask scheduler address, every stage runs there (:func:`screen_all`'s ``client``; the
     same events). ``table_format``: ``"parquet"`` (default) or ``"csv"``, the format of
-    the event table. Returns the paths written."""
+    the event table. ``as_of`` (UTC ISO): every model's drivers as a forecaster had them
+    then (default: the record as refreshed, observed and predicted). Returns the paths
+    written."""
 
     file: str | Path
     out: str | Path
@@ -213,6 +215,7 @@ class ScreenJob:
     cdm_min_pc: float | None = CDM_MIN_PC
     scheduler: str | None = None
     table_format: TableFormat = "parquet"
+    as_of: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "table_format", format_argument(self.table_format))
@@ -226,6 +229,7 @@ class ScreenJob:
         cat = _catalog(self.file, self.skip_bad)
         radii = read_radii(self.radii_file) if self.radii_file else None
         t0 = to_datetime64(self.start, "start") if self.start else default_start(cat)
+        models = models_by_name(self.model, self.as_of)  # a bad as_of fails before the folder
         folder = OutputFolder(
             self.out, command=self.command or command_line(), overwrite=self.overwrite
         )
@@ -233,7 +237,7 @@ class ScreenJob:
         try:
             res = screen_all(
                 cat,
-                models_by_name(self.model),
+                models,
                 start=t0,
                 end=to_datetime64(self.end, "end"),
                 distance=self.distance,

@@ -483,11 +483,15 @@ class SpaceWeather:
         leads."""
         assert self._forecast is not None
         last = self.date[self._n_daily - 1]
+        # A record as of an epoch is a forecast by request: no newer record to fetch.
+        hint = (
+            "" if " as of " in self.source else " Run 'rhoprop data refresh' for the latest record."
+        )
         warnings.warn(
             f"predicted space-weather drivers in use: epochs after the last observed day "
             f"({self._forecast - _DAY}) of {self.source} (forecast to "
             f"{last}); density sigma grows with lead time (rhoprop.spaceweather."
-            "forecast_sigma). Run 'rhoprop data refresh' for the latest record.",
+            f"forecast_sigma).{hint}",
             PredictedDriversWarning,
             stacklevel=3,
         )

@@ -104,16 +104,26 @@ def case_models(
 
 
 def default_models(
-    record: SpaceWeather | None = None, *, mean_dtc: bool = False, preset: Preset = "calibrated"
+    record: SpaceWeather | None = None,
+    *,
+    mean_dtc: bool = False,
+    preset: Preset = "calibrated",
+    as_of: EpochLike | None = None,
 ) -> dict[str, DensityModel]:
     """The default model families on ``record``, reference first: NRLMSIS 2.1 (driver
     uncertainty), JB2008 and Jacchia-Roberts 1971 (activity-dependent uncertainty) when
     JB2008 index files are available, else NRLMSIS 2.1, Jacchia-Roberts 1971 and
     NRLMSISE-00. ``mean_dtc`` holds JB2008's dTc at its 2000-2019 mean. NRLMSIS 2.0 (equal
     to 2.1 in mass density) is out of the default; use ``Msis("2.0")`` explicitly.
-    ``preset``: the models' settings (:data:`rhoprop.density.PRESETS`)."""
+    ``preset``: the models' settings (:data:`rhoprop.density.PRESETS`). ``as_of`` (UTC):
+    every model's drivers as a forecaster had them then (``record.as_of(as_of)`` and
+    JB2008's ``indices.as_of(as_of)``: observed before it, the library's forecast
+    after)."""
     sw = record if record is not None else SpaceWeather()
     names, _, indices = model_choice()
+    if as_of is not None:
+        sw = sw.as_of(as_of)
+        indices = None if indices is None else indices.as_of(as_of)
     models: dict[str, DensityModel] = {"NRLMSIS 2.1": Msis("2.1", space_weather=sw, preset=preset)}
     for name in names[1:]:
         if name == "JB2008" and indices is not None:
