@@ -213,7 +213,7 @@ def _sgp4_observations(sat: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndar
 #: Relative 1-sigma of the B*-derived prior on Cd*A/m (:func:`bstar_prior`): weak on
 #: purpose (B* is itself a fit, noisy from one element set to the next). On the four
 #: development weeks of ``benches/catalog_realism.py`` the fitted Cd*A/m is the prior to
-#: 1-2 % (robust log scatter 0.007-0.014, median ratio 0.98-0.99): over one day the SGP4
+#: 1-4 % (robust log scatter 0.007-0.014, median ratio 0.96-0.99): over one day the SGP4
 #: pseudo-observations carry SGP4's own deceleration, which the density ratio reproduces.
 BSTAR_PRIOR_SIGMA = 0.5
 #: Relative 1-sigma of the prior where B* gives none (B* <= 0): a guess.

@@ -48,9 +48,10 @@ if TYPE_CHECKING:
 
 #: Default density perturbation of a reentry run: one N(0,1) draw per member held over
 #: the whole run (``Constant``), so each member's density is the model's mean + kappa x
-#: the model's sigma (for NRLMSIS the 15 % model-error floor plus the drivers') for all
-#: of its remaining life. The model's error is a bias over days (the observed/model
-#: density ratios behind the 15 % are daily and orbit means, Emmert et al. 2021); the
+#: the model's sigma (for NRLMSIS the model-error floor, 11.4 % calibrated, plus the
+#: drivers') for all of its remaining life. The model's error is a bias over days (the
+#: observed/model density ratios behind the floor are daily and orbit means, Emmert et
+#: al. 2021); the
 #: 18-minute ``GaussMarkov()`` of the paper, used here until 2026-12-03, averages it away
 #: over a multi-day decay (about 2 % left after 3 days) and left the Cd*A/m floor as the
 #: only spread of the window. Measured on the 49 real decays of benches/reentry.py:

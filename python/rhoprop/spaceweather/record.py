@@ -98,13 +98,14 @@ AS_OF_AP_DAYS = 1
 #: Observed days whose mean daily F10.7 :meth:`SpaceWeather.as_of` holds.
 AS_OF_F107_DAYS = 1
 #: e-folding time (days) over which :meth:`SpaceWeather.as_of`'s ap relaxes from the last
-#: days' activity to the last 27 days' mean (inf: held; docs/catalog-realism.md,
-#: "Forecast mode").
+#: days' activity to the last 27 days' typical level (:data:`AS_OF_AP_TARGET`; inf:
+#: held; docs/catalog-realism.md, "Forecast mode").
 AS_OF_AP_RELAX_DAYS = 2.0
 #: What :meth:`SpaceWeather.as_of`'s ap relaxes to: the last 27 days' "mean" of the
 #: 3-hourly values or the "median" of their daily means (a typical day: ap's storms put
-#: the mean above most days: relaxing to it, the observed daily Ap lay about 25 % below
-#: the forecast at the median, 1995-2023; ``benches/forecast_error.py``).
+#: the mean above most days: relaxing to it, the observed daily Ap of the 1st to 7th day
+#: lay 16-26 % below the forecast at the median, 1995-2023, and 0-13 % below relaxing to
+#: the median; ``benches/forecast_error.py``).
 AS_OF_AP_TARGET = "median"
 AP_TARGETS = ("mean", "median")
 #: 27-day recurrence of :meth:`SpaceWeather.as_of` (``recurrence=True``): the weight, by
