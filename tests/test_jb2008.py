@@ -321,3 +321,13 @@ def test_indices_as_of_with_the_27_day_recurrence(indices) -> None:
     assert want != indices.as_of(epoch).at(np.array([three]))[0, 8]  # 29 K against 28 K
     with pytest.raises(TypeError, match="recurrence must be a bool"):
         indices.as_of(epoch, recurrence=1)
+    # dTc files that start later than the solar ones: 27 days of dTc are enough without
+    # the recurrence, which needs the 28 days before the epoch's day.
+    late = indices._dtc_first + np.timedelta64(60 * 24, "h")
+    later = rp.density.Jb2008Indices._from_arrays(
+        indices, indices._sol_first, indices._sol, late, indices._dtc[60 * 24 :], "late dTc"
+    )
+    when = late + np.timedelta64(27 * 24 + 5, "h")
+    later.as_of(when)
+    with pytest.raises(rp.OutsideRecordError, match="recurrence needs the 28 days of dTc"):
+        later.as_of(when, recurrence=True)

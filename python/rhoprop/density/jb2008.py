@@ -333,6 +333,12 @@ class Jb2008Indices:
             # Each hour's day one rotation earlier and the days either side, complete
             # days before the epoch's (hours past 25 days ahead keep that day's).
             today = (seen - 1) // 24
+            if today < 28:
+                raise OutsideRecordError(
+                    f"epoch {np.datetime_as_string(t, unit='s')}: the 27-day recurrence needs "
+                    f"the 28 days of dTc before the epoch's day ({self.dtcfile.name} starts "
+                    f"{self._dtc_first})"
+                )
             target = np.minimum((seen - 1 + lead_h.astype(int)) // 24, today + 25)
             days_dtc = self._dtc[: today * 24].reshape(today, 24).mean(1)
             back = target[:, None] - 27 + np.arange(-1, 2)[None, :]
