@@ -230,13 +230,12 @@ def _table_format(parser: argparse.ArgumentParser, default: str, tables: str) ->
 
 def _utc_epoch(text: str) -> str:
     """An argparse type: a UTC ISO epoch (argparse names the option in its error)."""
-    from .time import to_datetime64
+    from .jobs.models import as_of_text
 
     try:
-        to_datetime64(text, "epoch")
+        return as_of_text(text)
     except (TypeError, ValueError) as err:
         raise argparse.ArgumentTypeError(str(err)) from None
-    return text
 
 
 def _as_of(parser: argparse.ArgumentParser) -> None:

@@ -12,10 +12,17 @@ from ..propagation.methods import NAMES as METHOD_NAMES
 from ..propagation.methods import Method
 from ..propagation.methods import from_name as _method_from_name
 from ..spaceweather import SpaceWeather
-from ..time import EpochLike
+from ..time import EpochLike, to_datetime64
 
 #: The ``--model`` names of one model: NRLMSIS versions and the benchmark exponential.
 MODEL_NAMES = ("2.1", "2.0", "00", "exponential")
+
+
+def as_of_text(text: str) -> str:
+    """``text`` checked as the UTC ISO epoch of ``--as-of`` (a ValueError saying what it
+    should look like otherwise), before a job starts."""
+    to_datetime64(text, "epoch")
+    return text
 
 
 def record_as_of(as_of: EpochLike | None = None) -> SpaceWeather:
@@ -76,6 +83,7 @@ __all__ = [
     "MODEL_NAMES",
     "SCREEN_MODEL_NAMES",
     "TABLE_FORMATS",
+    "as_of_text",
     "method_by_name",
     "model_by_name",
     "models_by_name",
