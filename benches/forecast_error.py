@@ -32,6 +32,7 @@ import numpy as np
 
 import rhoprop as rp
 from rhoprop.spaceweather import f107a_forecast_sigma, forecast_sigma
+from rhoprop.spaceweather.record import AP_RECURRENCE_OFFSET, AS_OF_AP_RELAX_DAYS
 
 LEADS = (1, 2, 3, 5, 7, 10, 14, 27, 45)
 
@@ -93,10 +94,7 @@ def ap_bias(sw: rp.SpaceWeather, args: argparse.Namespace) -> None:
             print(f"| {target} | {k} | {np.median(r[:, j]):+.2f} | {size:.2f} |")
 
 
-#: ap's offset in the log error of the daily Ap (quiet days' Ap of 0-3 would dominate a
-#: plain log).
-AP_LOG_OFFSET = 4.0
-AP_RELAX_DAYS = 2.0
+AP_LOG_OFFSET = AP_RECURRENCE_OFFSET
 RECURRENCE_WEIGHTS = np.round(np.arange(0.0, 1.01, 0.05), 2)
 
 
@@ -141,7 +139,7 @@ def recurrence(sw: rp.SpaceWeather, args: argparse.Namespace) -> None:
             w = float(np.sum(err[a] * change[a]) / np.sum(change[a] ** 2))
             f_weights.append(w)
             f_scored.append((_rms(err[b] - w * change[b]), _rms(err[b])))
-        keep = np.exp(-(lead - 0.5) / AP_RELAX_DAYS)
+        keep = np.exp(-(lead - 0.5) / AS_OF_AP_RELAX_DAYS)
         seen = np.log(ap[t + lead] + AP_LOG_OFFSET)
         back = np.mean([ap[t + lead - 27 + k] for k in (-1, 0, 1)], axis=0)
         target = np.log(median + AP_LOG_OFFSET)

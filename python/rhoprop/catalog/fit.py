@@ -42,7 +42,6 @@ from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
-from ..constants import MU
 from ..density.model import AtmosphereLike, ModelLike
 from ..frames import rtn_basis
 from ..propagation import OrbitState
@@ -103,27 +102,35 @@ DEEP_SPACE_PERIOD_MIN = 225.0
 LOOSE_RADIUS_REGIMES = ("GEO",)
 
 
-def _near_circular_deep_space(epoch: np.datetime64, state: np.ndarray) -> bool:
-    """Whether the TEME state ``state`` (m, m/s) at ``epoch`` is a near-circular (e < 0.1)
-    deep-space orbit (period of :data:`DEEP_SPACE_PERIOD_MIN` or more), as
-    :func:`default_span` tells them."""
-    from ..propagation.propagate import axis_and_eccentricity
+def _orbit_class(period_min: float, eccentricity: float) -> str:
+    """ "near-Earth" (period under :data:`DEEP_SPACE_PERIOD_MIN`), else "near-circular"
+    (e < 0.1) or "eccentric" deep space: what the fit's span and step follow."""
+    if period_min < DEEP_SPACE_PERIOD_MIN:
+        return "near-Earth"
+    return "near-circular" if eccentricity < 0.1 else "eccentric"
 
-    a, e = axis_and_eccentricity(OrbitState(epoch, state[:3], state[3:6], "TEME"))
-    period_min = 2 * np.pi * np.sqrt(a**3 / MU) / 60.0
-    return bool(np.isfinite(a) and period_min >= DEEP_SPACE_PERIOD_MIN and e < 0.1)
+
+def _near_circular_deep_space(epoch: np.datetime64, state: np.ndarray) -> bool:
+    """Whether the TEME state ``state`` (m, m/s) at ``epoch`` is a near-circular deep-space
+    orbit (:func:`_orbit_class` of its osculating period and eccentricity)."""
+    from ..propagation.propagate import axis_and_eccentricity, orbital_period
+
+    orbit = OrbitState(epoch, state[:3], state[3:6], "TEME")
+    _, e = axis_and_eccentricity(orbit)
+    return _orbit_class(orbital_period(orbit) / 60.0, e) == "near-circular"
 
 
 def default_span(sat: Any) -> tuple[float, float]:
-    """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch): :data:`NEAR_CIRCULAR_SPAN`
-    for a near-circular deep-space orbit, :data:`DEEP_SPACE_SPAN` for another deep-space
-    orbit, else :data:`DEFAULT_SPAN`."""
+    """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch), by :func:`_orbit_class` of
+    its mean motion and eccentricity: :data:`NEAR_CIRCULAR_SPAN` for a near-circular
+    deep-space orbit, :data:`DEEP_SPACE_SPAN` for another deep-space orbit, else
+    :data:`DEFAULT_SPAN`."""
     period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
-    if period < DEEP_SPACE_PERIOD_MIN:
-        return DEFAULT_SPAN
-    if sat.ecco < 0.1:
-        return NEAR_CIRCULAR_SPAN
-    return DEEP_SPACE_SPAN
+    return {
+        "near-Earth": DEFAULT_SPAN,
+        "near-circular": NEAR_CIRCULAR_SPAN,
+        "eccentric": DEEP_SPACE_SPAN,
+    }[_orbit_class(period, sat.ecco)]
 
 
 #: Default spacing of the pseudo-observations, s.

@@ -45,8 +45,7 @@ from ..spaceweather.record import (
     AS_OF_AP_RELAX_DAYS,
     AS_OF_AP_TARGET,
     AS_OF_DAYS,
-    F107_RECURRENCE_WEIGHT,
-    _from_table,
+    recurrence_factor,
 )
 from ..time import EpochLike, EpochsLike, to_datetime64
 from . import calibrated as cal
@@ -311,13 +310,9 @@ class Jb2008Indices:
         sol[:observed] = self._sol[:observed]
         past = self._sol[:observed]
         daily, means = (0, 2, 4, 6), (1, 3, 5, 7)
-        # Forecast day j lies j + 1 days after the last observed one (recurrence: one
-        # rotation earlier is observed up to j = 26; later days keep j = 26's change).
-        lead_d = np.minimum(np.arange(n_new) + 1, 27)
-        weight = _from_table(F107_RECURRENCE_WEIGHT, lead_d) if recurrence else 0.0 * lead_d
         for d, m in zip(daily, means, strict=True):
-            change = past[observed - 28 + lead_d, d] / past[-28, d]
-            sol[observed:, d] = past[-1, d] * np.where(np.isfinite(change), change, 1.0) ** weight
+            factor = recurrence_factor(past[:, d], observed - 1, n_new) if recurrence else 1.0
+            sol[observed:, d] = past[-1, d] * factor
             # Centred 81-day means whose window reaches past the epoch are not known yet.
             sol[observed - 40 :, m] = past[-81:, d].mean()
         dtc_hours = seen + int(24 * n_new)

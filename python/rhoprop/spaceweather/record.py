@@ -124,6 +124,20 @@ F107_RECURRENCE_WEIGHT = (
 #: ... and of the mean daily Ap of the days 27 +- 1 before, in log(Ap + 4), in the
 #: target ap relaxes to (``python benches/forecast_error.py``).
 AP_RECURRENCE_WEIGHT = 0.4
+#: The offset of that log (quiet days' Ap of 0-3 would dominate a plain log).
+AP_RECURRENCE_OFFSET = 4.0
+
+
+def recurrence_factor(daily: np.ndarray, last: int, n_new: int) -> np.ndarray:
+    """The 27-day recurrence's factor on a daily index held from row ``last`` (the last
+    observed day) for the ``n_new`` forecast days after it: (x(last + L - 27) /
+    x(last - 27)) ** w(L) at lead L = 1..n_new days (:data:`F107_RECURRENCE_WEIGHT`; from
+    27 days on the change of the last rotation, whose days are all observed, is kept);
+    1 where a value is missing."""
+    lead = np.minimum(np.arange(n_new) + 1, 27)
+    change = daily[last + lead - 27] / daily[last - 27]
+    factor = change ** _from_table(F107_RECURRENCE_WEIGHT, lead)
+    return np.where(np.isfinite(factor), factor, 1.0)
 
 
 def forecast_sigma(lead_days: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -659,14 +673,12 @@ class SpaceWeather:
             back = last + np.minimum(np.arange(n_new), 25)[:, None] - 26 + np.arange(-1, 2)
             ap_back = np.nanmean(cols["ap"][back], axis=(1, 2))[:, None]
             kp_back = np.nanmean(cols["kp"][back], axis=(1, 2))[:, None]
-            ap_level = (ap_month + 4.0) * ((ap_back + 4.0) / (ap_month + 4.0)) ** (
+            offset = AP_RECURRENCE_OFFSET
+            ap_level = (ap_month + offset) * ((ap_back + offset) / (ap_month + offset)) ** (
                 AP_RECURRENCE_WEIGHT
-            ) - 4.0
+            ) - offset
             kp_level = kp_month + AP_RECURRENCE_WEIGHT * (kp_back - kp_month)
-            lead_d = np.minimum(np.arange(n_new) + 1, 27)
-            change = cols["f107_obs"][last + lead_d - 27] / cols["f107_obs"][last - 27]
-            f_scale = change ** _from_table(F107_RECURRENCE_WEIGHT, lead_d)
-            f_scale = np.where(np.isfinite(f_scale), f_scale, 1.0)
+            f_scale = recurrence_factor(cols["f107_obs"], last, n_new)
         extra: dict[str, np.ndarray] = {
             "date": dates,
             "section": np.full(n_new, 1, dtype=cols["section"].dtype),
