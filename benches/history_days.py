@@ -24,6 +24,7 @@ and their ratio, the share of objects better than SGP4, along-track inside 1/2/3
 the RTN Mahalanobis inside 1/2/3 sigma, as ``catalog_realism.figures``.
 
 Run:  python benches/history_days.py [--every 1] [--horizons 1,3,7] [--drivers forecast]
+      [--initial-covariance object] [--dump FILE.npz]   (``covariance_parts.py`` reads dumps)
 """
 
 from __future__ import annotations
@@ -92,13 +93,15 @@ def start_day(
     threads: int,
     drags: dict[int, tuple[float, float, int]] | None = None,
     together: bool = False,
+    initial: str = "object",
 ) -> dict[float, tuple[dict, dict]]:
     """Predictions and truths of one start: per horizon (pred, truth) dicts by NORAD id.
     ``drags``: Cd*A/m per object from the catalog density sensor, replacing the fitted one
     (the state stays the fit's). The input is every element set of the 2 days before the
     start, as a user's history file holds them: ``load``'s default predicts from the
     newest; ``together``: from the fit of the newest and the others of its last
-    ``rp.catalog.HISTORY_DAYS`` (``load(history="fit")``)."""
+    ``rp.catalog.HISTORY_DAYS`` (``load(history="fit")``). ``initial``: the
+    initial covariance, :data:`INITIAL_COVARIANCES`."""
     t0 = jd(start)
     chosen: dict[int, tuple[str, str, str, float]] = {}
     for norad in clean:
@@ -146,6 +149,7 @@ def start_day(
                 truth[norad]["epoch"],
                 output_step=1e9,
                 execution=rp.Execution(progress=False, errors="record"),
+                initial_covariance=INITIAL_COVARIANCES[initial],
             )
             return norad, {
                 "mean": res.mean[0, -1],
@@ -157,6 +161,26 @@ def start_day(
             pred = dict(pool.map(one, sorted(truth)))
         out[h] = (pred, truth)
     return out
+
+
+#: ``--initial-covariance``: what each object starts with. "object" is the library's
+#: default (a fitted object's TLE accuracy plus its fit's covariance); "fit" the fit's
+#: covariance alone; "tle" the TLE accuracy alone, with the regime's whole drift;
+#: "nodrift" the TLE accuracy without any drift, plus the fit's; "paper" the near-zero
+#: one (what is left is the density's and Cd*A/m's growth). ``covariance_parts.py``
+#: compares the ``--dump`` files of such runs.
+INITIAL_COVARIANCES: dict[str, Any] = {
+    "object": "object",
+    "tle": "tle",
+    "paper": "paper",
+    "fit": lambda obj: obj.fit.covariance[:6, :6] if obj.fit is not None else obj.covariance,
+    "nodrift": lambda obj: (
+        catalog.tle_covariance(
+            obj.state, dataclasses.replace(catalog.tle_accuracy(obj.state), drift_rate=0.0)
+        )
+        + (obj.fit.covariance[:6, :6] if obj.fit is not None else 0.0)
+    ),
+}
 
 
 def row(label: str, f: dict[str, Any]) -> str:
@@ -230,6 +254,31 @@ def common_mode(pred: dict[tuple[str, int], dict], truth: dict[tuple[str, int], 
     }
 
 
+def dump(path: str, pooled: dict[tuple[str, float], tuple[dict, dict]]) -> None:
+    """Every valid prediction as arrays: mode, horizon (days), start, NORAD id, RTN error
+    of rhoprop and of SGP4 (m, the truth's RTN frame), the predicted RTN position
+    covariance and the truth's own (TLE accuracy), m^2."""
+    cols: dict[str, list[Any]] = {
+        k: [] for k in ("mode", "horizon", "start", "norad", "error", "sgp4", "cov", "truth")
+    }
+    for (mode, h), (pred, truth) in pooled.items():
+        for key, p in pred.items():
+            if not (np.all(np.isfinite(p["mean"])) and np.all(np.isfinite(p["cov"]))):
+                continue
+            t = truth[key]
+            basis = rtn_basis(t["state"][:3], t["state"][3:])
+            state = rp.OrbitState(t["epoch"], t["state"][:3], t["state"][3:])
+            cols["mode"].append(mode)
+            cols["horizon"].append(h)
+            cols["start"].append(key[0])
+            cols["norad"].append(key[1])
+            cols["error"].append(basis @ (p["mean"][:3] - t["state"][:3]))
+            cols["sgp4"].append(basis @ (t["sgp4"][:3] - t["state"][:3]))
+            cols["cov"].append(basis @ p["cov"][:3, :3] @ basis.T)
+            cols["truth"].append(basis @ catalog.tle_covariance(state)[:3, :3] @ basis.T)
+    np.savez(path, **{k: np.array(v) for k, v in cols.items()})
+
+
 def main() -> None:
     print(describe())
     parser = argparse.ArgumentParser(
@@ -269,6 +318,18 @@ def main() -> None:
         action="store_true",
         help="beside the default, each object's element sets of the last "
         "rp.catalog.HISTORY_DAYS fitted together (load(history='fit'))",
+    )
+    parser.add_argument(
+        "--initial-covariance",
+        choices=tuple(INITIAL_COVARIANCES),
+        default="object",
+        help="each object's initial covariance (default: the library's, 'object')",
+    )
+    parser.add_argument(
+        "--dump",
+        default=None,
+        help="also write every prediction (RTN error, predicted and truth covariance, SGP4's "
+        "error) to this .npz, for studies of the covariance",
     )
     parser.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = parser.parse_args()
@@ -333,7 +394,17 @@ def main() -> None:
                     drags = density_sensor.drag_parameters(intervals, correction)
                     drags = {n: d for n, d in drags.items() if n in clean}
             together = mode.endswith("history")
-            res = start_day(t_start, history, clean, horizons, model, args.threads, drags, together)
+            res = start_day(
+                t_start,
+                history,
+                clean,
+                horizons,
+                model,
+                args.threads,
+                drags,
+                together,
+                args.initial_covariance,
+            )
             for h, (pred, truth) in res.items():
                 if not pred:
                     continue
@@ -382,6 +453,8 @@ def main() -> None:
                 f"{100 * c['residual_better']:.0f} %; the mean of rhoprop's and SGP4's "
                 f"predictions: {c['mean_with_sgp4_ratio']:.2f} x SGP4's"
             )
+    if args.dump:
+        dump(args.dump, pooled)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "history_days.json").write_text(

@@ -18,7 +18,12 @@ UTC instant (TAI - UTC: 31 s in 1997, 32 s in 2003), rotated from ITRS to GCRS w
 (IERS-B bundled with it, no download). The predictions are in TEME (SGP4's frame):
 rhoprop's of the element set's epoch, SGP4's of each instant; both rotated to GCRF with
 ``rp.frames.teme_to_gcrf``. Printed: per satellite and horizon the median and
-largest position error (km) of each configuration and its ratio to SGP4's.
+largest position error (km) of each configuration and its ratio to SGP4's; the default's
+covariance judged on the same errors (the precise orbit's own error, centimetres, is
+left out): RMS of each RTN error over its predicted sigma (1 for a calibrated Gaussian)
+and the share of predictions inside the RTN 1/2/3-sigma ellipsoids; and SGP4's own error
+at each element set's epoch against the TLE accuracy rhoprop assumes there
+(``catalog.tle_accuracy``).
 
 Run:  python benches/precise_orbits.py
 """
@@ -31,6 +36,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from scipy import stats
 from sgp4.api import Satrec
 
 import rhoprop as rp
@@ -86,8 +92,9 @@ def predict(
     start: np.datetime64,
     ends: list[np.datetime64],
     history: bool,
-) -> list[np.ndarray]:
-    """rhoprop's GCRF positions at ``ends`` from the element sets before ``start``."""
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """rhoprop's GCRF states (m, m/s) and position covariances (m^2) at ``ends`` from the
+    element sets before ``start``."""
     before = [s for s in sets if s[2] < jd(start)]
     if history:
         before = [s for s in before if s[2] >= jd(start) - 3.0]
@@ -111,8 +118,38 @@ def predict(
             output_step=1e9,
             execution=rp.Execution(progress=False),
         )
-        out.append(rp.frames.teme_to_gcrf(obj.state.epoch, res.mean[0, -1])[:3])
+        turn = rp.frames.teme_to_gcrf_matrix(obj.state.epoch)
+        cov = turn @ res.covariance[0, -1, :3, :3] @ turn.T
+        out.append((rp.frames.teme_to_gcrf(obj.state.epoch, res.mean[0, -1]), cov))
     return out
+
+
+def rtn_ratios(state: np.ndarray, cov: np.ndarray, true: np.ndarray) -> np.ndarray:
+    """The RTN error of ``state`` from the position ``true`` over its sigmas (3 values)
+    and its squared Mahalanobis distance."""
+    basis = rp.frames.rtn_basis(state[:3], state[3:])
+    d = basis @ (state[:3] - true)
+    c = basis @ cov @ basis.T
+    return np.append(d / np.sqrt(np.diag(c)), d @ np.linalg.solve(c, d))
+
+
+def epoch_errors(sets: list[tuple[str, str, float]], sp3: rp.io.Sp3) -> np.ndarray:
+    """SGP4's RTN position error (m) at each element set's own epoch within the precise
+    orbit, against the precise position, and the RTN 1-sigma rhoprop assumes there
+    (``catalog.tle_accuracy``): rows of 6."""
+    rows = []
+    for l1, l2, _ in sets:
+        sat = Satrec.twoline2rv(l1, l2)
+        epoch = rp.time.from_jd(sat.jdsatepoch, sat.jdsatepochF)
+        if not sp3.epochs[5] <= epoch <= sp3.epochs[-6]:
+            continue
+        _, r, v = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
+        state = rp.frames.teme_to_gcrf(epoch, np.array(r + v) * 1e3)
+        basis = rp.frames.rtn_basis(state[:3], state[3:])
+        acc = catalog.tle_accuracy(rp.OrbitState(epoch, state[:3], state[3:]))
+        error = basis @ (state[:3] - truth_gcrs(sp3, epoch))
+        rows.append(np.append(error, [acc.radial, acc.along_track, acc.cross_track]))
+    return np.array(rows)
 
 
 def main() -> None:
@@ -127,11 +164,15 @@ def main() -> None:
         "km | ratio | rhoprop history median / max km | ratio |"
     )
     print("| --- | ---: | ---: | --- | --- | ---: | --- | ---: |")
+    ratios: dict[str, dict[int, list[np.ndarray]]] = {}
+    at_epoch: dict[str, np.ndarray] = {}
     for name, (norad, file) in SATELLITES.items():
         sp3 = rp.io.read_sp3(data / file)
         sets = sets_of(data / "tles_jason1_topex.txt", norad)
         first_utc, last_utc = sp3.epochs[0], sp3.epochs[-1]
         errors: dict[int, list[tuple[float, float, float]]] = {h: [] for h in HORIZONS}
+        ratios[name] = {h: [] for h in HORIZONS}
+        at_epoch[name] = epoch_errors(sets, sp3)
         day = first_utc.astype("datetime64[D]") + np.timedelta64(1, "D")
         while day + np.timedelta64(1, "D") <= last_utc:
             start = day.astype("datetime64[ns]")
@@ -149,8 +190,12 @@ def main() -> None:
                 )[:3]
                 true = truth_gcrs(sp3, end)
                 errors[h].append(
-                    tuple(float(np.linalg.norm(p - true)) / 1e3 for p in (p_sgp4, p_def, p_hist))
+                    tuple(
+                        float(np.linalg.norm(p - true)) / 1e3
+                        for p in (p_sgp4, p_def[0][:3], p_hist[0][:3])
+                    )
                 )
+                ratios[name][h].append(rtn_ratios(p_def[0], p_def[1], true))
             day += np.timedelta64(1, "D")
         for h in HORIZONS:
             if not errors[h]:
@@ -163,6 +208,51 @@ def main() -> None:
                 f"{med[2] / med[0]:.2f} |",
                 flush=True,
             )
+    show_covariance(ratios, at_epoch)
+
+
+def show_covariance(
+    ratios: dict[str, dict[int, list[np.ndarray]]], at_epoch: dict[str, np.ndarray]
+) -> None:
+    """The default's covariance against the precise orbits, and SGP4's error at epoch."""
+    print(
+        "\nThe default's covariance (CCSP): RMS error / sigma radial, along-track, "
+        "cross-track (1 if calibrated) and inside the RTN 1/2/3-sigma ellipsoids"
+    )
+    print(
+        "\n| satellite | horizon | starts | RMS R / T / N error over sigma | inside 1/2/3 sigma |"
+    )
+    print("| --- | ---: | ---: | --- | --- |")
+    bounds = [stats.chi2.ppf(2 * stats.norm.cdf(k) - 1, 3) for k in (1, 2, 3)]
+    for name, per in ratios.items():
+        for h, rows in per.items():
+            if not rows:
+                continue
+            r = np.array(rows)
+            rms = np.sqrt(np.mean(r[:, :3] ** 2, axis=0))
+            inside = [100 * np.mean(r[:, 3] <= b) for b in bounds]
+            print(
+                f"| {name} | {h} d | {len(r)} | "
+                + " / ".join(f"{x:.2f}" for x in rms)
+                + " | "
+                + " / ".join(f"{x:.0f}" for x in inside)
+                + " |"
+            )
+    print("\nSGP4 at each element set's epoch against the precise orbit, m")
+    print("\n| satellite | sets | mean R / T / N | RMS R / T / N | assumed 1-sigma R / T / N |")
+    print("| --- | ---: | --- | --- | --- |")
+    for name, e in at_epoch.items():
+        if not len(e):
+            continue
+        print(
+            f"| {name} | {len(e)} | "
+            + " / ".join(f"{x:+.0f}" for x in e[:, :3].mean(axis=0))
+            + " | "
+            + " / ".join(f"{x:.0f}" for x in np.sqrt(np.mean(e[:, :3] ** 2, axis=0)))
+            + " | "
+            + " / ".join(f"{x:.0f}" for x in np.median(e[:, 3:], axis=0))
+            + " |"
+        )
 
 
 if __name__ == "__main__":

@@ -141,6 +141,50 @@ def test_tle_covariance_is_a_covariance_for_any_accuracy(radial):
     assert sig[1] >= 1000.0 * (1 - 1e-9)
 
 
+def _drift_rate(state: rp.OrbitState, cov: np.ndarray) -> float:
+    """RMS along-track drift rate (m/s) a 6x6 inertial covariance implies, by
+    Clohessy-Wiltshire: the secular along-track rate is -1.5 n x_c with the radial offset
+    x_c = 4 x + 2 ydot / n (x radial, ydot along-track rate, both in the rotating frame)."""
+    r, v = state.position, state.velocity
+    n = float(np.linalg.norm(np.cross(r, v))) / float(r @ r)
+    basis = rtn_basis(r, v)
+    rtn = np.zeros((6, 6))
+    rtn[:3, :3] = rtn[3:, 3:] = basis
+    # Inertial rates seen from the frame turning at n about N: xdot + n y, ydot - n x.
+    turn = np.eye(6)
+    turn[3, 1], turn[4, 0] = n, -n
+    rot = turn @ rtn @ cov @ rtn.T @ turn.T
+    x_c = np.array([4.0, 0.0, 0.0, 0.0, 2.0 / n, 0.0])
+    return 1.5 * n * float(np.sqrt(x_c @ rot @ x_c))
+
+
+def test_a_fitted_leo_state_starts_with_less_of_the_regime_drift(tle_file, atmosphere):
+    # The regime's drift is SGP4's own error growth; a state fitted to a day of SGP4's
+    # positions keeps FITTED_DRIFT_FRACTION of it (the rest of the growth is the density's,
+    # which the propagation carries). Checked on the matrices by the Clohessy-Wiltshire
+    # relation between the radial offset and the along-track drift.
+    from rhoprop.catalog.covariance import FITTED_DRIFT_FRACTION, fitted_accuracy
+
+    raw = catalog.load(tle_file, errors="record")[0]
+    acc = tle_accuracy(raw.state)
+    assert acc.regime == "LEO below 800 km"
+    assert _drift_rate(raw.state, raw.covariance) == pytest.approx(acc.drift_rate, rel=1e-6)
+    fitted = catalog.load(tle_file, fit=catalog.FitSettings(atmosphere), errors="record")[0]
+    assert fitted.fit is not None
+    own = fitted.covariance - fitted.fit.covariance[:6, :6]
+    assert _drift_rate(fitted.state, own) == pytest.approx(
+        FITTED_DRIFT_FRACTION * acc.drift_rate, rel=1e-6
+    )
+    assert "drift 0.3 km/day" in fitted.covariance_note
+    # Full rank: the semi-major-axis error that is left keeps the matrix positive definite.
+    scale = np.sqrt(np.diag(own))
+    assert np.linalg.eigvalsh(own / np.outer(scale, scale)).min() > 1e-9
+    # Where drag does not set the growth (above 800 km, GEO) a fitted state keeps it all.
+    for regime in ("LEO 800-2000 km", "GEO"):
+        other = TleAccuracy(2000.0, 5000.0, 2000.0, 6e3 / 86400, regime)
+        assert fitted_accuracy(other) == other
+
+
 def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):
     cat = catalog.load(SAMPLE)
     end = "2002-09-08T00:00"

@@ -6,7 +6,7 @@ histories as a density sensor (``density_sensor``) and files out (``export``: CC
 and a Parquet summary)."""
 
 from ..io import summary_table, write_oem, write_summary
-from .covariance import TleAccuracy, tle_accuracy, tle_covariance
+from .covariance import TleAccuracy, fitted_accuracy, tle_accuracy, tle_covariance
 from .density_sensor import (
     DecayIntervals,
     corrected_model,
@@ -51,6 +51,7 @@ __all__ = [
     "fit_element_set",
     "fit_element_sets",
     "fit_objects",
+    "fitted_accuracy",
     "load",
     "propagate_catalog",
     "reentry",

@@ -764,7 +764,7 @@ def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogO
     (:data:`MAX_PRIOR_FACTOR`)."""
     import dataclasses
 
-    from .covariance import tle_accuracy, tle_covariance
+    from .covariance import fitted_accuracy, tle_accuracy, tle_covariance
     from .fit import MIN_DRAG_PARAMETER
 
     if not f.rms_total <= MAX_FIT_RMS:
@@ -785,7 +785,7 @@ def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogO
             f"{f.prior:.3g} m^2/kg (at most {MAX_PRIOR_FACTOR:g}x either way, and above the "
             f"fit's floor of {MIN_DRAG_PARAMETER:g}): not drag, a manoeuvre or thrust?"
         )
-    acc = tle_accuracy(f.state)
+    acc = fitted_accuracy(tle_accuracy(f.state))
     return dataclasses.replace(
         obj,
         state=f.state,
