@@ -92,7 +92,7 @@ FITTED_DRIFT_REGIMES = ("LEO below 800 km",)
 #: made the 2026 history's along-track sigmas too wide (median error over sigma 0.43 /
 #: 0.60 at 1 / 3 days with the whole drift, 0.50 / 0.68 without; 0.67 if calibrated). What
 #: is kept is the growth that is not drag: against the precise orbits of Jason-1 and
-#: TOPEX (1,336 km, where drag is small) SGP4-fitted predictions drift 0.2-0.4 km/day
+#: TOPEX (1,336 km, where drag is small) fitted predictions drift 0.2-0.3 km/day
 #: (docs/catalog-realism.md, "The drift of a fitted state"). Above 800 km the whole drift
 #: stays: with a tenth of it Jason-1's along-track errors were 1.3-2.6 sigma.
 FITTED_DRIFT_FRACTION = 0.3
