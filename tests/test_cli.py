@@ -33,6 +33,25 @@ def test_as_of_must_be_an_epoch(command, capsys, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_element_sets_newer_than_as_of_are_noted(capsys, tmp_path):
+    # A forecaster at --as-of had neither element sets of later days nor their space
+    # weather: the run goes on (those days take the as-of forecast) and says so on stderr.
+    sample = Path(__file__).parent / "data" / "sample.tle"  # 6 sets, 2002-09-06T12Z..09-07
+    args = ["catalog", str(sample), "--end", "2002-09-07T06:00Z", "--no-fit"]
+    with pytest.warns(rp.errors.PredictedDriversWarning, match="as of 2002-09-01"):
+        code = main([*args, "--as-of", "2002-09-01T00:00Z", "--out", str(tmp_path / "a")])
+    assert code == 0
+    err = capsys.readouterr().err
+    assert (
+        "note: 6 of 6 element sets are newer than --as-of 2002-09-01T00:00Z "
+        "(the newest 2002-09-07T00:00Z)" in err
+    )
+    # As of the newest epoch: nothing to note.
+    with pytest.warns(rp.errors.PredictedDriversWarning):
+        main([*args, "--as-of", "2002-09-07T00:00Z", "--out", str(tmp_path / "b")])
+    assert "newer than --as-of" not in capsys.readouterr().err
+
+
 def test_every_option_with_a_default_names_it_in_the_help():
     # A newcomer reads --help for what a run does without an option: every option with a
     # default (other than on/off switches and None) says it, once.

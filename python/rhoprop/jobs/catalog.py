@@ -32,7 +32,7 @@ from ..propagation import Dynamics
 from ..propagation.methods import Ccsp, Method, MonteCarlo
 from ..spaceweather import SpaceWeather
 from ..time import to_datetime64
-from .models import model_by_name
+from .models import as_of_note, model_by_name
 
 
 #: Density models by the names the command line accepts.
@@ -269,6 +269,7 @@ class CatalogJob:
             raise ValueError(
                 f"{self.file}: no element set could be read ({len(cat.skipped)} skipped)"
             )
+        print_as_of_note(cat, self.as_of)
         kind: Duplicates = "error" if self.duplicates == "newest" else self.duplicates  # none left
         oem_names(cat.objects, kind)  # repeated ids fail here, before any work
         folder = OutputFolder(
@@ -320,6 +321,13 @@ class CatalogJob:
         )
         print(atlas_line())
         return [ephemeris, *meta, *paths, summary, manifest]
+
+
+def print_as_of_note(cat: Catalog, as_of: str | None) -> None:
+    """Says on stderr when element sets are newer than ``--as-of`` (:func:`as_of_note`)."""
+    note = as_of_note([o.state.epoch for o in cat.objects], as_of)
+    if note:
+        print(note, file=sys.stderr)
 
 
 def _write_catalog_tables(
@@ -431,6 +439,7 @@ class ReentryJob:
             raise ValueError(
                 f"{self.file}: no element set could be read ({len(cat.skipped)} skipped)"
             )
+        print_as_of_note(cat, self.as_of)
         folder = OutputFolder(
             self.out, command=self.command or command_line(), overwrite=self.overwrite
         )

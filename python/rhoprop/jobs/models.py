@@ -4,7 +4,10 @@ uncertainty methods of ``--method`` and the table formats of ``--format``."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Literal, cast
+
+import numpy as np
 
 from ..density import DensityModel, Exponential, Msis
 from ..io.tables import FORMATS as TABLE_FORMATS
@@ -23,6 +26,24 @@ def as_of_text(text: str) -> str:
     should look like otherwise), before a job starts."""
     to_datetime64(text, "epoch")
     return text
+
+
+def as_of_note(epochs: Sequence[np.datetime64], as_of: str | None) -> str | None:
+    """A note (for stderr) when element sets of ``epochs`` are newer than ``as_of``: a
+    forecaster then had neither them nor the space weather of their days (the run goes
+    on: the days after ``as_of`` take its forecast). None when none is, or no ``as_of``."""
+    if as_of is None or not len(epochs):
+        return None
+    limit = to_datetime64(as_of, "--as-of")
+    newer = [e for e in epochs if e > limit]
+    if not newer:
+        return None
+    newest = np.datetime_as_string(max(newer), unit="m")
+    return (
+        f"note: {len(newer)} of {len(epochs)} element sets are newer than --as-of {as_of} "
+        f"(the newest {newest}Z): a forecaster then had neither them nor the space weather "
+        "of their days, which take the as-of record's forecast"
+    )
 
 
 def record_as_of(as_of: EpochLike | None = None) -> SpaceWeather:
@@ -83,6 +104,7 @@ __all__ = [
     "MODEL_NAMES",
     "SCREEN_MODEL_NAMES",
     "TABLE_FORMATS",
+    "as_of_note",
     "as_of_text",
     "method_by_name",
     "model_by_name",

@@ -23,7 +23,7 @@ from ..io.tables import format_argument, table_name
 from ..options import TableFormat
 from ..progress import ProgressBar
 from ..time import to_datetime64
-from .catalog import connect, default_start, max_span_option, need_dask
+from .catalog import connect, default_start, max_span_option, need_dask, print_as_of_note
 from .models import FAMILIES, models_by_name
 
 __all__ = [
@@ -230,6 +230,7 @@ class ScreenJob:
         radii = read_radii(self.radii_file) if self.radii_file else None
         t0 = to_datetime64(self.start, "start") if self.start else default_start(cat)
         models = models_by_name(self.model, self.as_of)  # a bad as_of fails before the folder
+        print_as_of_note(cat, self.as_of)
         folder = OutputFolder(
             self.out, command=self.command or command_line(), overwrite=self.overwrite
         )
