@@ -160,29 +160,29 @@ def _drift_rate(state: rp.OrbitState, cov: np.ndarray) -> float:
 
 def test_a_fitted_leo_state_starts_with_less_of_the_regime_drift(tle_file, atmosphere):
     # The regime's drift is SGP4's own error growth; a state fitted to a day of SGP4's
-    # positions keeps FITTED_DRIFT_FRACTION of it (the rest of the growth is the density's,
-    # which the propagation carries). Checked on the matrices by the Clohessy-Wiltshire
-    # relation between the radial offset and the along-track drift.
-    from rhoprop.catalog.covariance import FITTED_DRIFT_FRACTION, fitted_accuracy
+    # positions starts with at most FITTED_DRIFT_RATE in LEO (the rest of the growth is
+    # the density's, which the propagation carries). Checked on the matrices by the
+    # Clohessy-Wiltshire relation between the radial offset and the along-track drift.
+    from rhoprop.catalog.covariance import FITTED_DRIFT_RATE, fitted_accuracy
 
     raw = catalog.load(tle_file, errors="record")[0]
     acc = tle_accuracy(raw.state)
-    assert acc.regime == "LEO below 800 km"
+    assert acc.regime == "LEO below 800 km" and acc.drift_rate > FITTED_DRIFT_RATE
     assert _drift_rate(raw.state, raw.covariance) == pytest.approx(acc.drift_rate, rel=1e-6)
     fitted = catalog.load(tle_file, fit=catalog.FitSettings(atmosphere), errors="record")[0]
     assert fitted.fit is not None
     own = fitted.covariance - fitted.fit.covariance[:6, :6]
-    assert _drift_rate(fitted.state, own) == pytest.approx(
-        FITTED_DRIFT_FRACTION * acc.drift_rate, rel=1e-6
-    )
+    assert _drift_rate(fitted.state, own) == pytest.approx(FITTED_DRIFT_RATE, rel=1e-6)
     assert "drift 0.3 km/day" in fitted.covariance_note
     # Full rank: the semi-major-axis error that is left keeps the matrix positive definite.
     scale = np.sqrt(np.diag(own))
     assert np.linalg.eigvalsh(own / np.outer(scale, scale)).min() > 1e-9
-    # Where drag does not set the growth (above 800 km, GEO) a fitted state keeps it all.
-    for regime in ("LEO 800-2000 km", "GEO"):
-        other = TleAccuracy(2000.0, 5000.0, 2000.0, 6e3 / 86400, regime)
-        assert fitted_accuracy(other) == other
+    # Where drag does not set the growth (GEO) a fitted state keeps it all; a regime
+    # drift already below the rate stays as it is.
+    geo = TleAccuracy(2000.0, 5000.0, 2000.0, 6e3 / 86400, "GEO")
+    assert fitted_accuracy(geo) == geo
+    slow = TleAccuracy(150.0, 600.0, 250.0, 0.5 * FITTED_DRIFT_RATE, "LEO 800-2000 km")
+    assert fitted_accuracy(slow) == slow
 
 
 def test_initial_covariance_choices_and_notes(tmp_path, atmosphere):

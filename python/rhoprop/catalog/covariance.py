@@ -80,31 +80,33 @@ REGIMES = (
 )
 
 
-#: Regimes whose fitted states start with less of the regime's drift
-#: (:func:`fitted_accuracy`): where drag sets the along-track growth.
-FITTED_DRIFT_REGIMES = ("LEO below 800 km",)
+#: Regimes whose fitted states start with at most :data:`FITTED_DRIFT_RATE`
+#: (:func:`fitted_accuracy`): low Earth orbits, where the rest of the along-track growth
+#: is drag's.
+FITTED_DRIFT_REGIMES = ("LEO below 800 km", "LEO 800-2000 km")
 
-#: The share of the regime's drift rate a fitted state's covariance keeps in
-#: :data:`FITTED_DRIFT_REGIMES`. The regime's drift is SGP4's own error growth (the fit's
-#: weights use it; an unfitted state keeps it). A state fitted to a day of SGP4's
-#: positions has its mean motion pinned; below 800 km the growth after it is mostly the
-#: density's and Cd*A/m's, which the propagation carries, and counted again as drift it
-#: made the 2026 history's along-track sigmas too wide (median error over sigma 0.43 /
-#: 0.60 at 1 / 3 days with the whole drift, 0.50 / 0.68 without; 0.67 if calibrated). What
-#: is kept is the growth that is not drag: against the precise orbits of Jason-1 and
-#: TOPEX (1,336 km, where drag is small) fitted predictions drift 0.2-0.3 km/day
-#: (docs/catalog-realism.md, "The drift of a fitted state"). Above 800 km the whole drift
-#: stays: with a tenth of it Jason-1's along-track errors were 1.3-2.6 sigma.
-FITTED_DRIFT_FRACTION = 0.3
+#: The along-track drift rate (m/s; 0.3 km/day) a fitted state's covariance starts with
+#: in :data:`FITTED_DRIFT_REGIMES`, where the regime's is larger. The regime's drift is
+#: SGP4's own error growth (the fit's weights use it; an unfitted state keeps it). A
+#: state fitted to a day of SGP4's positions has its mean motion pinned; what grows after
+#: it is the density's and Cd*A/m's error, which the propagation carries, and what is not
+#: drag: against the precise orbits of Jason-1 and TOPEX (1,336 km, little drag) the
+#: fitted predictions' along-track error grows by 0.25-0.3 km/day (RMS 0.95 km at 3
+#: days, 1.7 km at 5, from 0.6 km at epoch). Counted again, the regimes' 1 and 0.5
+#: km/day made the 2026 history's 1-day sigmas too wide below 800 km (median error over
+#: sigma 0.43 / 0.60 at 1 / 3 days, 0.67 if calibrated) and Jason-1's 1.5x too wide at
+#: 2-5 days; with 0.05 km/day Jason-1's errors were 1.3-2.6 sigma
+#: (docs/catalog-realism.md, "The drift of a fitted state").
+FITTED_DRIFT_RATE = 0.3 * _KM_PER_DAY
 
 
 def fitted_accuracy(accuracy: TleAccuracy) -> TleAccuracy:
     """The accuracy a state fitted to SGP4's positions starts with: the regime's errors
-    at epoch, and in :data:`FITTED_DRIFT_REGIMES` :data:`FITTED_DRIFT_FRACTION` of its
-    drift rate (m/s)."""
+    at epoch, and in :data:`FITTED_DRIFT_REGIMES` a drift rate of at most
+    :data:`FITTED_DRIFT_RATE` (m/s)."""
     if accuracy.regime not in FITTED_DRIFT_REGIMES:
         return accuracy
-    return replace(accuracy, drift_rate=accuracy.drift_rate * FITTED_DRIFT_FRACTION)
+    return replace(accuracy, drift_rate=min(accuracy.drift_rate, FITTED_DRIFT_RATE))
 
 
 def tle_accuracy(state: OrbitState) -> TleAccuracy:
