@@ -19,8 +19,11 @@ Truth: the later element set's own state at its epoch (SGP4 at t = 0, its most a
 point); each object is predicted from its start epoch to that epoch. Compared there:
 SGP4 of the start element set (the baseline) and rhoprop's mean and covariance
 (``propagate_catalog`` with its defaults: CCSP, NRLMSIS 2.1). Drivers (``--drivers``):
-``forecast`` (default) runs each week as a forecaster would, on the bundled record as of
-the start snapshot's day (``SpaceWeather.as_of``: observed before it, persistence after);
+``forecast`` (default) runs each object as a forecaster would, on the bundled record as
+of its start element set's epoch (``SpaceWeather.as_of`` at the start of its 3-hour ap
+interval: observed before it, persistence after; ``--as-of-at start``: as of the start
+snapshot's day for every object, as before 2026-12-06, when most element sets of a
+snapshot are later than its day's 00:00);
 ``hindcast`` on the record as observed through the prediction (no driver-forecast error,
 flattering); ``both`` prints the hindcast beside the forecast, its configurations
 suffixed ``/hindcast``. Errors are in the
@@ -347,18 +350,30 @@ def as_of_options(text: str | None) -> dict[str, Any]:
     return out
 
 
+def as_of_bin(epoch: np.datetime64) -> np.datetime64:
+    """The forecast's as-of time for an element set of ``epoch``: the 3-hour ap interval's
+    start at or before it (what had been observed by then; the run of objects that share
+    it is one)."""
+    hour = epoch.astype("datetime64[h]")
+    return hour - np.timedelta64(int(hour.astype(int)) % 3, "h")
+
+
 def run_week(
-    start: str, stop: str, args: argparse.Namespace, model: Any
+    start: str, stop: str, args: argparse.Namespace, model_at: Any
 ) -> tuple[dict[str, Any], dict[str, dict[int, dict[str, Any]]], dict[int, dict[str, Any]]]:
     """One development week: its figures per configuration, the raw predictions and the
-    truth (for the pooled figures)."""
+    truth (for the pooled figures). ``model_at(epoch)`` is the density model of an object
+    whose start element set has that epoch (forecast mode: the record as of it)."""
     paths, truth_path = week_paths(start, stop)
     first, second = read_snapshot(paths[-1]), read_snapshot(truth_path)
     ids = select(first, second, args.objects, args.min_gap)
     truth: dict[int, dict[str, Any]] = {}
+    groups: dict[Any, list[int]] = {}
     for norad in ids:
         s1 = Satrec.twoline2rv(*first[norad][1:])
         s2 = Satrec.twoline2rv(*second[norad][1:])
+        model = model_at(rp.time.from_jd(s1.jdsatepoch, s1.jdsatepochF))
+        groups.setdefault(model, []).append(norad)
         truth[norad] = {
             "epoch": rp.time.from_jd(s2.jdsatepoch, s2.jdsatepochF),
             "state": sgp4_state(s2, s2.jdsatepoch, s2.jdsatepochF),
@@ -368,30 +383,41 @@ def run_week(
             truth[norad].update(decay(first[norad], s1, s2))
     print(
         f"\n=== week {start} -> {stop}: {len(ids)} objects; history: "
-        f"{', '.join(p.name for p in paths[:-1]) or 'none'}"
+        f"{', '.join(p.name for p in paths[:-1]) or 'none'}; density models (drivers as "
+        f"of): {len(groups)}"
     )
     figs: dict[str, Any] = {}
     raw: dict[str, dict[int, dict[str, Any]]] = {}
     if args.per_object:
         sats = {n: Satrec.twoline2rv(*first[n][1:]) for n in ids}
-        density_ratios(truth, sats, model.space_weather)
+        density_ratios(truth, sats, model_at(None).space_weather)
+    span = None
+    if args.fit_span:
+        span = tuple(86400.0 * float(x) for x in args.fit_span.split(","))
     with tempfile.TemporaryDirectory() as tmp:
-        # Only the selected objects, from every snapshot up to the start.
-        chosen = []
-        for k, p in enumerate(paths):
-            snap = first if p == paths[-1] else read_snapshot(p)
-            out = Path(tmp) / f"{k}_{p.name.removesuffix('.gz')}"
-            out.write_text(
-                "".join(f"{snap[i][0]}\n{snap[i][1]}\n{snap[i][2]}\n" for i in ids if i in snap)
-            )
-            chosen.append(out)
+        snaps = [first if p == paths[-1] else read_snapshot(p) for p in paths]
         for config in args.configs.split(","):
-            span = None
-            if args.fit_span:
-                span = tuple(86400.0 * float(x) for x in args.fit_span.split(","))
-            pred, t_load, t_run, objects = run_config(
-                config, chosen, model, truth, args.threads, span
-            )
+            pred, objects, t_load, t_run = {}, [], 0.0, 0.0
+            for g, (model, members) in enumerate(groups.items()):
+                # Only the group's objects, from every snapshot up to the start.
+                chosen = []
+                for k, (p, snap) in enumerate(zip(paths, snaps, strict=True)):
+                    out = Path(tmp) / f"{g}_{k}_{p.name.removesuffix('.gz')}"
+                    out.write_text(
+                        "".join(
+                            f"{snap[i][0]}\n{snap[i][1]}\n{snap[i][2]}\n"
+                            for i in members
+                            if i in snap
+                        )
+                    )
+                    chosen.append(out)
+                got, load_s, run_s, loaded = run_config(
+                    config, chosen, model, truth, args.threads, span
+                )
+                pred.update(got)
+                objects += loaded
+                t_load += load_s
+                t_run += run_s
             figs[config] = figures(pred, truth, args.truth_covariance == "tle")
             figs[config]["seconds"] = {"load": t_load, "propagation": t_run}
             if config == "fit":
@@ -586,6 +612,28 @@ def prior_scatter(objects: list[Any]) -> dict[str, Any]:
     }
 
 
+def week_models(record: Any, mode: str, start: str, args: argparse.Namespace) -> Any:
+    """``model_at(epoch)``: NRLMSIS 2.1 on the drivers of ``mode`` for an element set of
+    ``epoch`` (None: the week's start day), one model per as-of time."""
+    models: dict[Any, Any] = {}
+
+    def model_at(epoch: Any) -> Any:
+        if mode == "hindcast":
+            key = None
+        elif epoch is None or args.as_of_at == "start":
+            key = np.datetime64(f"{start}T00:00")
+        else:
+            key = as_of_bin(epoch)
+        if key not in models:
+            weather = record
+            if key is not None:
+                weather = record.as_of(key, **as_of_options(args.as_of))
+            models[key] = Msis("2.1", space_weather=weather)
+        return models[key]
+
+    return model_at
+
+
 def main() -> None:
     print(describe())
     parser = argparse.ArgumentParser(
@@ -653,6 +701,14 @@ def main() -> None:
         "mode's SpaceWeather.as_of (default: the library's)",
     )
     parser.add_argument(
+        "--as-of-at",
+        choices=("epoch", "start"),
+        default="epoch",
+        help="forecast mode: the drivers as known at each start element set's epoch "
+        "(default; the start of its 3-hour ap interval), or at the start day's 00:00 for "
+        "every object (before 2026-12-06: most element sets of a snapshot are later)",
+    )
+    parser.add_argument(
         "--per-object",
         action="store_true",
         help="also write catalog_realism_objects.json in --out: per week, configuration "
@@ -686,11 +742,15 @@ def main() -> None:
     for start, stop in weeks:
         results[start] = {}
         for mode in modes:
-            weather = record
-            if mode == "forecast":
-                weather = record.as_of(f"{start}T00:00", **as_of_options(args.as_of))
-            print(f"\n--- drivers: {mode} ({weather.source})")
-            figs, raw, truth = run_week(start, stop, args, Msis("2.1", space_weather=weather))
+            model_at = week_models(record, mode, start, args)
+            where = {
+                "hindcast": "observed through the prediction",
+                "forecast": "as of each start element set's epoch (its 3-hour ap interval)"
+                if args.as_of_at == "epoch"
+                else f"as of {start}T00:00",
+            }[mode]
+            print(f"\n--- drivers: {mode}, {where} ({record.source})")
+            figs, raw, truth = run_week(start, stop, args, model_at)
             suffix = "" if mode == "forecast" else "/hindcast"
             results[start].update({c + suffix: f for c, f in figs.items()})
             for config, pred in raw.items():
