@@ -97,6 +97,25 @@ def test_omm_formats_match_the_tles(tmp_path, kind):
         assert a.norad_id == b.norad_id and a.name == b.name
 
 
+@pytest.mark.parametrize("form", ["whole seconds", "Z"])
+def test_omm_epochs_in_every_ccsds_form_rebuild_the_element_set(tmp_path, form):
+    # CCSDS epochs may end in Z or carry no fraction; sgp4's OMM reader takes neither.
+    # The loaded object's Satrec (what catalog and reentry runs rebuild) must come from
+    # the same epoch as the TLE's, to the microsecond.
+    records = omm_records()
+    for r in records:
+        whole = str(np.datetime64(r["EPOCH"], "s"))
+        r["EPOCH"] = whole if form == "whole seconds" else r["EPOCH"] + "Z"
+    path = tmp_path / "cat.json"
+    path.write_text(json.dumps(records))
+    for obj, (_, l1, l2) in zip(catalog.load(path), tle_pairs(), strict=True):
+        tle = Satrec.twoline2rv(l1, l2)
+        sat = obj.satrec()
+        days = (sat.jdsatepoch - tle.jdsatepoch) + (sat.jdsatepochF - tle.jdsatepochF)
+        limit = 1.0 if form == "whole seconds" else 1e-6  # s: the fraction cut, or none
+        assert abs(days * 86400.0) < limit
+
+
 def test_malformed_input_is_named_or_skipped(tmp_path):
     lines = SAMPLE.read_text().splitlines()
     bad = lines.copy()

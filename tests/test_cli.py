@@ -323,3 +323,141 @@ def test_screen_on_a_dask_scheduler_writes_the_local_events(tmp_path, capsys):
     assert len(local["tca"]) >= 1 and remote["tca"] == local["tca"]
     assert remote["miss_distance"] == local["miss_distance"]
     capsys.readouterr()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["catalog", "x.tle", "--end", "2002-09-08", "--members", "5"],
+            "--members acts only with --method monte_carlo",
+        ),
+        (
+            ["catalog", "x.tle", "--end", "2002-09-08", "--seed", "3"],
+            "--seed acts only with --method monte_carlo",
+        ),
+        (
+            [
+                "catalog",
+                "x.tle",
+                "--end",
+                "2002-09-08",
+                "--method",
+                "monte_carlo",
+                "--update-interval",
+                "60",
+            ],
+            "--update-interval acts only with --method ccsp",
+        ),
+        (
+            ["conjunction", "x.cdm", "--members", "50"],
+            "--members acts only with --method monte_carlo",
+        ),
+        (
+            ["screen", "x.tle", "--end", "2002-09-08", "--members", "50"],
+            "--members acts only with --monte-carlo",
+        ),
+        (["conjunction", "x.cdm", "--lead", "inf"], "argument --lead: must be a positive number"),
+        (["conjunction", "x.cdm", "--lead", "nan"], "argument --lead: must be a positive number"),
+        (
+            ["catalog", "x.tle", "--end", "2002-09-08", "--cd", "inf"],
+            "argument --cd: must be a positive",
+        ),
+    ],
+)
+def test_an_option_that_would_do_nothing_or_is_not_a_number_is_refused(
+    args, message, capsys, tmp_path
+):
+    # Refused by the parser (exit 2) before any file is read or folder made: an option
+    # given where it does nothing is refused, never ignored.
+    with pytest.raises(SystemExit) as info:
+        main([*args, "--out", str(tmp_path / "o")] if args[0] != "conjunction" else args)
+    assert info.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("variable", ["RHOPROP_FIELD_MEMORY", "RHOPROP_CACHE_MAX_BYTES"])
+def test_a_bad_memory_or_cache_variable_stops_the_run_before_it_starts(
+    variable, monkeypatch, capsys, tmp_path
+):
+    # It was read only when the run first needed it: after every output was written.
+    monkeypatch.setenv(variable, "-5")
+    sample = Path(__file__).parent / "data" / "sample.tle"
+    with pytest.raises(SystemExit) as info:
+        main(["catalog", str(sample), "--end", "2002-09-07T06:00Z", "--out", str(tmp_path / "o")])
+    assert info.value.code == 2
+    assert f"{variable} must be a number of bytes >= 0, got '-5'" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_drag_file_with_both_columns_is_refused_and_unknown_ids_are_noted(capsys, tmp_path):
+    sample = Path(__file__).parent / "data" / "sample.tle"  # NORAD 90001-90006
+    both = tmp_path / "both.csv"
+    both.write_text("norad_id,drag_parameter,area_to_mass\n90001,0.02,0.01\n")
+    run = ["catalog", str(sample), "--end", "2002-09-07T06:00Z", "--no-fit"]
+    assert main([*run, "--drag-file", str(both), "--out", str(tmp_path / "a")]) == 1
+    assert "give drag_parameter (Cd*A/m) or area_to_mass (A/m, times --cd), not both" in (
+        capsys.readouterr().err
+    )
+    other = tmp_path / "other.csv"
+    other.write_text("norad_id,drag_parameter\n90001,0.02\n99999,0.03\n")
+    assert main([*run, "--drag-file", str(other), "--out", str(tmp_path / "b")]) == 0
+    assert f"note: 1 NORAD ids of {other} are not in {sample} (not used): 99999" in (
+        capsys.readouterr().err
+    )
+
+
+def test_a_covariance_file_that_is_no_covariance_is_named(capsys, tmp_path):
+    sample = Path(__file__).parent / "data" / "sample.tle"
+    run = ["catalog", str(sample), "--end", "2002-09-07T06:00Z", "--no-fit"]
+    cases = {
+        "nan.txt": (np.where(np.eye(6) > 0, np.nan, 0.0), "NaN or infinite entries"),
+        "negative.txt": (-np.eye(6), "not positive definite"),
+        "skew.txt": (np.eye(6) + np.triu(np.ones((6, 6)), 1), "not symmetric"),
+    }
+    for name, (matrix, message) in cases.items():
+        path = tmp_path / name
+        np.savetxt(path, matrix)
+        code = main([*run, "--initial-covariance", str(path), "--out", str(tmp_path / name)])
+        assert code == 1
+        assert f"{path}: the covariance" in (err := capsys.readouterr().err) and message in err
+    text = tmp_path / "text.txt"
+    text.write_text("a covariance\n")
+    assert main([*run, "--initial-covariance", str(text), "--out", str(tmp_path / "t")]) == 1
+    assert f"{text}: not a 6x6 matrix of numbers" in capsys.readouterr().err
+
+
+def test_warnings_read_as_the_command_line_s_not_as_source_lines(tmp_path):
+    # A newcomer saw "/.../msis.py:356: PredictedDriversWarning: ..." and the library's
+    # source line; the run's warning now reads "rhoprop: warning (...)". In a
+    # process of its own: pytest records warnings instead of printing them.
+    sample = Path(__file__).parent / "data" / "sample.tle"
+    args = ["catalog", str(sample), "--end", "2002-09-07T06:00Z", "--no-fit"]
+    args += ["--as-of", "2002-09-01T00:00Z", "--out", str(tmp_path / "a")]
+    run = subprocess.run(
+        [sys.executable, "-m", "rhoprop", *args], capture_output=True, text=True, timeout=600
+    )
+    assert run.returncode == 0, run.stderr
+    # Once per process: a cold density cache is sampled in forked workers, each of which
+    # may say it once more.
+    assert "rhoprop: warning (PredictedDriversWarning): predicted space" in run.stderr
+    assert ".py:" not in run.stderr
+
+
+def test_a_run_nothing_of_which_can_run_is_refused_before_any_output(capsys, tmp_path):
+    # Every element set 180 days before --end (beyond the 60-day --max-span) once gave an
+    # empty ephemeris and exit 0.
+    sample = Path(__file__).parent / "data" / "sample.tle"
+    out = tmp_path / "o"
+    args = ["catalog", str(sample), "--end", "2003-03-07T06:00Z", "--no-fit", "--out", str(out)]
+    assert main(args) == 1
+    assert "no element set of 6 can be run to 2003-03-07T06:00Z" in capsys.readouterr().err
+    assert not out.exists()
+    # Repeated ids with --duplicates error name the file, not OEM files nobody asked for.
+    twice = tmp_path / "twice.tle"
+    twice.write_text(sample.read_text() * 2)
+    args = ["catalog", str(twice), "--end", "2002-09-07T06:00Z", "--duplicates", "error"]
+    assert main([*args, "--no-fit", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"occur more than once in {twice} (--duplicates error)" in err and "OEM" not in err

@@ -247,3 +247,24 @@ def test_example_scenario_switches_method_with_one_word(tmp_path):
     path.write_text(text.replace("update_interval = 3600.0", "members = 3"))
     with pytest.raises(ScenarioError, match=r"method\.ccsp has unknown key"):
         load_scenario(path)
+
+
+def test_a_scenario_after_the_record_runs_on_the_forecast_drivers(tmp_path):
+    # The example's models on "observed" drivers cannot run past the record's last
+    # observed day; space_weather = "forecast" takes its predicted rows (with the
+    # forecast's lead time and sigma), as the catalog commands do by themselves.
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "examples" / "scenario.toml").read_text()
+    text = text.replace('version = "2.1"\n', 'version = "2.1"\nspace_weather = "forecast"\n')
+    path = tmp_path / "forecast.toml"
+    path.write_text(text)
+    sc = load_scenario(path)
+    model = sc["models"]["NRLMSIS 2.1"]
+    last = rp.SpaceWeather.cached().observed_end
+    later = last + np.timedelta64(90, "D")  # past the daily predicted rows too
+    with pytest.warns(rp.errors.PredictedDriversWarning):
+        mean, sigma = model.mean_std(later, 0.0, 0.0, 400e3)
+    assert np.isfinite(mean) and mean > 0 and sigma > 0
+    with pytest.raises(rp.OutsideRecordError):
+        rp.density.Msis("2.1").mean_std(later, 0.0, 0.0, 400e3)

@@ -118,6 +118,35 @@ def test_omm_files_that_do_not_parse_name_the_file_and_field(tmp_path):
         rp.catalog.load(tmp_path / "fast.json")
 
 
+@pytest.mark.parametrize(
+    ("line", "columns", "text", "message"),
+    [
+        (2, (53, 63), "15.523O4312", r"columns 53-63 \(mean motion\) = '15.523O4312' is not a"),
+        (2, (9, 16), "200.0000", r"columns 9-16 \(inclination\) = '200.0000' is outside 0-180"),
+        (2, (9, 16), " -1.6000", r"columns 9-16 \(inclination\) = ' -1.6000' is not a"),
+        (2, (27, 33), "00O1234", r"columns 27-33 \(eccentricity\) = '00O1234' is not a"),
+        (2, (44, 51), "361.0000", r"columns 44-51 \(mean anomaly\) = '361.0000' is outside"),
+        (1, (54, 61), " 1x345-3", r"columns 54-61 \(B\*\) = ' 1x345-3' is not a"),
+        (1, (21, 32), "400.12345678", r"columns 21-32 \(epoch day\) = '400.12345678' is outside"),
+    ],
+)
+def test_a_tle_field_that_sgp4_would_half_read_is_named(tmp_path, line, columns, text, message):
+    # sgp4 reads a field up to its first bad character and folds angles into range: a
+    # letter O for a zero (with the checksum still valid) ran a wrong orbit without a word.
+    from sgp4 import exporter
+
+    lines = SAMPLE.read_text().splitlines()[:3]
+    k = line  # lines[0] is the name
+    first, last = columns
+    body = lines[k][: first - 1] + text + lines[k][last:68]
+    lines[k] = body + str(exporter.compute_checksum(body))
+    path = tmp_path / "bad.tle"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=message):
+        rp.catalog.load(path)
+    assert len(rp.catalog.load(path, errors="record").skipped) == 1
+
+
 def test_a_damaged_gzip_names_the_file(tmp_path):
     data = gzip.compress(SAMPLE.read_bytes())
     (tmp_path / "cut.tle.gz").write_bytes(data[: len(data) // 2])
@@ -215,6 +244,48 @@ def test_messages_name_the_argument():
         rp.OrbitState(PAPER.epoch, ["1e6", "2e6", "3e6"], PAPER.velocity)
     with pytest.raises(TypeError, match="weights must be real numbers"):
         GaussianMixture({"a": 1.0, "b": 1.0}, [0.0, 1.0], [1.0, 1.0])
+
+
+def test_the_second_review_s_inputs_are_named():
+    # Each once gave another exception, a numpy message or the wrong argument's name.
+    with pytest.raises(TypeError, match=r"path must be a file's path .* got 5"):
+        rp.catalog.load(5)
+    with pytest.raises(TypeError, match="objects must be a Catalog or CatalogObjects"):
+        rp.catalog.reentry(["x"], MODEL)
+    objects = rp.catalog.load(SAMPLE)
+    end = "2002-09-07T06:00:00"
+    quiet = rp.Execution(progress=False)
+    with pytest.raises(ValueError, match=r"output_step = 1e-300 s gives .* output epochs"):
+        rp.catalog.propagate_catalog(objects, MODEL, end, output_step=1e-300, execution=quiet)
+    with pytest.raises(ValueError, match=r"update_interval = 1e-300 s gives .* updates"):
+        rp.catalog.propagate_catalog(
+            objects, MODEL, end, method=rp.Ccsp(update_interval=1e-300), execution=quiet
+        )
+    with pytest.raises(ValueError, match="initial_covariance must be finite, got NaN"):
+        rp.catalog.propagate_catalog(
+            objects,
+            MODEL,
+            end,
+            initial=rp.catalog.Initial(covariance=np.full((6, 6), np.nan)),
+            execution=quiet,
+        )
+    epochs = PAPER.epoch + np.arange(6) * np.timedelta64(60, "s")
+    positions = np.tile(PAPER.position, (6, 1))
+    positions[2, 1] = np.nan
+    with pytest.raises(ValueError, match=r"positions must be finite, got .* in row 2"):
+        rp.fit_positions(epochs, positions, CRAFT, MODEL)
+    with pytest.raises(ValueError, match="duration must be at most 3660 days"):
+        rp.catalog.reentry(objects, MODEL, duration=1e5 * 86400.0, fit=False)
+
+
+def test_a_conjunction_lead_time_is_bounded_before_any_work():
+    # 1e12 s once stepped back a day at a time for hours, inf raised OverflowError.
+    pytest.importorskip("ccsds_ndm")
+    message = rp.conjunction.read_cdm(Path(__file__).parents[1] / "examples" / "conjunction.cdm")
+    models = {"a": MODEL}
+    for lead, text in ((1e12, "must lie in 60-2.592e"), (float("inf"), "must be finite")):
+        with pytest.raises(ValueError, match=text):
+            rp.conjunction.density_pc(message, models, "a", lead_time=lead)
 
 
 def test_equal_orbit_states_compare_equal():

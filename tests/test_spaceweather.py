@@ -13,6 +13,7 @@ import re
 import numpy as np
 import pytest
 
+from rhoprop.errors import PredictedDriversWarning
 from rhoprop.spaceweather import (
     SECTIONS,
     Drivers,
@@ -386,7 +387,12 @@ def test_out_of_range_raises_naming_date_and_span(sw):
         sw.drivers(last + np.timedelta64(1, "ns"))
     with pytest.raises(ValueError, match="outside"):
         sw.drivers(first - np.timedelta64(1, "ns"))
-    assert len(sw.drivers([first, last])) == 2
+    # The record's last days are its daily predicted rows: drivers with their lead time,
+    # forecast sigma and a warning, as with_forecast() gives them.
+    with pytest.warns(PredictedDriversWarning, match="epochs after the last observed day"):
+        both = sw.drivers([first, last])
+    assert len(both) == 2 and both.lead_time[0] == 0 and both.lead_time[1] > 0
+    assert both.f107_forecast_sigma[1] > 0 and both.f107_forecast_sigma[0] == 0
 
 
 def test_drivers_from_csv_equal_txt(mini_files):

@@ -37,6 +37,9 @@ from .errors import CacheWarning
 
 #: Environment variable of the size cap of each cache directory, bytes.
 MAX_BYTES_ENV = "RHOPROP_CACHE_MAX_BYTES"
+#: Environment variable of the in-memory density-tile budget, bytes (read by
+#: :mod:`rhoprop.density.atlas`).
+FIELD_MEMORY_ENV = "RHOPROP_FIELD_MEMORY"
 #: Default size cap, bytes (2 GB).
 DEFAULT_MAX_BYTES = 2_000_000_000
 #: Name of the checksum array inside an entry.
@@ -79,6 +82,14 @@ def max_bytes() -> int:
     >= 0, e.g. ``5e8``) or :data:`DEFAULT_MAX_BYTES`. ValueError naming the variable if it
     is not a number >= 0."""
     return bytes_from_env(MAX_BYTES_ENV, DEFAULT_MAX_BYTES)
+
+
+def check_environment() -> None:
+    """ValueError naming the variable if ``$RHOPROP_CACHE_MAX_BYTES`` or
+    ``$RHOPROP_FIELD_MEMORY`` is set to anything but a number of bytes >= 0: the command
+    line checks them before a run, not when the run first needs them."""
+    max_bytes()
+    bytes_from_env(FIELD_MEMORY_ENV, 0)
 
 
 def checksum(arrays: Mapping[str, np.ndarray]) -> str:

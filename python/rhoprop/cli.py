@@ -10,11 +10,17 @@ import argparse
 import math
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from ._version import __version__
-from .jobs.models import METHOD_NAMES, MODEL_NAMES, SCREEN_MODEL_NAMES, TABLE_FORMATS
+from .jobs.models import (
+    METHOD_NAMES,
+    MODEL_NAMES,
+    SCREEN_MODEL_NAMES,
+    TABLE_FORMATS,
+    method_takes,
+)
 
 
 def _paper(args: argparse.Namespace) -> int:
@@ -41,7 +47,10 @@ def _catalog(args: argparse.Namespace) -> int:
         args.end,
         args.out,
         method=method_by_name(
-            args.method, n=args.members, seed=args.seed, update_interval=args.update_interval
+            args.method,
+            n=100 if args.members is None else args.members,
+            seed=args.seed or 0,
+            update_interval=args.update_interval or 3600.0,
         ),
         model=args.model,
         output_step=args.output_step,
@@ -132,7 +141,7 @@ def _screen(args: argparse.Namespace) -> int:
         hard_body_radius=args.hbr,
         radii_file=args.radii,
         monte_carlo_events=args.monte_carlo,
-        members=args.members,
+        members=200 if args.members is None else args.members,
         skip_bad=not args.strict,
         overwrite=args.overwrite,
         command=args.command_line,
@@ -179,10 +188,50 @@ def _conjunction(args: argparse.Namespace) -> int:
     return 0
 
 
-def _seed(parser: argparse.ArgumentParser) -> None:
+def _seed(parser: argparse.ArgumentParser, default: int | None = 0) -> None:
     parser.add_argument(
-        "--seed", type=int, default=0, help="seed of the Monte Carlo members (default 0)"
+        "--seed",
+        type=_seed_value,
+        default=default,
+        help="seed of the Monte Carlo members (default 0)",
     )
+
+
+def _seed_value(text: str) -> int:
+    """An argparse type: a whole number 0 .. 2**64 - 1 (the core's 64-bit streams)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+    if not 0 <= value < 2**64:
+        raise argparse.ArgumentTypeError(f"must lie in 0 .. 2**64 - 1, got {text}")
+    return value
+
+
+_MC = "--method monte_carlo"
+#: Options that act only with another's value: (command, option, its dest, the condition
+#: as a predicate on the arguments, what it needs). Given without it they are refused,
+#: never ignored.
+_NEEDS: tuple[tuple[str, str, str, Callable[[argparse.Namespace], bool], str], ...] = (
+    ("catalog", "--members", "members", lambda a: method_takes(a.method, "n"), _MC),
+    ("catalog", "--seed", "seed", lambda a: method_takes(a.method, "seed"), _MC),
+    (
+        "catalog",
+        "--update-interval",
+        "update_interval",
+        lambda a: method_takes(a.method, "update_interval"),
+        "--method ccsp",
+    ),
+    ("conjunction", "--members", "members", lambda a: method_takes(a.method, "n"), _MC),
+    ("screen", "--members", "members", lambda a: a.monte_carlo > 0, "--monte-carlo N (N > 0)"),
+)
+
+
+def _refuse_unused(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """A parser error for an option given where it does nothing (``_NEEDS``)."""
+    for command, option, dest, applies, needs in _NEEDS:
+        if args.command == command and getattr(args, dest) is not None and not applies(args):
+            parser.error(f"{option} acts only with {needs}")
 
 
 def _cache(args: argparse.Namespace) -> int:
@@ -383,7 +432,12 @@ def build_parser() -> argparse.ArgumentParser:
         default="ccsp",
         help="the sigma-point filter or a Monte Carlo per object",
     )
-    cat.add_argument("--members", type=int, default=100, help="Monte Carlo members per object")
+    cat.add_argument(
+        "--members",
+        type=int,
+        default=None,
+        help="Monte Carlo members per object (default 100; only with --method monte_carlo)",
+    )
     cat.add_argument("--output-step", type=_positive, default=3600.0, help="output spacing, s")
     cat.add_argument(
         "--frame",
@@ -396,11 +450,11 @@ def build_parser() -> argparse.ArgumentParser:
     cat.add_argument(
         "--update-interval",
         type=_positive,
-        default=3600.0,
-        help="CCSP update interval, s (default 3600, the paper's tuning); eccentric "
-        "orbits (e >= 0.1) update once per revolution, at apogee",
+        default=None,
+        help="CCSP update interval, s (default 3600, the paper's tuning; only with --method "
+        "ccsp); eccentric orbits (e >= 0.1) update once per revolution, at apogee",
     )
-    _seed(cat)
+    _seed(cat, default=None)
     cat.add_argument(
         "--drag-file",
         default=None,
@@ -410,7 +464,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument(
         "--cd",
-        type=float,
+        type=_positive,
         default=None,
         help="drag coefficient for a --drag-file that gives area_to_mass (default 2.2)",
     )
@@ -540,7 +594,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     reentry.add_argument(
         "--drag-sigma",
-        type=float,
+        type=_non_negative,
         default=None,
         help="relative 1-sigma of Cd*A/m (default: the fit's, at least 0.15; else 0.15)",
     )
@@ -566,11 +620,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     conj.add_argument("file", help="CDM file (KVN or XML)")
     conj.add_argument(
-        "--hbr", type=float, default=None, help="hard-body radius, m (default: the CDM's)"
+        "--hbr", type=_positive, default=None, help="hard-body radius, m (default: the CDM's)"
     )
     conj.add_argument(
         "--lead",
-        type=float,
+        type=_positive,
         default=None,
         help="s before TCA the density uncertainty starts (default: TCA - CREATION_DATE)",
     )
@@ -583,7 +637,7 @@ def build_parser() -> argparse.ArgumentParser:
     conj.add_argument("--members", type=int, default=None, help="Monte Carlo members (200)")
     conj.add_argument(
         "--drag",
-        type=float,
+        type=_positive,
         nargs=2,
         metavar=("BETA1", "BETA2"),
         default=None,
@@ -622,7 +676,7 @@ def build_parser() -> argparse.ArgumentParser:
         "1971, Cd debiased per model) or one model",
     )
     scr.add_argument(
-        "--hbr", type=float, default=None, help="combined hard-body radius for every event, m"
+        "--hbr", type=_positive, default=None, help="combined hard-body radius for every event, m"
     )
     scr.add_argument(
         "--radii",
@@ -654,7 +708,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="also the member Monte Carlo's Pc of the N most probable events (default 0)",
     )
     scr.add_argument(
-        "--members", type=int, default=200, help="Monte Carlo members per object and model"
+        "--members",
+        type=int,
+        default=None,
+        help="Monte Carlo members per object and model (default 200; only with --monte-carlo)",
     )
     scr.add_argument(
         "--max-span",
@@ -690,7 +747,7 @@ def build_parser() -> argparse.ArgumentParser:
         "and SET's JB2008 index files into the user cache ($RHOPROP_CACHE, else "
         "$XDG_CACHE_HOME/rhoprop or ~/.cache/rhoprop), where rhoprop reads them next.",
     )
-    refresh.add_argument("--timeout", type=float, default=60.0, help="per download, s")
+    refresh.add_argument("--timeout", type=_positive, default=60.0, help="per download, s")
     refresh.set_defaults(run=_data_refresh)
     cache = sub.add_parser(
         "cache",
@@ -754,6 +811,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 2
+    _refuse_unused(parser, args)
+    from .cache import check_environment
+
+    try:
+        check_environment()
+    except ValueError as err:
+        parser.error(str(err))
     if getattr(args, "members", None) is not None and args.members < 2:
         parser.error("--members must be at least 2")
     if args.threads is not None:
@@ -764,10 +828,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as err:
             parser.error(f"--threads: {err}")
     before = _cache_bytes()
+    plain = warnings.formatwarning
+    warnings.formatwarning = _format_warning
     try:
         with warnings.catch_warnings():
             # The commands list each element set they set aside on stderr themselves.
             warnings.filterwarnings("ignore", r".* Earth radii set aside", RuntimeWarning)
+            # Said once per run, not once per place in the library that meets it.
+            warnings.filterwarnings("once", r"predicted space-weather drivers in use")
             code = int(args.run(args))
         _say_cache_growth(before)
         return code
@@ -779,6 +847,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, TypeError, OSError, ImportError) as err:
         print(f"rhoprop: error: {err}", file=sys.stderr)
         return 1
+    finally:
+        warnings.formatwarning = plain
+
+
+def _format_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    line: str | None = None,
+) -> str:
+    """A warning as the command line shows it: its kind and message, not the library's
+    source line."""
+    return f"rhoprop: warning ({category.__name__}): {message}\n"
 
 
 if __name__ == "__main__":

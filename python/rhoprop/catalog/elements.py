@@ -14,6 +14,7 @@ import dataclasses
 import io
 import json
 import math
+import re
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -198,6 +199,47 @@ def _checksum_ok(line: str) -> bool:
     return line[68].isdigit() and total % 10 == int(line[68])
 
 
+_NUMBER = r" *(\d+\.?\d*|\.\d+)"
+_SIGNED_DECIMAL = r" *[+-]?\d*\.\d+"
+_EXPONENT = r" *[+-]?\d{1,5}[ +-]\d"  # an implied-decimal mantissa and exponent: -11606-4
+_DIGITS = r" *\d*"
+#: The numeric fields of a TLE's two lines: (line, first and last column (1-based), name,
+#: form, allowed range). sgp4 reads a field up to its first bad character (mean motion
+#: "15.523O4312" read as 15.523) and folds angles out of range, so each is checked whole.
+_TLE_FIELDS = (
+    (1, 19, 20, "epoch year", r"[ \d]\d", None),
+    (1, 21, 32, "epoch day", r" *\d{1,3}\.\d*", (1.0, 367.0)),
+    (1, 34, 43, "first derivative of mean motion", _SIGNED_DECIMAL, None),
+    (1, 45, 52, "second derivative of mean motion", _EXPONENT, None),
+    (1, 54, 61, "B*", _EXPONENT, None),
+    (1, 63, 63, "ephemeris type", r"[ \d]", None),
+    (1, 65, 68, "element set number", _DIGITS, None),
+    (2, 9, 16, "inclination", _NUMBER, (0.0, 180.0)),
+    (2, 18, 25, "right ascension of the ascending node", _NUMBER, (0.0, 360.0)),
+    (2, 27, 33, "eccentricity", r" *\d{1,7}", None),
+    (2, 35, 42, "argument of perigee", _NUMBER, (0.0, 360.0)),
+    (2, 44, 51, "mean anomaly", _NUMBER, (0.0, 360.0)),
+    (2, 53, 63, "mean motion", _NUMBER, None),
+    (2, 64, 68, "revolution number", _DIGITS, None),
+)
+
+
+def _tle_field_problem(lines: tuple[tuple[int, str], tuple[int, str]]) -> str | None:
+    """What is wrong with a TLE's numeric fields (naming the line, columns and field), or
+    None."""
+    for line, first, last, name, form, bounds in _TLE_FIELDS:
+        number, text = lines[line - 1]
+        field = text[first - 1 : last]
+        where = f"line {number} columns {first}-{last} ({name}) = {field!r}"
+        if not re.fullmatch(form, field):
+            return f"{where} is not a number of the TLE's form"
+        if bounds is not None and not bounds[0] <= float(field) <= bounds[1]:
+            return f"{where} is outside {bounds[0]:g}-{bounds[1]:g}"
+        if name == "mean motion" and float(field) <= 0.0:
+            return f"{where} is not positive"
+    return None
+
+
 def _parse_tle(text: str, path: str) -> list[tuple[str, Any]]:
     """(where, callable returning an object) per TLE in ``text``."""
     from sgp4.api import Satrec
@@ -229,6 +271,8 @@ def _parse_tle(text: str, path: str) -> list[tuple[str, Any]]:
                 break
         if problem is None and l1[2:7] != l2[2:7]:
             problem = f"catalog numbers differ: {l1[2:7]!r} on line {n1}, {l2[2:7]!r} on line {n2}"
+        if problem is None:
+            problem = _tle_field_problem(((n1, l1), (n2, l2)))
         if problem:
             entries.append((where, ValueError(f"{where}: {problem}")))
             continue
@@ -291,6 +335,8 @@ def _checked_omm(rec: dict[str, Any]) -> dict[str, Any]:
         if not isinstance(epoch, str):
             raise ValueError(f"unreadable field EPOCH = {epoch!r}")
         text = epoch.strip().removesuffix("Z")
+        if not re.fullmatch(r"\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d+)?", text):
+            raise ValueError(f"unreadable field EPOCH = {epoch!r} (CCSDS: YYYY-MM-DDThh:mm:ss)")
         out["EPOCH"] = text if "." in text else text + ".0"
     return out
 
@@ -326,7 +372,8 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
             continue
         sat = Satrec()
         try:
-            omm.initialize(sat, _checked_omm(rec))
+            checked = _checked_omm(rec)
+            omm.initialize(sat, checked)
         except KeyError as err:
             entries.append((where, ValueError(f"{where}: missing field {err}")))
             continue
@@ -336,7 +383,8 @@ def _parse_omm(text: str, path: str) -> list[tuple[str, Any]]:
             )
             entries.append((where, ValueError(f"{where}: {text}")))
             continue
-        entries.append((where, (sat, str(rec.get("OBJECT_NAME", "")).strip(), dict(rec))))
+        # The checked record: ``CatalogObject.satrec`` parses it again.
+        entries.append((where, (sat, str(rec.get("OBJECT_NAME", "")).strip(), checked)))
     return entries
 
 
@@ -488,10 +536,19 @@ def load(
             )
         for key, value in drag_parameters.items():
             _validate.positive(f"drag_parameters[{key!r}] (Cd*A/m, m^2/kg)", value)
-    paths = [path] if isinstance(path, (str, Path)) else list(path)
+    try:
+        paths: list[object] = [path] if isinstance(path, (str, Path)) else list(path)
+    except TypeError:
+        paths = [path]
+    files = [Path(one) for one in paths if isinstance(one, (str, Path))]
+    if len(files) != len(paths):
+        bad = next(one for one in paths if not isinstance(one, (str, Path)))
+        raise TypeError(
+            f"path must be a file's path (str or Path) or a sequence of them, got {bad!r:.60}"
+        )
     if not paths:
         raise ValueError("load needs at least one file")
-    entries = [e for one in paths for e in _read_entries(Path(one), errors)]
+    entries = [e for one in files for e in _read_entries(one, errors)]
     out = Catalog([])
     far: dict[int, np.datetime64] = {}  # NORAD id: newest epoch set aside as too far
     for where, item in entries:

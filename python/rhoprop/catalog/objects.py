@@ -176,8 +176,10 @@ def _initial_covariance(obj: CatalogObject, choice: Any) -> tuple[np.ndarray | N
     else:
         cov = np.asarray(choice, dtype=float)
         note = "initial covariance: user-supplied matrix"
-    if cov.shape != (6, 6) or not np.all(np.isfinite(cov)):
-        raise ValueError(f"initial_covariance must be a finite (6, 6) matrix, got {cov.shape}")
+    if cov.shape != (6, 6):
+        raise ValueError(f"initial_covariance must be a (6, 6) matrix, got shape {cov.shape}")
+    if not np.all(np.isfinite(cov)):
+        raise ValueError("initial_covariance must be finite, got NaN or infinite entries")
     return cov, note
 
 

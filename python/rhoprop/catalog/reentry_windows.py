@@ -21,7 +21,7 @@ import datetime as _dt
 import threading
 import warnings
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
 from typing import TYPE_CHECKING, Any, TypedDict
@@ -31,6 +31,7 @@ import numpy as np
 from .. import _validate
 from ..density.model import ModelLike
 from ..parallel import map_in_threads, worker_count
+from ..progress import ProgressBar
 from ..propagation import Spacecraft, monte_carlo
 from ..propagation.dynamics import Dynamics, deprecated_keywords
 from ..propagation.kappa import Constant, KappaProcess
@@ -193,7 +194,17 @@ def _seconds(horizon: object) -> float:
         raise TypeError(f"duration must be seconds or a timedelta, got {type(horizon).__name__}")
     if not np.isfinite(value) or value <= 0:
         raise ValueError(f"duration must be positive, got {horizon!r}")
+    if value > MAX_DURATION:
+        raise ValueError(
+            f"duration must be at most {MAX_DURATION / 86400:g} days (ten years), got "
+            f"{value / 86400:g} days"
+        )
     return value
+
+
+#: Longest reentry horizon, s: ten years (a longer one would also exceed the steps a run
+#: may take at the Monte Carlo's step).
+MAX_DURATION = 3660 * 86400.0
 
 
 def _relative_sigma(obj: CatalogObject, drag_sigma: float | None) -> float:
@@ -248,9 +259,11 @@ def reentry(
             is used: rounded up); its ``kappa`` (None: :data:`DEFAULT_KAPPA`, the model's
             density error held over the whole run); object i group g seeded
             ``seed + 1000 * i + g``; ``threads`` objects run at once (None: all cores);
-            its ``perturbation`` and ``max_memory`` per run. Its ``drag_sigma``,
-            ``record_density`` and ``progress`` are this function's own (a ValueError
-            away from their defaults); its ``output_step`` is not used (decay times only).
+            its ``perturbation`` and ``max_memory`` per run; its ``progress`` (default
+            True: a bar of the objects done; False: none; a callable: called with the
+            number done). Its ``drag_sigma`` and ``record_density`` are this function's
+            own (a ValueError away from their defaults); its ``output_step`` is not used
+            (decay times only).
         duration: how far to look, s after each object's epoch, or a ``timedelta``
             (default 30 days).
         groups: Cd*A/m values per object (stratified; 1 turns Cd*A/m uncertainty off).
@@ -287,6 +300,7 @@ def reentry(
     objs = list(objects)
     if not objs:
         raise ValueError("the catalog has no objects")
+    _check_objects(objs)
     method, dyn, duration = _settings(method, dynamics, duration, dict(deprecated))
     n, seed, threads = method.n, method.seed, method.threads
     groups = _validate.count("groups", groups, minimum=1)
@@ -335,7 +349,7 @@ def reentry(
 
     # In epoch order, so that objects running at once share their day tiles.
     order = sorted(range(len(objs)), key=lambda i: objs[i].state.epoch)
-    ran = map_in_threads(lambda i: one(i, objs[i]), order, worker_count(threads), stop)
+    ran = _with_progress(lambda i: one(i, objs[i]), order, threads, stop, method.progress)
     done = [ran[k] for k in np.argsort(order)]
     decay_times = np.vstack([np.where(d[0] <= span, d[0], np.inf) for d in done])
     lo, med, hi = (_quantile_epochs(objs, decay_times, q) for q in (0.025, 0.5, 0.975))
@@ -357,6 +371,39 @@ def reentry(
         element_sets=np.array([counts[o.norad_id] for o in objs]),
         decay_times=decay_times,
     )
+
+
+def _check_objects(objs: list[Any]) -> None:
+    wrong = next((o for o in objs if not isinstance(o, CatalogObject)), None)
+    if wrong is not None:
+        raise TypeError(
+            "objects must be a Catalog or CatalogObjects (rp.catalog.load), got "
+            f"{type(wrong).__name__} {wrong!r:.60}"
+        )
+
+
+def _with_progress(
+    fn: Callable[[int], Any],
+    order: list[int],
+    threads: int | None,
+    stop: threading.Event,
+    progress: bool | Callable[[int], object],
+) -> list[Any]:
+    """``fn`` over the object indices ``order`` on the run's threads, reporting the
+    objects done: a bar (``progress`` True), a callable, or nothing (False)."""
+    bar = ProgressBar(len(order), "reentry", unit="objects") if progress is True else None
+    shown = bar if bar is not None else (progress if callable(progress) else None)
+    try:
+        return map_in_threads(
+            fn,
+            order,
+            worker_count(threads),
+            stop,
+            None if shown is None else lambda k, _result: shown(k + 1),
+        )
+    finally:
+        if bar is not None:
+            bar.close()
 
 
 def _settings(
@@ -381,7 +428,7 @@ def _settings(
     require_defaults(
         method,
         "reentry",
-        ("drag_sigma", "record_density", "progress"),
+        ("drag_sigma", "record_density"),
         "reentry's drag_sigma= and groups= give each object's Cd*A/m spread",
     )
     dyn = deprecated_keywords("reentry", dynamics, loose, names=("floor_altitude",), stacklevel=4)

@@ -33,6 +33,7 @@ from ..propagation.methods import (
     method_argument,
     with_keywords,
 )
+from ..propagation.propagate import MAX_STEPS
 from ..propagation.results import (
     StateMoments,
     dataset_attrs,
@@ -292,6 +293,11 @@ def common_epochs(
     (default: the latest object epoch), at least the end itself."""
     first = max(o.state.epoch for o in objects) if start is None else start
     span = seconds_between(first, end)
+    if span / step > MAX_STEPS:
+        raise ValueError(
+            f"output_step = {step:g} s gives {span / step:.3g} output epochs over {span:g} s, "
+            f"more than the {MAX_STEPS:,} a run may have; use a larger output_step"
+        )
     k = int(np.floor(span / step * (1 + 1e-12)))
     offsets = -step * np.arange(k, -1, -1)
     return offsets_to_epochs(end, offsets)

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 import numpy.typing as npt
 
+from .. import _validate
 from ..constants import MU
 from ..density.model import ModelLike
 from ..ensemble import EnsembleResult
@@ -46,6 +47,10 @@ REFERENCE_CD = 2.2
 
 #: The lead time is rounded to this grid (s) so it is a whole number of integration steps.
 LEAD_GRID = 60.0
+
+#: Longest lead time, s (30 days): the state that far before TCA is found by shooting
+#: back a day at a time, and conjunction messages are issued days, not months, ahead.
+MAX_LEAD = 30 * 86400.0
 
 
 class EnsembleOptions(TypedDict, total=False):
@@ -389,7 +394,8 @@ def density_pc(
             states are taken to follow.
         hard_body_radius: m (default: the message's ``COMMENT HBR``).
         lead_time: s before TCA at which the density uncertainty starts acting (default:
-            TCA minus the message's CREATION_DATE), rounded to whole minutes.
+            TCA minus the message's CREATION_DATE), 1 minute to 30 days (:data:`MAX_LEAD`),
+            rounded to whole minutes.
         drag_parameters: Cd*A/m of object 1 and 2, m^2/kg (default: each object's
             CD_AREA_OVER_MASS in the message).
         method: :class:`~rhoprop.Ccsp` (default ``rp.Ccsp()``) or
@@ -413,13 +419,19 @@ def density_pc(
     from .probability import pc_2d
 
     hbr = message._hbr(hard_body_radius)
-    lead = message.lead_time if lead_time is None else float(lead_time)
-    lead = round(lead / LEAD_GRID) * LEAD_GRID
-    if not lead >= LEAD_GRID:
+    if lead_time is None:
+        lead = message.lead_time
+        where = f"TCA minus the message's creation date ({message.lead_time:g} s)"
+    else:
+        lead = _validate.seconds("lead_time", lead_time)
+        where = f"lead_time ({lead:g} s)"
+    if not LEAD_GRID <= lead <= MAX_LEAD:
         raise ValueError(
-            f"lead_time must be at least {LEAD_GRID:g} s (TCA minus the creation date is "
-            f"{message.lead_time:g} s): density uncertainty needs time to act"
+            f"{where} must lie in {LEAD_GRID:g}-{MAX_LEAD:g} s (1 minute to 30 days): "
+            "density uncertainty needs time to act, and the state before TCA is found by "
+            "shooting back from it"
         )
+    lead = round(lead / LEAD_GRID) * LEAD_GRID
     a, b = message.object1, message.object2
     betas = [
         _drag_parameter(obj, given, k)

@@ -54,7 +54,14 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _core
-from ..cache import bytes_from_env, cache_dir, entry_lock, load_entry, store_entry
+from ..cache import (
+    FIELD_MEMORY_ENV,
+    bytes_from_env,
+    cache_dir,
+    entry_lock,
+    load_entry,
+    store_entry,
+)
 from ..errors import OutsideRecordError
 from ..progress import ProgressBar
 from ..time import EpochLike, EpochsLike, add_seconds, to_datetime64, ut1_seconds
@@ -78,7 +85,7 @@ DEFAULT_CEILING = 1_500e3
 #: Length of a tile: one UTC day.
 TILE_DAY = np.timedelta64(1, "D")
 #: Environment variable of the in-memory tile budget, bytes.
-MEMORY_ENV = "RHOPROP_FIELD_MEMORY"
+MEMORY_ENV = FIELD_MEMORY_ENV
 #: Default in-memory tile budget, bytes (1 GB: about 40 days of NRLMSIS at the default
 #: resolution).
 DEFAULT_MEMORY = 1_000_000_000
@@ -316,7 +323,8 @@ class Atlas:
                 hint = (
                     "; after the record, give the model predicted drivers "
                     "(space_weather=rp.SpaceWeather().with_forecast() for the NRLMSIS and "
-                    "Jacchia models) or a newer record ('rhoprop data refresh'; JB2008: "
+                    'Jacchia models; space_weather = "forecast" in a scenario file) or a '
+                    "newer record ('rhoprop data refresh'; JB2008: "
                     "rp.density.Jb2008Indices.refresh)"
                     if t1 > last
                     else ""

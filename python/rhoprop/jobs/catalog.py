@@ -14,11 +14,18 @@ import numpy as np
 from ..catalog.covariance import COVARIANCE_NAMES
 from ..catalog.elements import Catalog, FitSettings, load
 from ..catalog.objects import Initial
-from ..catalog.run import MAX_SPAN, STATUSES, CatalogResult, propagate_catalog
+from ..catalog.run import (
+    MAX_SPAN,
+    STATUSES,
+    CatalogResult,
+    beyond_max_span,
+    propagate_catalog,
+)
 from ..execution import Execution
 from ..io import (
     OutputFolder,
     command_line,
+    duplicate_ids,
     oem_names,
     sanitise,
     table_name,
@@ -30,8 +37,9 @@ from ..io.tables import format_argument, meta_path, write_folder_table
 from ..options import Duplicates, TableFormat
 from ..propagation import Dynamics
 from ..propagation.methods import Ccsp, Method, MonteCarlo
+from ..propagation.montecarlo import drag_sigma_argument
 from ..spaceweather import SpaceWeather
-from ..time import to_datetime64
+from ..time import seconds_between, to_datetime64
 from .models import as_of_note, model_by_name
 
 
@@ -47,9 +55,20 @@ def initial_covariance_option(value: str | None) -> Any:
             f"--initial-covariance must be one of {', '.join(COVARIANCE_NAMES)} or a file "
             f"with a 6x6 matrix, got {value!r}"
         )
-    matrix = np.loadtxt(path, ndmin=2)
+    try:
+        matrix = np.loadtxt(path, ndmin=2)
+    except (ValueError, UnicodeDecodeError) as err:
+        raise ValueError(f"{path}: not a 6x6 matrix of numbers ({err})") from None
     if matrix.shape != (6, 6):
         raise ValueError(f"{path}: a 6x6 covariance matrix is needed, got {matrix.shape}")
+    if not np.all(np.isfinite(matrix)):
+        raise ValueError(f"{path}: the covariance has NaN or infinite entries")
+    if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=0.0):
+        raise ValueError(f"{path}: the covariance is not symmetric")
+    try:
+        np.linalg.cholesky(matrix)
+    except np.linalg.LinAlgError:
+        raise ValueError(f"{path}: the covariance is not positive definite") from None
     return matrix
 
 
@@ -129,6 +148,10 @@ def read_drag_file(path: str | Path, cd: float | None = None) -> dict[int, float
         raise ValueError(
             f"{p.name}: expected a header with norad_id and drag_parameter or area_to_mass, "
             f"got {sorted(columns)}"
+        )
+    if {"drag_parameter", "area_to_mass"} <= columns:
+        raise ValueError(
+            f"{p.name}: give drag_parameter (Cd*A/m) or area_to_mass (A/m, times --cd), not both"
         )
     kind = "drag_parameter" if "drag_parameter" in columns else "area_to_mass"
     if kind == "drag_parameter" and cd is not None:
@@ -270,7 +293,27 @@ class CatalogJob:
                 f"{self.file}: no element set could be read ({len(cat.skipped)} skipped)"
             )
         print_as_of_note(cat, self.as_of)
+        if drag is not None:
+            unused = sorted(set(drag) - {o.norad_id for o in cat.objects})
+            if unused:
+                shown = ", ".join(str(n) for n in unused[:10]) + (
+                    " ..." if len(unused) > 10 else ""
+                )
+                print(
+                    f"note: {len(unused)} NORAD ids of {self.drag_file} are not in "
+                    f"{self.file} (not used): {shown}",
+                    file=sys.stderr,
+                )
         kind: Duplicates = "error" if self.duplicates == "newest" else self.duplicates  # none left
+        _refuse_all_stale(cat, self.end, max_span_option(self.max_span_days))
+        twice = duplicate_ids(cat.objects)
+        if kind == "error" and not self.oem and twice:
+            shown = ", ".join(map(str, twice[:10])) + (" ..." if len(twice) > 10 else "")
+            raise ValueError(
+                f"NORAD ids {shown} occur more than once in {self.file} (--duplicates "
+                "error); --duplicates newest keeps each id's newest element set, suffix "
+                "runs them all"
+            )
         oem_names(cat.objects, kind)  # repeated ids fail here, before any work
         folder = OutputFolder(
             self.out, command=self.command or command_line(), overwrite=self.overwrite
@@ -356,15 +399,30 @@ def _write_catalog_tables(
     return ephemeris, meta, paths, summary
 
 
+def _refuse_all_stale(cat: Catalog, end: Any, limit: float | None) -> None:
+    """ValueError, before any output, when every element set is too far from ``end`` to
+    run (an empty ephemeris and exit 0 told a user nothing ran only in the summary)."""
+    end64 = to_datetime64(end, "--end")
+    reasons = [beyond_max_span(seconds_between(o.state.epoch, end64), "end", limit) for o in cat]
+    if reasons and all(reasons):
+        raise ValueError(
+            f"no element set of {len(reasons)} can be run to {end}: the first's {reasons[0]}"
+        )
+
+
 def _drag_sigma_option(drag_sigma: str | float) -> float | Literal["auto"]:
     """``--drag-sigma``: "auto" or a number (its text)."""
     if isinstance(drag_sigma, str) and drag_sigma == "auto":
         return "auto"
     try:
-        return float(drag_sigma)
+        value = float(drag_sigma)
     except ValueError:
         msg = f"--drag-sigma must be 'auto' or a number, got {drag_sigma!r}"
         raise ValueError(msg) from None
+    try:
+        return drag_sigma_argument(value)
+    except ValueError as err:
+        raise ValueError(f"--drag-sigma: {err}") from None
 
 
 def _iso(t: np.datetime64) -> str:
@@ -428,8 +486,12 @@ class ReentryJob:
         import csv
         import io
 
-        from ..catalog.reentry_windows import reentry, resolved_history
+        from ..catalog.reentry_windows import MAX_DURATION, reentry, resolved_history
 
+        if not 0 < self.horizon_days <= MAX_DURATION / 86400:
+            raise ValueError(
+                f"--horizon must lie in 0-{MAX_DURATION / 86400:g} days, got {self.horizon_days:g}"
+            )
         atmosphere = model_by_name(self.model, self.as_of)
         # reentry() itself predicts a self.history once (history="newest") or each element set
         cat = _load(self.file, self.skip_bad, history="each")

@@ -98,6 +98,14 @@ def method_by_name(name: str, **settings: object) -> Method:
     return _method_from_name(name, **settings)
 
 
+def method_takes(name: str, setting: str) -> bool:
+    """Whether the uncertainty method called ``name`` has the setting ``setting`` (a
+    field of its class: ``n``, ``seed``, ``update_interval``, ...)."""
+    import dataclasses
+
+    return setting in {f.name for f in dataclasses.fields(type(method_by_name(name)))}
+
+
 __all__ = [
     "FAMILIES",
     "METHOD_NAMES",
@@ -107,6 +115,7 @@ __all__ = [
     "as_of_note",
     "as_of_text",
     "method_by_name",
+    "method_takes",
     "model_by_name",
     "models_by_name",
     "record_as_of",

@@ -21,6 +21,7 @@ from .kappa import Constant, GaussMarkov, KappaProcess, PiecewiseConstant, TwoSc
 from .montecarlo import drag_sigma_argument
 from .propagate import (
     DEFAULT_MAX_MEMORY,
+    MAX_STEPS,
     axis_and_eccentricity,
     check_memory,
     check_model,
@@ -610,6 +611,12 @@ def update_schedule(
 
 def _every(offsets: np.ndarray, interval: float) -> np.ndarray:
     """CCSP update times: every ``interval`` s, plus every output offset (> 0)."""
+    if offsets[-1] / interval > MAX_STEPS:
+        raise ValueError(
+            f"update_interval = {interval:g} s gives {offsets[-1] / interval:.3g} updates over "
+            f"{offsets[-1]:g} s, more than the {MAX_STEPS:,} a run may take; use a larger "
+            "update_interval"
+        )
     grid = np.arange(interval, offsets[-1], interval)
     times = np.unique(np.concatenate([grid, offsets[offsets > 0]]))
     return times if len(times) else np.array([offsets[-1]])

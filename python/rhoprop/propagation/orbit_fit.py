@@ -125,6 +125,9 @@ def fit_positions(
     r = _validate.real_array("positions", positions)
     if r.ndim != 2 or r.shape[1] != 3 or r.shape[0] != t.size:
         raise ValueError(f"positions must be ({t.size}, 3) to match epochs, got {r.shape}")
+    if not np.all(np.isfinite(r)):
+        row = int(np.flatnonzero(~np.isfinite(r).all(axis=1))[0])
+        raise ValueError(f"positions must be finite, got {r[row].tolist()} in row {row}")
     if t.size < 5:
         raise ValueError(f"fit_positions needs at least 5 positions, got {t.size}")
     if np.any(np.diff(t) <= 0):

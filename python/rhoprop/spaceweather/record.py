@@ -452,9 +452,12 @@ class SpaceWeather:
         """NRLMSIS drivers (see :class:`Drivers`) at UTC ``epochs``: a ``datetime64``
         scalar or array, an ISO string, a ``datetime`` or a sequence of these (flattened to
         1-D). Only observed and daily predicted rows are used (monthly predicted rows carry
-        no ap). Raises ValueError for NaT, and :class:`~rhoprop.OutsideRecordError` (a
-        ValueError) for epochs outside :attr:`span` (naming the offending epoch and the
-        span) and for missing values in the rows needed.
+        no ap); epochs on predicted days carry their lead time and the forecast sigma
+        (:func:`forecast_sigma`) and warn (:class:`~rhoprop.errors.PredictedDriversWarning`),
+        in a record as published as in :meth:`with_forecast`. Raises ValueError for NaT,
+        and :class:`~rhoprop.OutsideRecordError` (a ValueError) for epochs outside
+        :attr:`span` (naming the offending epoch and the span) and for missing values in
+        the rows needed.
         """
         t = _as_epochs(epochs)
         day0 = self.date[0].astype("datetime64[ns]")
@@ -470,10 +473,15 @@ class SpaceWeather:
         window = np.arange(8)
         ap[:, 5] = self._ap_flat[slot[:, None] - 11 + window].mean(axis=1)
         ap[:, 6] = self._ap_flat[slot[:, None] - 19 + window].mean(axis=1)
-        if self._forecast is None:
+        first_predicted = self._first_predicted_day()
+        if first_predicted is not None and self._forecast is None and len(t):
+            # A record as published: observed epochs keep their drivers as they were.
+            if t.max() < first_predicted.astype("datetime64[ns]"):
+                first_predicted = None
+        if first_predicted is None:
             drivers = Drivers(t, self.f107_obs[day - 1], self.f107_obs_ctr81[day], ap)
         else:
-            start = self._forecast.astype("datetime64[ns]")
+            start = first_predicted.astype("datetime64[ns]")
             lead = np.maximum((t - start) / np.timedelta64(1, "D"), 0.0)
             f_sigma, a_sigma = forecast_sigma(lead)
             drivers = Drivers(
@@ -487,16 +495,27 @@ class SpaceWeather:
                 f107a_forecast_sigma(lead),
             )
             if len(t) and lead.max() > 0:
-                self._warn_predicted()
+                self._warn_predicted(first_predicted)
         self._check_finite(drivers)
         return drivers
 
-    def _warn_predicted(self) -> None:
+    def _first_predicted_day(self) -> np.datetime64 | None:
+        """The first day whose drivers are predicted: a forecast's start, or, in a record
+        as published, the day after the last observed one when daily predicted rows
+        follow it (they once served as if observed: no lead time, no forecast sigma, no
+        warning); None when every usable day is observed."""
+        first: np.datetime64 | None = None
+        if self._forecast is not None:
+            first = self._forecast
+        elif (self.section[: self._n_daily] != 0).any():
+            first = (self.observed_end + _DAY).astype("datetime64[D]")
+        return first
+
+    def _warn_predicted(self, first_predicted: np.datetime64) -> None:
         """The warning, its text the same for every call on this record so that Python
         shows it once per call site (a 12-day run asked for drivers ~100 times, each with
         its own lead in the text: a wall of warnings); ``Drivers.lead_time`` has the
         leads."""
-        assert self._forecast is not None
         last = self.date[self._n_daily - 1]
         # A record as of an epoch is a forecast by request: no newer record to fetch.
         hint = (
@@ -504,7 +523,7 @@ class SpaceWeather:
         )
         warnings.warn(
             f"predicted space-weather drivers in use: epochs after the last observed day "
-            f"({self._forecast - _DAY}) of {self.source} (forecast to "
+            f"({first_predicted - _DAY}) of {self.source} (forecast to "
             f"{last}); density sigma grows with lead time (rhoprop.spaceweather."
             f"forecast_sigma).{hint}",
             PredictedDriversWarning,

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import sys
 from dataclasses import fields
 from pathlib import Path
@@ -23,6 +24,7 @@ from ..io import OutputFolder, command_line, sanitise, write_oem
 from ..propagation import MonteCarlo, OrbitState, Spacecraft, kappa
 from ..propagation.methods import from_name
 from ..spaceweather import SpaceWeather
+from ..time import to_datetime64
 from .plots import ensemble_figure
 
 SECTIONS = {"scenario", "state", "spacecraft", "models", "method", "output"}
@@ -70,12 +72,16 @@ def _space_weather(value: str, where: str, cache: dict[str, SpaceWeather]) -> Sp
             cache[value] = SpaceWeather()
         elif value == "mean-geomagnetic":
             cache[value] = SpaceWeather().mean_geomagnetic()
+        elif value == "forecast":
+            # The newest record at hand, its predicted rows as drivers: runs past the
+            # last observed day (with growing uncertainty and a warning).
+            cache[value] = SpaceWeather.cached().with_forecast()
         elif Path(value).exists():
             cache[value] = SpaceWeather(value)
         else:
             raise ScenarioError(
-                f"{where}.space_weather must be 'observed', 'mean-geomagnetic' or an existing "
-                f"file, got {value!r}"
+                f"{where}.space_weather must be 'observed', 'mean-geomagnetic', 'forecast' or "
+                f"an existing file, got {value!r}"
             )
     return cache[value]
 
@@ -89,6 +95,8 @@ def _model(
     kind = _get(entry, where, "type", str)
     reference = _get(entry, where, "reference", bool, False)
     weight = _get(entry, where, "weight", float, 1.0)
+    if not (math.isfinite(weight) and weight >= 0):
+        raise ScenarioError(f"{where} ({name!r}).weight must be a number >= 0, got {weight}")
     common = {"name", "type", "reference", "weight"}
     try:
         if kind == "msis":
@@ -130,14 +138,18 @@ def load_scenario(path: str | Path) -> dict[str, Any]:
     cr = _table(doc, "spacecraft")
     _unknown(cr, "spacecraft", {"cd", "area_to_mass", "cr"})
     try:
+        epoch = to_datetime64(_get(sc, "scenario", "epoch", str), "epoch")
+    except (ValueError, TypeError) as err:
+        raise ScenarioError(f"scenario.epoch: {err}") from err
+    try:
         state = OrbitState(
-            _get(sc, "scenario", "epoch", str),
+            epoch,
             _get(st, "state", "position", list),
             _get(st, "state", "velocity", list),
             _get(st, "state", "frame", str) if "frame" in st else "GCRF",
         )
     except (ValueError, TypeError) as err:
-        raise ScenarioError(f"[state] / scenario.epoch: {err}") from err
+        raise ScenarioError(f"[state]: {err}") from err
     try:
         craft = Spacecraft(
             _get(cr, "spacecraft", "cd", float),
