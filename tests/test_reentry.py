@@ -96,6 +96,18 @@ def test_nat_beyond_the_horizon(atmosphere):
         catalog.reentry([_low(1, 200e3)], atmosphere, duration="soon")
 
 
+def test_progress_counts_the_objects_done_and_false_turns_it_off(atmosphere):
+    # rp.MonteCarlo(progress=False) was refused; a run showed no progress at all.
+    objs = [_low(1, 200e3), _low(2, 210e3), _low(3, 220e3)]
+    calls: list[int] = []
+    method = rp.MonteCarlo(n=4, progress=calls.append)
+    catalog.reentry(objs, atmosphere, method=method, duration=3600.0, groups=2)
+    assert calls == [1, 2, 3]
+    quiet = rp.MonteCarlo(n=4, progress=False)
+    r = catalog.reentry(objs, atmosphere, method=quiet, duration=3600.0, groups=2)
+    assert r.members == 4
+
+
 def test_cli_reentry_prints_and_writes(tmp_path, capsys):
     out = tmp_path / "re"
     code = main(
