@@ -277,6 +277,12 @@ def test_the_second_review_s_inputs_are_named():
     with pytest.raises(ValueError, match="duration must be at most 3660 days"):
         rp.catalog.reentry(objects, MODEL, duration=1e5 * 86400.0, fit=False)
 
+    def solid(t, lat, lon, alt):  # 1 kg/m^3 everywhere: the orbit diverges in a step
+        return lat * 0 + 1.0, lat * 0 + 0.1
+
+    with pytest.raises(ValueError, match=r"position became non-finite .* the orbit diverged"):
+        rp.ccsp(PAPER, CRAFT, rp.density.FromFunction(solid), 3600.0)
+
 
 def test_a_conjunction_lead_time_is_bounded_before_any_work():
     # 1e12 s once stepped back a day at a time for hours, inf raised OverflowError.

@@ -440,6 +440,17 @@ impl GriddedField {
         alt: f64,
     ) -> Result<(f64, f64), CoreError> {
         let t = ut1 - self.epoch;
+        if !(lat.is_finite() && lon.is_finite() && alt.is_finite()) {
+            // Not a place outside the field: the integrated state itself went bad.
+            return Err(CoreError::Rejected {
+                name: "the integrated state".into(),
+                reason: format!(
+                    "its position became non-finite (altitude {alt} m) at t = {t} s from the \
+                     field's epoch: the orbit diverged, e.g. under a density or an \
+                     acceleration far beyond any real atmosphere"
+                ),
+            });
+        }
         let outside =
             |axis: &'static str, value: f64, a: &Axis, scale: f64| CoreError::OutsideField {
                 axis,
@@ -1061,6 +1072,9 @@ mod tests {
         assert!(f
             .at_geodetic(100.0 + 1200.0, 60f64.to_radians(), 0.0, 450e3)
             .is_ok());
+        // A diverged state is not a place outside the field: the message says so.
+        let e = f.at_geodetic(100.0, 0.0, 0.0, f64::NAN).unwrap_err();
+        assert!(e.to_string().contains("position became non-finite"), "{e}");
     }
 
     #[test]
