@@ -80,6 +80,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import chi2, norm
 from sgp4.api import Satrec
+from tables import slashed
 
 import rhoprop as rp
 from machine import describe, info
@@ -804,14 +805,12 @@ def summary(results: dict[str, Any], weeks: list[str], configs: list[str]) -> No
             f = results[week][config]
             e = f["along_track_error_km"]
             inside = [f[f"inside_{k}sigma"] for k in (1, 2, 3)]
+            along = slashed((100 * i["along_track"] for i in inside), ".0f")
+            rtn = slashed((100 * i["mahalanobis_rtn"] for i in inside), ".0f")
             print(
                 f"| {week} | {config} | {f['objects']} | {e['rhoprop_median']:.2f} / "
                 f"{e['rhoprop_p90']:.1f} | {e['sgp4_median']:.2f} / {e['sgp4_p90']:.1f} | "
-                f"{e['rhoprop_median'] / e['sgp4_median']:.2f} | "
-                + " / ".join(f"{100 * i['along_track']:.0f}" for i in inside)
-                + " | "
-                + " / ".join(f"{100 * i['mahalanobis_rtn']:.0f}" for i in inside)
-                + " |"
+                f"{e['rhoprop_median'] / e['sgp4_median']:.2f} | {along} | {rtn} |"
             )
 
 

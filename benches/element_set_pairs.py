@@ -26,6 +26,7 @@ import numpy as np
 from catalog_realism import EXCLUDE, altitudes_km
 from history_days import HISTORY, manoeuvres, read_history
 from sgp4.api import Satrec
+from tables import slashed
 
 from machine import describe
 from rhoprop.frames import rtn_basis
@@ -81,13 +82,7 @@ def main() -> None:
             continue
         rms = np.sqrt(np.mean(diff[m] ** 2, axis=0))
         med = np.median(np.abs(diff[m]), axis=0)
-        print(
-            f"| {lo:g}-{hi:g} | {m.sum()} | "
-            + " / ".join(f"{x:.0f}" for x in rms)
-            + " | "
-            + " / ".join(f"{x:.0f}" for x in med)
-            + " |"
-        )
+        print(f"| {lo:g}-{hi:g} | {m.sum()} | {slashed(rms, '.0f')} | {slashed(med, '.0f')} |")
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 from catalog_realism import as_of_options
+from tables import slashed
 
 import rhoprop as rp
 from machine import describe, info
@@ -137,13 +138,7 @@ def main() -> None:
                     kept.append(hold)
                     if dep is not None:
                         known.append((dep, d))
-                print(
-                    f"| {start} | {name} | "
-                    + " / ".join(f"{x:+.3f}" for x in d)
-                    + " | "
-                    + " / ".join(f"{x:+.3f}" for x in hold)
-                    + " |"
-                )
+                print(f"| {start} | {name} | {slashed(d, '+.3f')} | {slashed(hold, '+.3f')} |")
         print(f"<!-- {start}: {time.perf_counter() - t0:.0f} s -->", flush=True)
     print("\n| rule | starts | mean delta day 1 / 2 / 3 | RMS delta day 1 / 2 / 3 |")
     print("| --- | ---: | --- | --- |")

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 from sgp4.api import Satrec
+from tables import slashed
 
 import rhoprop as rp
 from machine import describe
@@ -232,11 +233,7 @@ def show_covariance(
             rms = np.sqrt(np.mean(r[:, :3] ** 2, axis=0))
             inside = [100 * np.mean(r[:, 3] <= b) for b in bounds]
             print(
-                f"| {name} | {h} d | {len(r)} | "
-                + " / ".join(f"{x:.2f}" for x in rms)
-                + " | "
-                + " / ".join(f"{x:.0f}" for x in inside)
-                + " |"
+                f"| {name} | {h} d | {len(r)} | {slashed(rms, '.2f')} | {slashed(inside, '.0f')} |"
             )
     print("\nSGP4 at each element set's epoch against the precise orbit, m")
     print("\n| satellite | sets | mean R / T / N | RMS R / T / N | assumed 1-sigma R / T / N |")
