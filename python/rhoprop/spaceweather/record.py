@@ -246,6 +246,7 @@ class SpaceWeather:
     __slots__ = (
         "_ap_flat",
         "_declared",
+        "_first_predicted",
         "_forecast",
         "_n_daily",
         "ap",
@@ -285,6 +286,7 @@ class SpaceWeather:
     _ap_flat: np.ndarray
     _declared: tuple[tuple[str, int], ...] | None
     _forecast: np.datetime64 | None
+    _first_predicted: np.datetime64 | None
     _n_daily: int
 
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
@@ -323,6 +325,14 @@ class SpaceWeather:
         object.__setattr__(self, "_declared", declared_items)
         object.__setattr__(self, "mean_range", mean_range)
         object.__setattr__(self, "_forecast", forecast)
+        # The first day whose drivers are predicted: a forecast's start, or, in a record
+        # as published, the day after the last observed one when daily predicted rows
+        # follow it (they once served as if observed: no lead time, no forecast sigma, no
+        # warning); None when every usable day is observed.
+        first = forecast
+        if first is None and (self.section[:n_daily] != 0).any():
+            first = (self.observed_end + _DAY).astype("datetime64[D]")
+        object.__setattr__(self, "_first_predicted", first)
 
     def _columns(self) -> dict[str, np.ndarray]:
         names = ("date", "section", "kp", "ap", *SCALARS)
@@ -473,7 +483,7 @@ class SpaceWeather:
         window = np.arange(8)
         ap[:, 5] = self._ap_flat[slot[:, None] - 11 + window].mean(axis=1)
         ap[:, 6] = self._ap_flat[slot[:, None] - 19 + window].mean(axis=1)
-        first_predicted = self._first_predicted_day()
+        first_predicted = self._first_predicted
         if first_predicted is not None and self._forecast is None and len(t):
             # A record as published: observed epochs keep their drivers as they were.
             if t.max() < first_predicted.astype("datetime64[ns]"):
@@ -498,18 +508,6 @@ class SpaceWeather:
                 self._warn_predicted(first_predicted)
         self._check_finite(drivers)
         return drivers
-
-    def _first_predicted_day(self) -> np.datetime64 | None:
-        """The first day whose drivers are predicted: a forecast's start, or, in a record
-        as published, the day after the last observed one when daily predicted rows
-        follow it (they once served as if observed: no lead time, no forecast sigma, no
-        warning); None when every usable day is observed."""
-        first: np.datetime64 | None = None
-        if self._forecast is not None:
-            first = self._forecast
-        elif (self.section[: self._n_daily] != 0).any():
-            first = (self.observed_end + _DAY).astype("datetime64[D]")
-        return first
 
     def _warn_predicted(self, first_predicted: np.datetime64) -> None:
         """The warning, its text the same for every call on this record so that Python
