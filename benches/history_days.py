@@ -149,7 +149,7 @@ def start_day(
                 truth[norad]["epoch"],
                 output_step=1e9,
                 execution=rp.Execution(progress=False, errors="record"),
-                initial_covariance=INITIAL_COVARIANCES[initial],
+                initial=rp.catalog.Initial(covariance=INITIAL_COVARIANCES[initial]),
             )
             return norad, {
                 "mean": res.mean[0, -1],

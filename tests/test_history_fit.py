@@ -210,6 +210,11 @@ DENSE_HISTORY = "history_2026/celestrak_stations_weather_amateur_20260228-202604
 DENSE_STARTS = ("2026-03-02", "2026-03-11", "2026-03-20", "2026-03-29", "2026-04-07", "2026-04-16")
 
 
+def _julian_date(epoch):
+    """The Julian date (UTC days) of a datetime64, as Satrec's jdsatepoch + jdsatepochF."""
+    return float((epoch - np.datetime64("2000-01-01T12:00")) / np.timedelta64(1, "D")) + 2451545
+
+
 def _dense_history(test_data):
     """Element sets per NORAD id (name, line 1, line 2, epoch JD) of the 2026 history, of
     objects whose mean motion never falls between consecutive sets (no orbit raise)."""
@@ -253,7 +258,7 @@ def test_a_history_fit_predicts_the_next_day_of_a_dense_history_better(test_data
     single_errors, history_errors = [], []
     for day in DENSE_STARTS:
         start = np.datetime64(day)
-        t0 = float((start - np.datetime64("2000-01-01T12:00")) / np.timedelta64(1, "D")) + 2451545
+        t0 = _julian_date(start)
         given = {}
         for norad, found in history.items():
             before = [s for s in found if t0 - 2 <= s[3] < t0]
@@ -290,3 +295,50 @@ def test_a_history_fit_predicts_the_next_day_of_a_dense_history_better(test_data
     print(f"1 day: history / newest {ratio:.3f}, better {better:.0%}, per start {per_start}")
     assert 0.6 < ratio < 0.95
     assert 0.51 < better < 0.61
+
+
+def _oem_comments(path):
+    """The COMMENT lines of an OEM file, joined into one text."""
+    lines = path.read_text().splitlines()
+    return " ".join(ln[len("COMMENT ") :] for ln in lines if ln.startswith("COMMENT "))
+
+
+@pytest.mark.filterwarnings("ignore::rhoprop.errors.PredictedDriversWarning")
+def test_the_command_line_fits_a_history_when_asked(test_data, tmp_path, capsys):
+    # rhoprop catalog --duplicates fit: each object's newest element set fitted with the
+    # others of its last day, as load(history="fit") does; the OEM says how many were used.
+    from rhoprop.cli import main
+
+    history = _dense_history(test_data)
+    t0 = _julian_date(np.datetime64("2026-04-07"))
+    chosen = []
+    for found in history.values():
+        before = [s for s in found if t0 - 1 <= s[3] < t0]
+        lo, hi = _altitudes(Satrec.twoline2rv(*before[-1][1:3])) if before else (0, 0)
+        if len(before) >= 2 and lo >= 300 and hi <= 700:
+            chosen.append(before)
+        if len(chosen) == 2:
+            break
+    path = tmp_path / "history.tle"
+    path.write_text("".join(f"{s[0]}\n{s[1]}\n{s[2]}\n" for v in chosen for s in v))
+    args = ["catalog", str(path), "--end", "2026-04-08T00:00Z", "--as-of", "2026-04-07T00:00Z"]
+    args += ["--oem", "--output-step", "3600"]
+    assert main([*args, "--duplicates", "fit", "--out", str(tmp_path / "fit")]) == 0
+    assert main([*args, "--out", str(tmp_path / "newest")]) == 0
+    for before in chosen:
+        norad = Satrec.twoline2rv(*before[-1][1:3]).satnum
+        fit, newest = (
+            _oem_comments(tmp_path / run / "oem" / f"{norad}.oem") for run in ("fit", "newest")
+        )
+        assert f"over -24..+0 h of {len(before)} element sets (RMS residual" in fit
+        assert "element sets (RMS" not in newest and f"newest of {len(before)}" in newest
+        states = [
+            (tmp_path / run / "oem" / f"{norad}.oem")
+            .read_text()
+            .split("COVARIANCE_START")[0][-300:]
+            for run in ("fit", "newest")
+        ]
+        assert states[0] != states[1]  # a different fit, a different orbit
+    capsys.readouterr()
+    assert main([*args, "--duplicates", "fit", "--no-fit", "--out", str(tmp_path / "x")]) == 1
+    assert "--duplicates fit fits each object's element sets" in capsys.readouterr().err

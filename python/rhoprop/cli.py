@@ -493,11 +493,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cat.add_argument(
         "--duplicates",
-        choices=("newest", "error", "suffix"),
+        choices=("newest", "fit", "error", "suffix"),
         default="newest",
         help="NORAD ids occurring more than once (a history): one object, the newest "
-        "element set (default), an error, or objects of their own (with --oem in OEM "
-        "files named <id>_2.oem, <id>_3.oem, ...)",
+        "element set (default); 'fit': one object fitted to the newest and the others of "
+        "its last day (better over one day on a dense history, not over two or more: "
+        "docs/catalogs.md); an error; or objects of their own (with --oem in OEM files "
+        "named <id>_2.oem, <id>_3.oem, ...)",
     )
     cat.add_argument(
         "--oem",

@@ -623,6 +623,17 @@ def _drop_behind_far(
     out.objects = [o for o in out.objects if id(o) not in gone]
 
 
+#: How an object's note says that it stands for several element sets (the newest).
+HISTORY_NOTE = "; the newest of "
+
+
+def _history_note(note: str) -> str:
+    """The part of ``note`` saying the object is the newest of several element sets
+    (:data:`HISTORY_NOTE` on), kept when a later fit rewrites the note; else ""."""
+    at = note.find(HISTORY_NOTE)
+    return note[at:] if at >= 0 else ""
+
+
 def _noted_histories(
     objects: list[CatalogObject], older: dict[int, list[CatalogObject]]
 ) -> list[CatalogObject]:
@@ -632,8 +643,9 @@ def _noted_histories(
     return [
         dataclasses.replace(
             o,
-            covariance_note=f"{o.covariance_note}; the newest of "
-            f"{len(older[o.norad_id]) + 1} element sets (history='fit' fits them together)",
+            covariance_note=f"{o.covariance_note}{HISTORY_NOTE}"
+            f"{len(older[o.norad_id]) + 1} element sets (history='fit' or --duplicates fit "
+            "fits them together)",
         )
         if o.norad_id in older
         else o
@@ -854,6 +866,7 @@ def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogO
             + (f" of {len(f.element_sets)} element sets" if len(f.element_sets) > 1 else "")
             + f" (RMS residual {f.rms_total:.0f} m); Cd*A/m fitted, "
             f"{f.drag_parameter:.4g} +- {f.drag_sigma:.2g} m^2/kg ({f.prior_note})"
+            + _history_note(obj.covariance_note)
         ),
         fit=f,
     )

@@ -217,10 +217,11 @@ class CatalogJob:
     ``skip_bad``: malformed element sets are skipped and objects whose propagation fails
     get status "failed" (both on stderr). ``overwrite``: clear ``out`` of an earlier run.
     ``duplicates``: a NORAD id given several times is one object, the newest element set
-    (``"newest"``), an error before any work or objects with suffixed OEM names
-    (``"suffix"``). ``fit``: "auto" (default) fits the low near-Earth objects with B*
-    (``propagate_catalog(fit="auto")``), True every object (``load(fit=True)``), False
-    none. ``initial_covariance``:
+    (``"newest"``) or the newest fitted with the others of its last day (``"fit"``:
+    ``load(history="fit")``; not with ``fit=False``), an error before any work or objects
+    with suffixed OEM names (``"suffix"``). ``fit``: "auto" (default) fits the objects
+    with B* (``propagate_catalog(fit="auto")``), True every object (``load(fit=True)``),
+    False none. ``initial_covariance``:
     :func:`initial_covariance_option` (default: each object's own, the TLE accuracy, plus
     the fit's with ``fit``). ``zonal_degree``: 2 (J2 only) to 6 (J2..J6), default 4 (J2..J4).
     ``method``: :class:`~rhoprop.Ccsp` (default) or :class:`~rhoprop.MonteCarlo` with
@@ -249,7 +250,7 @@ class CatalogJob:
     scheduler: str | None = None
     skip_bad: bool = False
     overwrite: bool = False
-    duplicates: Duplicates | Literal["newest"] = "newest"
+    duplicates: Duplicates | Literal["newest", "fit"] = "newest"
     command: str | None = None
     fit: bool | Literal["auto"] = "auto"
     initial_covariance: str | None = None
@@ -276,15 +277,18 @@ class CatalogJob:
             raise ValueError("--cd applies to a --drag-file with an area_to_mass column")
         if self.scheduler:
             need_dask()
+        together = self.duplicates == "fit"
+        if together and self.fit is False:
+            raise ValueError("--duplicates fit fits each object's element sets: not with --no-fit")
         atmosphere = model_by_name(self.model, self.as_of)
         cat = _load(
             self.file,
             self.skip_bad,
             fit=FitSettings(atmosphere, dynamics=Dynamics(zonal_degree=self.zonal_degree))
-            if self.fit is True
+            if self.fit is True or together
             else False,
             drag_parameters=drag,
-            history="newest" if self.duplicates == "newest" else "each",
+            history={"newest": "newest", "fit": "fit"}.get(self.duplicates, "each"),
         )
         for where, message in cat.skipped:
             print(f"skipped {sanitise(where)}: {sanitise(message, 300)}", file=sys.stderr)
@@ -304,7 +308,8 @@ class CatalogJob:
                     f"{self.file} (not used): {shown}",
                     file=sys.stderr,
                 )
-        kind: Duplicates = "error" if self.duplicates == "newest" else self.duplicates  # none left
+        # none left after "newest" or "fit"
+        kind: Duplicates = "suffix" if self.duplicates == "suffix" else "error"
         _refuse_all_stale(cat, self.end, max_span_option(self.max_span_days))
         twice = duplicate_ids(cat.objects)
         if kind == "error" and not self.oem and twice:
