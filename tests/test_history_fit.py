@@ -303,7 +303,6 @@ def _oem_comments(path):
     return " ".join(ln[len("COMMENT ") :] for ln in lines if ln.startswith("COMMENT "))
 
 
-@pytest.mark.filterwarnings("ignore::rhoprop.errors.PredictedDriversWarning")
 def test_the_command_line_fits_a_history_when_asked(test_data, tmp_path, capsys):
     # rhoprop catalog --duplicates fit: each object's newest element set fitted with the
     # others of its last day, as load(history="fit") does; the OEM says how many were used.
@@ -321,7 +320,7 @@ def test_the_command_line_fits_a_history_when_asked(test_data, tmp_path, capsys)
             break
     path = tmp_path / "history.tle"
     path.write_text("".join(f"{s[0]}\n{s[1]}\n{s[2]}\n" for v in chosen for s in v))
-    args = ["catalog", str(path), "--end", "2026-04-08T00:00Z", "--as-of", "2026-04-07T00:00Z"]
+    args = ["catalog", str(path), "--end", "2026-04-08T00:00Z"]
     args += ["--oem", "--output-step", "3600"]
     assert main([*args, "--duplicates", "fit", "--out", str(tmp_path / "fit")]) == 0
     assert main([*args, "--out", str(tmp_path / "newest")]) == 0
