@@ -69,11 +69,17 @@ _KM_PER_DAY = 1e3 / 86400.0
 #: (1 km before) was doubled on the same weeks: 50 % of its cross-track errors fell
 #: inside 2 sigma, 95 % now. The LEO radial error, 200 m before 2026-12-04, is 300 m: the
 #: later element sets of the same weeks sit 0.2-0.7 km above the earlier ones' orbits,
-#: and with 300 m the RTN Mahalanobis goal holds in every week ("Week by week").
+#: and with 300 m the RTN Mahalanobis goal holds in every week ("Week by week"). The
+#: LEO 800-2000 km row (150 m, 600 m, 250 m before 2026-12-06) is SGP4's error against
+#: the precise orbits of Jason-1 and TOPEX/Poseidon within 3 h of their element sets'
+#: epochs, the two satellites weighted equally (273 / 693 / 357 m RMS; mostly a
+#: once-per-revolution error of the orbit's shape and plane, which element sets share
+#: and later element sets cannot show: docs/catalog-realism.md, "The covariance against
+#: precise orbits").
 REGIMES = (
     # (max perigee altitude m, max eccentricity, max period s, accuracy)
     (800e3, 0.1, np.inf, TleAccuracy(300.0, 1000.0, 300.0, 1.0 * _KM_PER_DAY, "LEO below 800 km")),
-    (2000e3, 0.1, np.inf, TleAccuracy(150.0, 600.0, 250.0, 0.5 * _KM_PER_DAY, "LEO 800-2000 km")),
+    (2000e3, 0.1, np.inf, TleAccuracy(300.0, 700.0, 350.0, 0.5 * _KM_PER_DAY, "LEO 800-2000 km")),
     (np.inf, 0.1, 16 * 3600.0, TleAccuracy(200.0, 1000.0, 150.0, 0.3 * _KM_PER_DAY, "MEO")),
     (np.inf, 0.1, np.inf, TleAccuracy(2000.0, 5000.0, 2000.0, 6.0 * _KM_PER_DAY, "GEO")),
     (np.inf, 1.0, np.inf, TleAccuracy(1000.0, 5000.0, 2000.0, 3.0 * _KM_PER_DAY, "eccentric")),

@@ -21,7 +21,8 @@ to its neighbours: every set speaks near its own epoch, the idea of Levit & Mars
 2011, "Improved orbit predictions using two-line elements", Adv. Space Res. 47). Each is
 weighted by SGP4's own error growth away from its epoch, in the RTN frame: the published
 TLE accuracy at epoch (:func:`~rhoprop.catalog.covariance.tle_accuracy`: radial,
-along-track, cross-track) with the along-track sigma growing by the regime's drift rate,
+along-track, cross-track; at 800-2000 km :data:`WEIGHT_ACCURACY`) with the along-track
+sigma growing by the regime's drift rate,
 sigma_T(dt) = sqrt(sigma_T0^2 + (drift dt)^2). In a history the positions of one element
 set weigh together as one observation (sigmas times the square root of their number):
 they share the set's error, and counted apart the scatter between sets reads as drag.
@@ -37,7 +38,7 @@ above ``MIN_DRAG_PARAMETER``.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
@@ -52,6 +53,7 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from .. import _core
+    from .covariance import TleAccuracy
 
 #: SGP4 reference density times one Earth radius, kg m^-2 ER^-1 (B* = rho0 B / 2).
 SGP4_RHO0 = 0.15696615
@@ -100,6 +102,25 @@ DEEP_SPACE_PERIOD_MIN = 225.0
 #: (themselves SDP4) the GEO medians moved 1.96 / 15.38 / 11.60 / 8.66 ->
 #: 2.34 / 11.67 / 6.31 / 12.10 km.
 LOOSE_RADIUS_REGIMES = ("GEO",)
+
+
+#: The fit's weights of regimes whose covariance accuracy (:data:`~rhoprop.catalog.
+#: covariance.REGIMES`) holds an error the fit follows rather than averages: radial,
+#: along-track, cross-track m. At 800-2000 km the covariance carries SGP4's
+#: once-per-revolution error of the orbit's shape and plane against precise orbits
+#: (300 / 700 / 350 m since 2026-12-06); every position of an element set shares it, so
+#: the fit inherits it whatever the weights, and weighting by it only loosened the fit
+#: (the four weeks' 700-2,000 km median 1.00 -> 1.03 of SGP4's, 1.14 / 1.32 / 1.23 / 0.71
+#: by week). The weights keep the accuracy they were chosen with.
+WEIGHT_ACCURACY = {"LEO 800-2000 km": (150.0, 600.0, 250.0)}
+
+
+def _weight_accuracy(accuracy: TleAccuracy) -> TleAccuracy:
+    """``accuracy`` as the fit weights its positions (:data:`WEIGHT_ACCURACY`)."""
+    if accuracy.regime not in WEIGHT_ACCURACY:
+        return accuracy
+    radial, along, cross = WEIGHT_ACCURACY[accuracy.regime]
+    return replace(accuracy, radial=radial, along_track=along, cross_track=cross)
 
 
 def _orbit_class(period_min: float, eccentricity: float) -> str:
@@ -383,7 +404,7 @@ def _observe(
         except ValueError as err:
             raise ValueError(f"element set of {epochs[k]}: {err}") from err
         at = int(np.argmin(np.abs(t_own)))
-        acc = tle_accuracy(OrbitState(epochs[k], r[at], v[at], "TEME"))
+        acc = _weight_accuracy(tle_accuracy(OrbitState(epochs[k], r[at], v[at], "TEME")))
         sig = np.empty((len(grid), 3))
         sig[:, 0] = acc.along_track if acc.regime in LOOSE_RADIUS_REGIMES else acc.radial
         sig[:, 1] = np.hypot(acc.along_track, acc.drift_rate * t_own)
