@@ -363,6 +363,10 @@ def test_screen_on_a_dask_scheduler_writes_the_local_events(tmp_path, capsys):
             ["catalog", "x.tle", "--end", "2002-09-08", "--cd", "inf"],
             "argument --cd: must be a positive",
         ),
+        (
+            ["catalog", "x.tle", "--end", "2002-09-08", "--duplicates", "fit", "--no-fit"],
+            "--duplicates fit fits each object's element sets: not with --no-fit",
+        ),
     ],
 )
 def test_an_option_that_would_do_nothing_or_is_not_a_number_is_refused(

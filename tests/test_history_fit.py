@@ -303,7 +303,7 @@ def _oem_comments(path):
     return " ".join(ln[len("COMMENT ") :] for ln in lines if ln.startswith("COMMENT "))
 
 
-def test_the_command_line_fits_a_history_when_asked(test_data, tmp_path, capsys):
+def test_the_command_line_fits_a_history_when_asked(test_data, tmp_path):
     # rhoprop catalog --duplicates fit: each object's newest element set fitted with the
     # others of its last day, as load(history="fit") does; the OEM says how many were used.
     from rhoprop.cli import main
@@ -338,6 +338,3 @@ def test_the_command_line_fits_a_history_when_asked(test_data, tmp_path, capsys)
             for run in ("fit", "newest")
         ]
         assert states[0] != states[1]  # a different fit, a different orbit
-    capsys.readouterr()
-    assert main([*args, "--duplicates", "fit", "--no-fit", "--out", str(tmp_path / "x")]) == 1
-    assert "--duplicates fit fits each object's element sets" in capsys.readouterr().err

@@ -228,10 +228,13 @@ _NEEDS: tuple[tuple[str, str, str, Callable[[argparse.Namespace], bool], str], .
 
 
 def _refuse_unused(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """A parser error for an option given where it does nothing (``_NEEDS``)."""
+    """A parser error for an option given where it does nothing (``_NEEDS``) or against
+    another (a history fit without fits)."""
     for command, option, dest, applies, needs in _NEEDS:
         if args.command == command and getattr(args, dest) is not None and not applies(args):
             parser.error(f"{option} acts only with {needs}")
+    if args.command == "catalog" and args.duplicates == "fit" and args.fit is False:
+        parser.error("--duplicates fit fits each object's element sets: not with --no-fit")
 
 
 def _cache(args: argparse.Namespace) -> int:
