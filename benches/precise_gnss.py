@@ -4,18 +4,29 @@
 5 min, GPS time, Earth-fixed IGS20) of 2024-06-16..18 and 52 BeiDou element sets
 published 2024-06-12..16 (the PRN in each name; C38's name does not match its orbit and
 is left out). For every BeiDou satellite with both, the newest element set before
-2024-06-16T00:00 UTC is predicted to each whole GPS hour of the three days by
+2024-06-17T00:00 UTC is predicted to each whole GPS hour of the two days after it by
 
-- rhoprop's default: ``catalog.load`` then ``propagate_catalog`` (fitted state and
-  Cd*A/m, CCSP, NRLMSIS 2.1 on the space weather known at the start: forecast mode; at
-  these heights the Sun's and Moon's pull and the Earth's tesseral field act, drag not);
+- rhoprop's default: ``catalog.load(fit=FitSettings(model))`` then ``propagate_catalog``
+  (fitted state and Cd*A/m, SGP4's positions debiased along-track by the regime's
+  ``rp.catalog.fit.ALONG_TRACK_BIAS``, CCSP, NRLMSIS 2.1 on the space weather known at
+  the start: forecast mode; at these heights the Sun's and Moon's pull and the Earth's
+  tesseral field act, drag not);
+- the same without debiasing (``FitSettings(model, along_track_bias={})``);
 - SGP4/SDP4 of the same element set (the baseline).
 
 Truth: the SP3 position at that GPS hour (UTC = GPS - 18 s), rotated from ITRS to GCRS
 with astropy (bundled IERS-B, no download). Predictions (TEME) are rotated to GCRF with
 ``rp.frames.teme_to_gcrf``. Printed per class (GEO: the geostationary C01-C05, C59, C60,
 C62; IGSO; MEO) and hours after the start: the median position error of each and the
-ratio, and the median along-track error (rhoprop - truth, km).
+ratio, and the median along-track error (rhoprop - truth, km). Then the debiasing per
+TLE-accuracy regime (MEO; "GEO": the geostationary and inclined geosynchronous ones):
+each satellite's mean along-track error over the hours without debiasing, their median
+(what ``ALONG_TRACK_BIAS`` holds), and the median position error over every hour 0-47
+without debiasing, with the library's table, and cross-validated: each satellite
+debiased by the median of the others (and for MEO of the other two orbital planes). The
+fit follows a shift of its positions one to one (the debiased run's median along-track
+error is printed beside the table's value), so the cross-validated errors are the
+undebiased run's, shifted.
 
 Run:  python benches/precise_gnss.py
 """
@@ -27,6 +38,7 @@ import re
 import tempfile
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from sgp4.api import Satrec
@@ -81,6 +93,70 @@ def jd(t: np.datetime64) -> tuple[float, float]:
     return whole + 2451545.0, days - whole
 
 
+def newest_sets(data: Path) -> dict[str, tuple[str, str, str]]:
+    """{PRN: (name, line 1, line 2)}: each BeiDou satellite's newest element set before
+    :data:`START` that the precise orbits hold (C38 left out)."""
+    truth = read_sp3([data / f for f in SP3])
+    lines = (data / TLES).read_text().splitlines()
+    newest: dict[str, tuple[str, str, str, float]] = {}
+    for name, l1, l2 in zip(lines[0::3], lines[1::3], lines[2::3], strict=True):
+        prn = re.search(r"\((C\d\d)\)", name)
+        sat = Satrec.twoline2rv(l1, l2)
+        epoch = sat.jdsatepoch + sat.jdsatepochF
+        if prn is None or prn.group(1) == "C38" or prn.group(1) not in truth:
+            continue
+        old = newest.get(prn.group(1))
+        if epoch < sum(jd(START)) and (old is None or old[3] < epoch):
+            newest[prn.group(1)] = (name.strip(), l1, l2, epoch)
+    return {p: v[:3] for p, v in sorted(newest.items())}
+
+
+def rtn_errors(
+    newest: dict[str, tuple[str, str, str]],
+    truth: dict[str, dict[np.datetime64, np.ndarray]],
+    hours: list[int],
+    bias: dict[str, float] | None,
+) -> dict[str, tuple[list[int], np.ndarray, np.ndarray]]:
+    """Per PRN: the hours the truth holds, rhoprop's and SDP4's RTN errors (n, 3) m there,
+    rhoprop fitted with ``along_track_bias=bias`` (None: the library's)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "beidou.tle"
+        path.write_text("".join(f"{n}\n{a}\n{b}\n" for n, a, b in newest.values()))
+        model = Msis("2.1", space_weather=rp.SpaceWeather().as_of(START))
+        cat = catalog.load(path, fit=catalog.FitSettings(model, along_track_bias=bias))
+    order = [re.search(r"\((C\d\d)\)", o.name).group(1) for o in cat]  # type: ignore[union-attr]
+    gps_hours = [START + np.timedelta64(h, "h") for h in hours]
+    utc = [g - GPS_MINUS_UTC for g in gps_hours]
+    res = catalog.propagate_catalog(
+        cat,
+        model,
+        utc[-1],
+        output_step=3600.0,
+        start=utc[0] - np.timedelta64(1, "h"),
+        execution=rp.Execution(progress=False),
+    )
+    out = {}
+    for i, prn in enumerate(order):
+        sat = Satrec.twoline2rv(*newest[prn][1:])
+        have = [k for k, g in enumerate(gps_hours) if g in truth[prn]]
+        true = to_gcrs([utc[k] for k in have], np.array([truth[prn][gps_hours[k]] for k in have]))
+        ours, theirs = [], []
+        for row, k in enumerate(have):
+            j = int(np.flatnonzero(res.epochs == utc[k])[0])
+            mine = rp.frames.teme_to_gcrf(cat[i].state.epoch, res.mean[i, j])
+            _, r, v = sat.sgp4(*jd(utc[k]))
+            sdp4 = rp.frames.teme_to_gcrf(utc[k], np.concatenate([np.array(r), np.array(v)]) * 1e3)
+            basis = rp.frames.rtn_basis(true[row], sdp4[3:])
+            ours.append(basis @ (mine[:3] - true[row]))
+            theirs.append(basis @ (sdp4[:3] - true[row]))
+        out[prn] = ([hours[k] for k in have], np.array(ours), np.array(theirs))
+    return out
+
+
+def kind_of(prn: str, name: str) -> str:
+    return "GEO" if prn in GEO else ("IGSO" if "IGSO" in name else "MEO")
+
+
 def main() -> None:
     print(describe())
     data = Path(os.environ.get("RHOPROP_TEST_DATA", "../shared/data")) / GNSS
@@ -89,65 +165,11 @@ def main() -> None:
 
     iers.conf.auto_download = False
     truth = read_sp3([data / f for f in SP3])
-    lines = (data / TLES).read_text().splitlines()
-    newest: dict[str, tuple[str, str, str]] = {}
-    for name, l1, l2 in zip(lines[0::3], lines[1::3], lines[2::3], strict=True):
-        prn = re.search(r"\((C\d\d)\)", name)
-        sat = Satrec.twoline2rv(l1, l2)
-        epoch = sat.jdsatepoch + sat.jdsatepochF
-        if prn is None or prn.group(1) == "C38" or prn.group(1) not in truth:
-            continue
-        if epoch < sum(jd(START)):
-            old = newest.get(prn.group(1))
-            if (
-                old is None
-                or Satrec.twoline2rv(old[1], old[2]).jdsatepoch
-                + Satrec.twoline2rv(old[1], old[2]).jdsatepochF
-                < epoch
-            ):
-                newest[prn.group(1)] = (name.strip(), l1, l2)
-    prns = sorted(newest)
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "beidou.tle"
-        path.write_text("".join(f"{n}\n{a}\n{b}\n" for n, a, b in newest.values()))
-        weather = rp.SpaceWeather().as_of(START)
-        model = Msis("2.1", space_weather=weather)
-        cat = catalog.load(path)
-        order = [re.search(r"\((C\d\d)\)", o.name).group(1) for o in cat]  # type: ignore[union-attr]
-        gps_hours = [START + np.timedelta64(h, "h") for h in HOURS]
-        utc = [g - GPS_MINUS_UTC for g in gps_hours]
-        end = utc[-1]
-        res = catalog.propagate_catalog(
-            cat,
-            model,
-            end,
-            output_step=3600.0,
-            start=utc[0] - np.timedelta64(1, "h"),
-            execution=rp.Execution(progress=False),
-        )
-    rows: dict[str, dict[int, list[tuple[float, float, float]]]] = {}
-    for i, prn in enumerate(order):
-        kind = "GEO" if prn in GEO else ("IGSO" if "IGSO" in cat[i].name else "MEO")
-        sat = Satrec.twoline2rv(*[ln for ln in newest[prn][1:]])
-        have = [k for k, g in enumerate(gps_hours) if g in truth[prn]]
-        true = to_gcrs([utc[k] for k in have], np.array([truth[prn][gps_hours[k]] for k in have]))
-        for row, k in enumerate(have):
-            j = int(np.flatnonzero(res.epochs == utc[k])[0])
-            ours = rp.frames.teme_to_gcrf(cat[i].state.epoch, res.mean[i, j])
-            _, r, v = sat.sgp4(*jd(utc[k]))
-            theirs = rp.frames.teme_to_gcrf(
-                utc[k], np.concatenate([np.array(r), np.array(v)]) * 1e3
-            )
-            basis = rp.frames.rtn_basis(true[row], ours[3:])
-            along = float((ours[:3] - true[row]) @ basis[1]) / 1e3
-            rows.setdefault(kind, {}).setdefault(HOURS[k], []).append(
-                (
-                    float(np.linalg.norm(ours[:3] - true[row])) / 1e3,
-                    float(np.linalg.norm(theirs[:3] - true[row])) / 1e3,
-                    along,
-                )
-            )
-    print(f"\n{len(prns)} satellites: " + ", ".join(prns))
+    newest = newest_sets(data)
+    print(f"\n{len(newest)} satellites: " + ", ".join(newest))
+    every = list(range(48))
+    runs = {"default": rtn_errors(newest, truth, every, None)}
+    runs["none"] = rtn_errors(newest, truth, every, {})
     print(
         "\n| class | hours after start | satellites | SGP4 median km | rhoprop median km | ratio "
         "| rhoprop along-track median km |"
@@ -155,15 +177,69 @@ def main() -> None:
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     for kind in ("GEO", "IGSO", "MEO"):
         for h in HOURS:
-            e = np.array(rows.get(kind, {}).get(h, []))
-            if not len(e):
+            e = [
+                (np.linalg.norm(o[hs.index(h)]), np.linalg.norm(t[hs.index(h)]), o[hs.index(h), 1])
+                for prn, (hs, o, t) in runs["default"].items()
+                if kind_of(prn, newest[prn][0]) == kind and h in hs
+            ]
+            if not e:
                 continue
-            med = np.median(e, axis=0)
+            med = np.median(np.array(e) / 1e3, axis=0)
             print(
                 f"| {kind} | {h} | {len(e)} | {med[1]:.2f} | {med[0]:.2f} | "
                 f"{med[0] / med[1]:.2f} | {med[2]:+.2f} |",
                 flush=True,
             )
+    debiasing(newest, runs)
+
+
+def debiasing(newest: dict[str, tuple[str, str, str]], runs: dict[str, Any]) -> None:
+    """The table of TLE debiasing per regime (module docstring)."""
+    print(
+        "\n| regime | satellites | mean along-track without, median m (SDP4's) | table m "
+        "| debiased run's median m | median error 0-47 h m: without / table / left out "
+        "by satellite / by plane | better than without, by satellite / plane % |"
+    )
+    print("| --- | ---: | --- | ---: | ---: | --- | --- |")
+    for regime, kinds in (("MEO", ("MEO",)), ("GEO", ("GEO", "IGSO"))):
+        prns = [p for p in newest if kind_of(p, newest[p][0]) in kinds]
+        own = {p: float(runs["none"][p][1][:, 1].mean()) for p in prns}
+        sdp4 = np.median([runs["none"][p][2][:, 1].mean() for p in prns])
+        after = np.median([runs["default"][p][1][:, 1].mean() for p in prns])
+        planes = {p: round(Satrec.twoline2rv(*newest[p][1:]).nodeo / (np.pi / 3)) for p in prns}
+        errors = {"without": [], "table": [], "satellite": [], "plane": []}
+        for p in prns:
+            base = runs["none"][p][1]
+            keep = {
+                "satellite": [q for q in prns if q != p],
+                "plane": [
+                    q for q in prns if q != p and (regime != "MEO" or planes[q] != planes[p])
+                ],
+            }
+            errors["without"].append(np.linalg.norm(base, axis=1))
+            errors["table"].append(np.linalg.norm(runs["default"][p][1], axis=1))
+            for fold, others in keep.items():
+                shifted = base - np.array([0.0, np.median([own[q] for q in others]), 0.0])
+                errors[fold].append(np.linalg.norm(shifted, axis=1))
+        med = {k: np.median(np.concatenate(v)) for k, v in errors.items()}
+        better = {
+            k: 100
+            * np.mean(
+                [
+                    np.median(a) < np.median(b)
+                    for a, b in zip(errors[k], errors["without"], strict=True)
+                ]
+            )
+            for k in ("satellite", "plane")
+        }
+        print(
+            f"| {regime} | {len(prns)} | {np.median(list(own.values())):+.0f} ({sdp4:+.0f}) | "
+            f"{catalog.fit.ALONG_TRACK_BIAS.get(regime, 0.0):+.0f} | {after:+.0f} | "
+            + " / ".join(f"{med[k]:.0f}" for k in ("without", "table", "satellite", "plane"))
+            + " | "
+            f"{better['satellite']:.0f} / {better['plane']:.0f} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -354,3 +354,40 @@ def test_a_fit_with_no_more_observations_than_unknowns_is_no_linear_algebra_erro
     f = fit_element_set(obj, atmosphere, span=(-600.0, 0.0))
     assert len(f.times) == 2
     assert np.all(np.isfinite(f.covariance)) and 0 < f.drag_sigma <= f.prior_sigma * (1 + 1e-9)
+
+
+def test_a_meo_fit_follows_its_along_track_debiasing_one_to_one(atmosphere):
+    # TLE debiasing moves every SGP4 position of the span back along-track by the bias;
+    # in a near-circular orbit that is a rotation within the orbit's plane, which the
+    # dynamics follow, so the fitted state moves by the same distance and nothing else.
+    sat = Satrec.twoline2rv(*_tle(91010, 20200.0, 0.0))
+    raw = fit_element_set(sat, atmosphere, along_track_bias={})
+    moved = fit_element_set(sat, atmosphere, along_track_bias={"MEO": 300.0})
+    default = fit_element_set(sat, atmosphere)
+    assert (raw.along_track_bias, moved.along_track_bias) == (0.0, 300.0)
+    assert default.along_track_bias == catalog.fit.ALONG_TRACK_BIAS["MEO"] != 0.0
+    shift = rtn_basis(raw.state.position, raw.state.velocity) @ (
+        moved.state.position - raw.state.position
+    )
+    assert shift == pytest.approx([0.0, -300.0, 0.0], abs=1.0)  # m, RTN (0.2 m apart)
+    # LEO element sets carry none by default
+    leo = fit_element_set(Satrec.twoline2rv(*_tle(91011, 420.0, 3e-4)), atmosphere)
+    assert leo.along_track_bias == 0.0
+
+
+@pytest.mark.parametrize(
+    ("table", "error", "match"),
+    [
+        ({"LEO": 100.0}, ValueError, "unknown regime 'LEO'; the regimes are"),
+        ({"MEO": float("nan")}, ValueError, r"along_track_bias\['MEO'\] must be a finite"),
+        ({"MEO": "500"}, ValueError, "finite number of metres"),
+        ([("MEO", 500.0)], TypeError, "must be a mapping of regime name to metres, got list"),
+    ],
+)
+def test_along_track_bias_is_checked_where_given(atmosphere, table, error, match):
+    with pytest.raises(error, match=match):
+        catalog.FitSettings(atmosphere, along_track_bias=table)
+    with pytest.raises(error, match=match):
+        fit_element_set(
+            Satrec.twoline2rv(*_tle(91012, 20200.0, 0.0)), atmosphere, along_track_bias=table
+        )

@@ -26,6 +26,8 @@ sigma growing by the regime's drift rate,
 sigma_T(dt) = sqrt(sigma_T0^2 + (drift dt)^2). In a history the positions of one element
 set weigh together as one observation (sigmas times the square root of their number):
 they share the set's error, and counted apart the scatter between sets reads as drag.
+Above LEO each position is first debiased along-track by its regime's
+:data:`ALONG_TRACK_BIAS` (SGP4's systematic lag behind precise orbits).
 
 Prior on Cd*A/m (:func:`bstar_prior`): B* converted with the density ratio of SGP4's own
 static atmosphere to the fit's model along the element set's orbit (B* was fitted by the
@@ -123,6 +125,55 @@ def _weight_accuracy(accuracy: TleAccuracy) -> TleAccuracy:
     return replace(accuracy, radial=radial, along_track=along, cross_track=cross)
 
 
+#: TLE debiasing (Hallgarten La Casta & Amato 2024, "Debiasing of two-line element sets
+#: for batch least squares pseudo-orbit determination in MEO and GEO", arXiv:2412.15793):
+#: SGP4's systematic along-track error, m (its position minus the truth; negative: SGP4
+#: lags), by TLE-accuracy regime (:data:`~rhoprop.catalog.covariance.REGIMES`), removed
+#: from the pseudo-observations before the fit. Element sets share it, so later element
+#: sets cannot show it; precise orbits can. Measured 2026-12-07 on GFZ's precise orbits
+#: of BeiDou (2024-06-17..18, ``benches/precise_gnss.py``): the undebiased fits of 23 of
+#: 27 MEO satellites lag (median -484 m over 0-47 h), of 15 of the 16 geosynchronous ones
+#: ("GEO": 7 GEO, 9 IGSO; median -379 m); SDP4 itself lags by 625 and 487 m. Debiased,
+#: the median position error over 0-47 h falls from 650 to 453 m (MEO) and from 630 to
+#: 594 m (GEO); cross-validated (each satellite by the others' median; for MEO also by
+#: the other orbital planes') 474 and 581 m, 610 m (docs/catalog-realism.md, "TLE
+#: debiasing"). One constellation over two days: other MEO and GEO element sets are
+#: assumed alike. None in LEO: there a bias measured between an object's own element
+#: sets foresees nothing (``benches/tle_debias_leo.py``: SGP4's 1- and 3-day predictions
+#: of the 2026 history 2-52 % worse) and the two precise orbits at 1,336 km disagree
+#: (Jason-1 +302 m, TOPEX +40 m).
+ALONG_TRACK_BIAS: dict[str, float] = {"MEO": -490.0, "GEO": -370.0}
+
+
+def along_track_biases(table: Mapping[str, float] | None) -> dict[str, float]:
+    """``table`` (regime name -> SGP4's along-track bias, m) checked, or a copy of
+    :data:`ALONG_TRACK_BIAS` for None; ``{}`` removes none."""
+    from .._validate import is_real
+    from .covariance import REGIMES
+
+    if table is None:
+        return dict(ALONG_TRACK_BIAS)
+    if not isinstance(table, Mapping):
+        raise TypeError(
+            f"along_track_bias must be a mapping of regime name to metres, got "
+            f"{type(table).__name__}"
+        )
+    names = [row[3].regime for row in REGIMES]
+    out = {}
+    for name, value in table.items():
+        if name not in names:
+            raise ValueError(
+                f"along_track_bias: unknown regime {name!r}; the regimes are "
+                f"{', '.join(map(repr, names))}"
+            )
+        if not is_real(value) or not np.isfinite(float(value)):
+            raise ValueError(
+                f"along_track_bias[{name!r}] must be a finite number of metres, got {value!r}"
+            )
+        out[name] = float(value)
+    return out
+
+
 def _orbit_class(period_min: float, eccentricity: float) -> str:
     """ "near-Earth" (period under :data:`DEEP_SPACE_PERIOD_MIN`), else "near-circular"
     (e < 0.1) or "eccentric" deep space: what the fit's span and step follow."""
@@ -198,6 +249,9 @@ class FitResult:
         all_times, all_residuals, observation_set: every observation of a history fit
             (s from the newest epoch; RTN residuals, m; index into ``element_sets``);
             ``times``/``residuals``/``rms`` are the newest element set's.
+        along_track_bias: SGP4's along-track bias removed from the newest element set's
+            positions before the fit, m (:data:`ALONG_TRACK_BIAS`; 0: none); residuals
+            are against the debiased positions.
     """
 
     state: OrbitState
@@ -219,6 +273,7 @@ class FitResult:
     all_times: np.ndarray | None = None
     all_residuals: np.ndarray | None = None
     observation_set: np.ndarray | None = None
+    along_track_bias: float = 0.0
 
 
 def _sgp4_observations(sat: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -352,6 +407,7 @@ class _Observations:
     velocities: np.ndarray  # (k, 3) m/s
     bases: np.ndarray  # (k, 3, 3) RTN rows of the SGP4 orbit
     sigmas: np.ndarray  # (k, 3) RTN 1-sigma, m
+    along_track_bias: float = 0.0  # removed from the newest element set's positions, m
 
     @property
     def shared(self) -> np.ndarray:
@@ -381,16 +437,22 @@ def _model_drift(old: Any, new: Any, gap: float, tau: np.ndarray) -> np.ndarray:
 
 
 def _observe(
-    sats: list[Any], span: tuple[float, float], spacing: float
+    sats: list[Any],
+    span: tuple[float, float],
+    spacing: float,
+    bias: Mapping[str, float] | None = None,
 ) -> tuple[_Observations, np.datetime64]:
     """The observations of ``sats`` (ascending epochs, the newest last) and the newest
-    epoch; ValueError naming an element set SGP4 fails on."""
+    epoch, each element set's positions less its regime's along-track ``bias`` (m;
+    :func:`along_track_biases`); ValueError naming an element set SGP4 fails on."""
     from .covariance import tle_accuracy
 
     epochs = [from_jd(s.jdsatepoch, s.jdsatepochF, scale="utc") for s in sats]
     newest = epochs[-1]
     rel = np.array([(e - newest) / np.timedelta64(1, "ns") / 1e9 for e in epochs])
     parts = []
+    bias = ALONG_TRACK_BIAS if bias is None else bias
+    shift = 0.0
     for k, (sat, (lo, hi)) in enumerate(zip(sats, _windows(rel, span), strict=True)):
         # grid times (multiples of spacing from the newest epoch) within the window
         g0 = int(np.ceil((rel[k] + lo) / spacing - 1e-9))
@@ -405,6 +467,9 @@ def _observe(
             raise ValueError(f"element set of {epochs[k]}: {err}") from err
         at = int(np.argmin(np.abs(t_own)))
         acc = _weight_accuracy(tle_accuracy(OrbitState(epochs[k], r[at], v[at], "TEME")))
+        shift = bias.get(acc.regime, 0.0)
+        if shift:
+            r = r - shift * rtn_basis(r, v)[:, 1, :]
         sig = np.empty((len(grid), 3))
         sig[:, 0] = acc.along_track if acc.regime in LOOSE_RADIUS_REGIMES else acc.radial
         sig[:, 1] = np.hypot(acc.along_track, acc.drift_rate * t_own)
@@ -426,6 +491,7 @@ def _observe(
         velocities=vel,
         bases=rtn_basis(pos, vel),
         sigmas=np.concatenate([p[4] for p in parts]),
+        along_track_bias=shift,
     )
     return obs, newest
 
@@ -439,6 +505,7 @@ def fit_element_set(
     spacing: float = DEFAULT_SPACING,
     max_iterations: int = 8,
     dynamics: Dynamics | None = None,
+    along_track_bias: Mapping[str, float] | None = None,
     **deprecated: Unpack[LooseDegree],
 ) -> FitResult:
     """Fits state and Cd*A/m of one element set to its SGP4 positions.
@@ -459,6 +526,11 @@ def fit_element_set(
             The fit integrates on its own RK8 grid down to the default floor: an
             ``integrator``, ``step``, ``rtol``, another ``floor_altitude``,
             ``field_degree`` or ``third_bodies`` is refused (ValueError).
+        along_track_bias: SGP4's systematic along-track error by TLE-accuracy regime, m
+            (SGP4's position minus the truth), removed from the positions before the fit
+            (TLE debiasing; None: :data:`ALONG_TRACK_BIAS`, measured on precise orbits
+            above LEO; ``{}``: none). The result's ``along_track_bias`` says what was
+            removed.
         **deprecated: ``zonal_degree=``, now in ``dynamics``, with a DeprecationWarning.
 
     Returns:
@@ -473,6 +545,7 @@ def fit_element_set(
         spacing=spacing,
         max_iterations=max_iterations,
         dynamics=fit_dynamics("fit_element_set", dynamics, deprecated),
+        along_track_bias=along_track_bias,
     )
 
 
@@ -528,6 +601,7 @@ def fit_element_sets(
     spacing: float = DEFAULT_SPACING,
     max_iterations: int = 8,
     dynamics: Dynamics | None = None,
+    along_track_bias: Mapping[str, float] | None = None,
     **deprecated: Unpack[LooseDegree],
 ) -> FitResult:
     """Fits one state and Cd*A/m to several element sets of one object (a history), each
@@ -539,9 +613,10 @@ def fit_element_sets(
     Args:
         sats: ``Satrec`` objects or :class:`~rhoprop.catalog.CatalogObject` of one object,
             any order (sorted by epoch; repeated epochs count once).
-        model, drag_parameter, span, spacing, max_iterations, dynamics: as
-            :func:`fit_element_set` (``span`` is each element set's window, s from its own
-            epoch, cut halfway to its neighbours; the newest one's B* gives the prior).
+        model, drag_parameter, span, spacing, max_iterations, dynamics, along_track_bias:
+            as :func:`fit_element_set` (``span`` is each element set's window, s from
+            its own epoch, cut halfway to its neighbours; the newest one's B* gives the
+            prior).
 
     Returns:
         :class:`FitResult`. Raises ValueError if SGP4 fails, the orbit decays within the
@@ -555,6 +630,7 @@ def fit_element_sets(
         spacing=spacing,
         max_iterations=max_iterations,
         dynamics=fit_dynamics("fit_element_sets", dynamics, deprecated),
+        along_track_bias=along_track_bias,
     )[0]
     if isinstance(out, Exception):
         raise out
@@ -571,6 +647,7 @@ def fit_histories(
     max_iterations: int = 8,
     dynamics: Dynamics | None = None,
     threads: int | None = None,
+    along_track_bias: Mapping[str, float] | None = None,
     **deprecated: Unpack[LooseDegree],
 ) -> list[FitResult | Exception]:
     """:func:`fit_element_sets` of many objects at once: the fits run in the core, many
@@ -584,6 +661,9 @@ def fit_histories(
         model, drag_parameter, span, spacing, max_iterations, dynamics: as
             :func:`fit_element_sets`.
         threads: core threads (default: ``rhoprop.parallel``'s setting).
+        along_track_bias: SGP4's along-track bias by TLE-accuracy regime, m, removed from
+            the positions before the fit (TLE debiasing; None: :data:`ALONG_TRACK_BIAS`,
+            ``{}``: none).
 
     Returns:
         Per object, in order, its :class:`FitResult` or the exception (ValueError) its fit
@@ -598,7 +678,8 @@ def fit_histories(
             ordered.append(err)
     results: list[Any] = [o if isinstance(o, Exception) else None for o in ordered]
     zonal_degree = fit_dynamics("fit_histories", dynamics, deprecated).zonal_degree
-    settings = (model, (start, end), spacing, max_iterations, zonal_degree, threads)
+    bias = along_track_biases(along_track_bias)
+    settings = (model, (start, end), spacing, max_iterations, zonal_degree, threads, bias)
     todo = [i for i, o in enumerate(ordered) if not isinstance(o, Exception)]
     runs = _fit_round(
         [ordered[i][-1:] for i in todo],
@@ -669,11 +750,12 @@ def _job(
     span: tuple[float, float],
     spacing: float,
     start: FitResult | None,
+    bias: Mapping[str, float] | None = None,
 ) -> _Job:
     """The fit of ``ordered`` element sets, from ``start``'s solution if given, else from
-    the newest one's SGP4 state at its epoch and the prior."""
+    the newest one's SGP4 state at its epoch and the prior; ``bias``: as :func:`_observe`."""
     sats = [o[0] for o in ordered]
-    obs, epoch = _observe(sats, span, spacing)
+    obs, epoch = _observe(sats, span, spacing, bias)
     if start is not None:
         prior, prior_sigma, note = start.prior, start.prior_sigma, start.prior_note
         p = np.concatenate([start.state.state, [start.drag_parameter]])
@@ -699,6 +781,7 @@ def _fit_round(
     max_iterations: int,
     zonal_degree: int,
     threads: int | None,
+    bias: Mapping[str, float] | None = None,
 ) -> list[tuple[FitResult, float] | Exception]:
     """One fit of each of ``sets`` (from ``starts``): groups of nearby epochs, each
     prepared in Python and run in core calls, ``threads`` groups at once (one prepares
@@ -717,7 +800,7 @@ def _fit_round(
         jobs: list[tuple[int, _Job]] = []
         for i in group:
             try:
-                jobs.append((i, _job(sets[i], model, drags[i], span, spacing, starts[i])))
+                jobs.append((i, _job(sets[i], model, drags[i], span, spacing, starts[i], bias)))
             except ValueError as err:
                 out[i] = err
         for chunk in _chunks(jobs, spacing):
@@ -920,6 +1003,7 @@ def _result(fit: _Solution, job: _Job) -> tuple[FitResult, float]:
         all_times=obs.times,
         all_residuals=residuals,
         observation_set=obs.which,
+        along_track_bias=obs.along_track_bias,
     )
     return result, float(older_norm.max()) if older_norm.size else 0.0
 
@@ -930,6 +1014,7 @@ def fit_span_epochs(epoch: np.datetime64, span: tuple[float, float]) -> tuple[An
 
 
 __all__ = [
+    "ALONG_TRACK_BIAS",
     "BSTAR_PRIOR_SIGMA",
     "DEFAULT_DRAG_PARAMETER",
     "DEFAULT_SPACING",
@@ -938,6 +1023,7 @@ __all__ = [
     "MIN_DRAG_PARAMETER",
     "SGP4_RHO0",
     "FitResult",
+    "along_track_biases",
     "bstar_prior",
     "drag_parameter_from_bstar",
     "fit_element_set",
