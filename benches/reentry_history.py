@@ -15,10 +15,14 @@ Reference: the CORDS time (``reentry/cords_reentry_times_2022_2023.jsonl``, the 
 "CORDS ... +-Nh") with its uncertainty, else the SATCAT decay day (the reference is its
 middle, the truth interval the whole UTC day).
 
-Settings: "fitted" (the default of ``rp.catalog.reentry``: the newest element set, state
-and Cd*A/m fitted) and "history" (``history="fit"``: the fit also takes the earlier sets
-within ``rp.catalog.HISTORY_DAYS``); drivers: "forecast" (``SpaceWeather.as_of(S)``, the
-library's forecast with its sigma) and/or "hindcast" (the record as observed).
+Settings: "fitted" (the newest element set, state and Cd*A/m fitted), "history"
+(``history="fit"``, what ``rp.catalog.reentry``'s default "auto" does with a history: the
+fit also takes the earlier sets within ``rp.catalog.HISTORY_DAYS``) and, for the 2026
+cases only, "sensor" (``--settings history,sensor``): "history" with NRLMSIS corrected by
+the catalog density sensor (``rp.catalog.corrected_model``), measured from the decay of
+every other object of ``history_2026`` up to S (the reentering object left out);
+drivers: "forecast" (``SpaceWeather.as_of(S)``, the library's forecast with its sigma)
+and/or "hindcast" (the record as observed).
 
 Scored per case, for each window probability of ``--levels`` (default 95 % and 80 %,
 ``ReentryResult.window``): held = the window overlaps the truth interval, a window still
@@ -135,11 +139,22 @@ def element_epoch(line1: str) -> np.datetime64:
 
 
 def run_case(
-    case: Case, record: rp.SpaceWeather, setting: str, drivers: str, args: argparse.Namespace
+    case: Case,
+    record: rp.SpaceWeather,
+    setting: str,
+    drivers: str,
+    args: argparse.Namespace,
+    catalog_sets: list[Any] | None = None,
 ) -> dict[str, Any]:
-    """One case's window and its score."""
+    """One case's window and its score; ``catalog_sets``: every element set of the 2026
+    history as catalog objects, for the "sensor" setting."""
     weather = record.as_of(case.start) if drivers == "forecast" else record
-    model = rp.density.Msis("2.1", space_weather=weather)
+    model: Any = rp.density.Msis("2.1", space_weather=weather)
+    if setting == "sensor":
+        others = sorted({o.norad_id for o in catalog_sets or []} - {case.norad})
+        model, _ = rp.catalog.corrected_model(
+            catalog_sets or [], model, case.start, calibration_ids=others
+        )
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "case.tle"
         path.write_text("".join(f"{n}\n{a}\n{b}\n" for n, a, b in case.sets))
@@ -149,7 +164,7 @@ def run_case(
         model,
         method=rp.MonteCarlo(n=args.members),
         duration=args.horizon_days * 86400.0,
-        history="fit" if setting == "history" else "newest",
+        history="newest" if setting == "fitted" else "fit",
     )
     epoch = res.objects[0].state.epoch
     lo, med, hi = res.epoch_q025[0], res.epoch_median[0], res.epoch_q975[0]
@@ -227,6 +242,11 @@ def main() -> None:
     settings = args.settings.split(",")
     record = rp.SpaceWeather()
     warnings.simplefilter("ignore", rp.errors.PredictedDriversWarning)
+    catalog_sets = None
+    if "sensor" in settings:
+        catalog_sets = rp.catalog.load(
+            Path(root) / HISTORY, history="each", errors="record"
+        ).objects
     print(
         f"{len(cases)} cases; {args.members} members, horizon {args.horizon_days:g} days, "
         "NRLMSIS 2.1\n"
@@ -240,8 +260,10 @@ def main() -> None:
     t0 = time.perf_counter()
     for case in cases:
         for setting in settings:
+            if setting == "sensor" and case.source != "2026":
+                continue
             for drivers in modes:
-                r = run_case(case, record, setting, drivers, args)
+                r = run_case(case, record, setting, drivers, args, catalog_sets)
                 r["case"] = case
                 scored.setdefault((case.source, setting, drivers), []).append(r)
                 lo, med, hi = r["window"]

@@ -116,6 +116,8 @@ def test_a_history_fit_against_a_single_fit_on_a_real_week(week, monkeypatch):
     assert [o.drag_parameter for o in within_a_day] == [o.drag_parameter for o in single]
     assert all(len(o.fit.element_sets) == 1 for o in within_a_day)
     assert all("the newest of 2 element sets" in o.covariance_note for o in newest)
+    assert [o.element_sets for o in newest] == [2] * len(ids)
+    assert [o.element_sets for o in single] == [1] * len(ids)
     monkeypatch.setattr(catalog.elements, "HISTORY_DAYS", 10.0)
     history = catalog.load(files, fit=rp.catalog.FitSettings(model), history="fit")
     assert [o.norad_id for o in history] == [o.norad_id for o in single] == ids

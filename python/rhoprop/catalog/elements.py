@@ -68,6 +68,8 @@ class CatalogObject:
             parameter were fitted (``load(fit=True)``), else None.
         elements: the element set as read (TLE lines or the OMM record), to rebuild the
             SGP4 propagator (``Satrec`` does not pickle).
+        element_sets: how many element sets of the input the object stands for: with
+            ``load(history="newest")`` (the default) the newest of them; 1 otherwise.
     """
 
     name: str
@@ -80,6 +82,7 @@ class CatalogObject:
     covariance_note: str = field(default="", compare=False)
     fit: Any = field(default=None, repr=False, compare=False)
     elements: Any = field(default=None, repr=False, compare=False)
+    element_sets: int = field(default=1, compare=False)
 
     def satrec(self) -> Any:
         """A fresh ``sgp4`` ``Satrec`` of the element set (None without ``elements``)."""
@@ -631,15 +634,15 @@ def _drop_behind_far(
     out.objects = [o for o in out.objects if id(o) not in gone]
 
 
-#: How an object's note says that it stands for several element sets (the newest).
-HISTORY_NOTE = "; the newest of "
-
-
-def _history_note(note: str) -> str:
-    """The part of ``note`` saying the object is the newest of several element sets
-    (:data:`HISTORY_NOTE` on), kept when a later fit rewrites the note; else ""."""
-    at = note.find(HISTORY_NOTE)
-    return note[at:] if at >= 0 else ""
+def _history_note(obj: CatalogObject) -> str:
+    """The end of ``obj``'s note when it stands for several element sets (the newest),
+    else ""."""
+    if obj.element_sets <= 1:
+        return ""
+    return (
+        f"; the newest of {obj.element_sets} element sets (history='fit' or --duplicates "
+        "fit fits them together)"
+    )
 
 
 def _noted_histories(
@@ -648,17 +651,13 @@ def _noted_histories(
     """``objects`` with the note of those that stand for several element sets."""
     import dataclasses
 
-    return [
-        dataclasses.replace(
-            o,
-            covariance_note=f"{o.covariance_note}{HISTORY_NOTE}"
-            f"{len(older[o.norad_id]) + 1} element sets (history='fit' or --duplicates fit "
-            "fits them together)",
-        )
-        if o.norad_id in older
-        else o
-        for o in objects
-    ]
+    out = []
+    for o in objects:
+        if o.norad_id in older:
+            o = dataclasses.replace(o, element_sets=len(older[o.norad_id]) + 1)
+            o = dataclasses.replace(o, covariance_note=o.covariance_note + _history_note(o))
+        out.append(o)
+    return out
 
 
 #: Largest decompressed size of a gzip catalog file, bytes: the whole public catalog
@@ -882,7 +881,7 @@ def _fitted(obj: CatalogObject, f: Any, window: tuple[float, float]) -> CatalogO
             )
             + "); Cd*A/m fitted, "
             f"{f.drag_parameter:.4g} +- {f.drag_sigma:.2g} m^2/kg ({f.prior_note})"
-            + _history_note(obj.covariance_note)
+            + _history_note(obj)
         ),
         fit=f,
     )
