@@ -370,9 +370,12 @@ def test_a_meo_fit_follows_its_along_track_debiasing_one_to_one(atmosphere):
         moved.state.position - raw.state.position
     )
     assert shift == pytest.approx([0.0, -300.0, 0.0], abs=1.0)  # m, RTN (0.2 m apart)
-    # LEO element sets carry none by default
+    # LEO element sets carry none by default, nor near-Earth (SGP4) ones of the MEO
+    # regime (perigee above 2,000 km, period under 225 min): it was measured on SDP4's
     leo = fit_element_set(Satrec.twoline2rv(*_tle(91011, 420.0, 3e-4)), atmosphere)
-    assert leo.along_track_bias == 0.0
+    low_meo = fit_element_set(Satrec.twoline2rv(*_tle(91013, 3000.0, 0.0)), atmosphere)
+    assert tle_accuracy(low_meo.state).regime == "MEO"
+    assert leo.along_track_bias == low_meo.along_track_bias == 0.0
 
 
 @pytest.mark.parametrize(

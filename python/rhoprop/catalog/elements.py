@@ -424,7 +424,8 @@ class FitSettings:
         along_track_bias: SGP4's systematic along-track error by TLE-accuracy regime, m
             (its position minus the truth), removed from the positions each fit is made
             to (TLE debiasing; None: :data:`rhoprop.catalog.fit.ALONG_TRACK_BIAS`, measured
-            on precise orbits: MEO -490 m, GEO -370 m, none in LEO; ``{}``: none).
+            on precise orbits: MEO -490 m, GEO -370 m, none in LEO; ``{}``: none); applied
+            to deep-space element sets (SDP4's, periods of 225 min or more).
 
     Example:
         >>> import rhoprop as rp

@@ -129,7 +129,8 @@ def _weight_accuracy(accuracy: TleAccuracy) -> TleAccuracy:
 #: for batch least squares pseudo-orbit determination in MEO and GEO", arXiv:2412.15793):
 #: SGP4's systematic along-track error, m (its position minus the truth; negative: SGP4
 #: lags), by TLE-accuracy regime (:data:`~rhoprop.catalog.covariance.REGIMES`), removed
-#: from the pseudo-observations before the fit. Element sets share it, so later element
+#: from the pseudo-observations of deep-space element sets (SDP4's, period of at least
+#: :data:`DEEP_SPACE_PERIOD_MIN`) before the fit. Element sets share it, so later element
 #: sets cannot show it; precise orbits can. Measured 2026-12-07 on GFZ's precise orbits
 #: of BeiDou (2024-06-17..18, ``benches/precise_gnss.py``): the undebiased fits of 23 of
 #: 27 MEO satellites lag (median -484 m over 0-47 h), of 15 of the 16 geosynchronous ones
@@ -467,7 +468,9 @@ def _observe(
             raise ValueError(f"element set of {epochs[k]}: {err}") from err
         at = int(np.argmin(np.abs(t_own)))
         acc = _weight_accuracy(tle_accuracy(OrbitState(epochs[k], r[at], v[at], "TEME")))
-        shift = bias.get(acc.regime, 0.0)
+        # measured on SDP4's element sets: near-Earth ones (SGP4) of the regime keep theirs
+        deep = 2 * np.pi / sat.no_kozai >= DEEP_SPACE_PERIOD_MIN if sat.no_kozai > 0 else True
+        shift = bias.get(acc.regime, 0.0) if deep else 0.0
         if shift:
             r = r - shift * rtn_basis(r, v)[:, 1, :]
         sig = np.empty((len(grid), 3))
@@ -527,10 +530,10 @@ def fit_element_set(
             ``integrator``, ``step``, ``rtol``, another ``floor_altitude``,
             ``field_degree`` or ``third_bodies`` is refused (ValueError).
         along_track_bias: SGP4's systematic along-track error by TLE-accuracy regime, m
-            (SGP4's position minus the truth), removed from the positions before the fit
-            (TLE debiasing; None: :data:`ALONG_TRACK_BIAS`, measured on precise orbits
-            above LEO; ``{}``: none). The result's ``along_track_bias`` says what was
-            removed.
+            (SGP4's position minus the truth), removed from the positions of deep-space
+            element sets (SDP4's) before the fit (TLE debiasing; None:
+            :data:`ALONG_TRACK_BIAS`, measured on precise orbits above LEO; ``{}``: none).
+            The result's ``along_track_bias`` says what was removed.
         **deprecated: ``zonal_degree=``, now in ``dynamics``, with a DeprecationWarning.
 
     Returns:
