@@ -394,3 +394,10 @@ def test_along_track_bias_is_checked_where_given(atmosphere, table, error, match
         fit_element_set(
             Satrec.twoline2rv(*_tle(91012, 20200.0, 0.0)), atmosphere, along_track_bias=table
         )
+
+
+def test_fit_settings_stay_hashable_with_their_along_track_bias(atmosphere):
+    mine = catalog.FitSettings(atmosphere, along_track_bias={"GEO": -100})
+    assert mine.along_track_bias == {"GEO": -100.0}
+    assert catalog.FitSettings(atmosphere).along_track_bias == catalog.fit.ALONG_TRACK_BIAS
+    assert len({mine, catalog.FitSettings(atmosphere)}) == 2  # hashable; unequal

@@ -437,7 +437,8 @@ class FitSettings:
     span: tuple[float, float] | None = None
     dynamics: Dynamics | None = None
     threads: int | None = None
-    along_track_bias: Mapping[str, float] | None = None
+    # checked into a dict: left out of the hash, which the other fields still give
+    along_track_bias: Mapping[str, float] | None = field(default=None, hash=False)
 
     def __post_init__(self) -> None:
         from .fit import along_track_biases

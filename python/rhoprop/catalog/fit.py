@@ -26,8 +26,8 @@ sigma growing by the regime's drift rate,
 sigma_T(dt) = sqrt(sigma_T0^2 + (drift dt)^2). In a history the positions of one element
 set weigh together as one observation (sigmas times the square root of their number):
 they share the set's error, and counted apart the scatter between sets reads as drag.
-Above LEO each position is first debiased along-track by its regime's
-:data:`ALONG_TRACK_BIAS` (SGP4's systematic lag behind precise orbits).
+In deep-space element sets (SDP4's) each position is first debiased along-track by its
+regime's :data:`ALONG_TRACK_BIAS` (SDP4's systematic lag behind precise orbits).
 
 Prior on Cd*A/m (:func:`bstar_prior`): B* converted with the density ratio of SGP4's own
 static atmosphere to the fit's model along the element set's orbit (B* was fitted by the
