@@ -193,17 +193,22 @@ def _near_circular_deep_space(epoch: np.datetime64, state: np.ndarray) -> bool:
     return _orbit_class(orbital_period(orbit) / 60.0, e) == "near-circular"
 
 
+def _element_set_class(sat: Any) -> str:
+    """:func:`_orbit_class` of an ``sgp4`` ``Satrec``'s mean motion and eccentricity."""
+    period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
+    return _orbit_class(period, sat.ecco)
+
+
 def default_span(sat: Any) -> tuple[float, float]:
     """The fit span of an ``sgp4`` ``Satrec`` (s from its epoch), by :func:`_orbit_class` of
     its mean motion and eccentricity: :data:`NEAR_CIRCULAR_SPAN` for a near-circular
     deep-space orbit, :data:`DEEP_SPACE_SPAN` for another deep-space orbit, else
     :data:`DEFAULT_SPAN`."""
-    period = 2 * np.pi / sat.no_kozai if sat.no_kozai > 0 else np.inf
     return {
         "near-Earth": DEFAULT_SPAN,
         "near-circular": NEAR_CIRCULAR_SPAN,
         "eccentric": DEEP_SPACE_SPAN,
-    }[_orbit_class(period, sat.ecco)]
+    }[_element_set_class(sat)]
 
 
 #: Default spacing of the pseudo-observations, s.
@@ -469,7 +474,7 @@ def _observe(
         at = int(np.argmin(np.abs(t_own)))
         acc = _weight_accuracy(tle_accuracy(OrbitState(epochs[k], r[at], v[at], "TEME")))
         # measured on SDP4's element sets: near-Earth ones (SGP4) of the regime keep theirs
-        deep = 2 * np.pi / sat.no_kozai >= DEEP_SPACE_PERIOD_MIN if sat.no_kozai > 0 else True
+        deep = _element_set_class(sat) != "near-Earth"
         shift = bias.get(acc.regime, 0.0) if deep else 0.0
         if shift:
             r = r - shift * rtn_basis(r, v)[:, 1, :]
